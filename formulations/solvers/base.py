@@ -1,0 +1,69 @@
+"""The backend contract: minimise c.x subject to row_lower <= A x <= row_upper, bounds."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass
+class LinearModel:
+    """A linear (or 0/1 mixed-integer) model in column-wise sparse form.
+
+    Attributes:
+        cost: ``(n,)`` objective c.
+        matrix: ``(m, n)`` constraint matrix A, any scipy sparse format.
+        row_lower, row_upper: ``(m,)`` row bounds (``-inf``/``inf`` for one-sided rows).
+        col_lower, col_upper: ``(n,)`` column bounds.
+        integer: ``(n,)`` bool, True for integer columns; None for a pure LP.
+    """
+
+    cost: np.ndarray
+    matrix: sp.spmatrix
+    row_lower: np.ndarray
+    row_upper: np.ndarray
+    col_lower: np.ndarray
+    col_upper: np.ndarray
+    integer: np.ndarray | None = None
+
+
+@dataclass
+class SolveResult:
+    """What a solve returns.
+
+    Attributes:
+        status: The solver's model status, e.g. "Optimal", "Time limit reached".
+        optimal: True when the solver proved optimality (within its tolerances).
+        objective: Objective value of ``x`` (nan when there is no solution).
+        x: Column values.
+        row_dual: Row duals y with reduced costs c - A^T y (LP only; empty for MIP).
+        bound: Best proven lower bound (equals objective for a solved LP).
+        seconds: Wall time in the solver.
+    """
+
+    status: str
+    optimal: bool
+    objective: float
+    x: np.ndarray
+    row_dual: np.ndarray
+    bound: float
+    seconds: float
+
+
+class SolverBackend(ABC):
+    """Initialise with a model, solve, optionally add columns and solve again warm."""
+
+    @abstractmethod
+    def set_model(self, model: LinearModel, time_limit: float | None = None) -> None:
+        """Load the model (replacing any previous one)."""
+
+    @abstractmethod
+    def add_columns(self, cost: np.ndarray, lower: np.ndarray, upper: np.ndarray, columns: sp.csc_matrix) -> None:
+        """Append columns to the loaded model, keeping the current basis for a warm start."""
+
+    @abstractmethod
+    def solve(self) -> SolveResult:
+        """Solve the loaded model."""

@@ -1,0 +1,73 @@
+"""HiGHS through highspy, fed directly from scipy sparse matrices."""
+
+from __future__ import annotations
+
+import time
+
+import highspy
+import numpy as np
+import scipy.sparse as sp
+
+from formulations.solvers.base import LinearModel, SolveResult, SolverBackend
+
+
+class HighsBackend(SolverBackend):
+    """Dual simplex for LPs (warm-startable after adding columns), branch and bound for MIPs."""
+
+    def __init__(self) -> None:
+        self._highs = highspy.Highs()
+        self._highs.setOptionValue("output_flag", False)
+        # One thread: windows are solved many at a time by the caller; HiGHS' parallel
+        # simplex only adds overhead on problems this small.
+        self._highs.setOptionValue("threads", 1)
+        self._is_mip = False
+
+    def set_model(self, model: LinearModel, time_limit: float | None = None) -> None:
+        a = sp.csc_matrix(model.matrix)
+        a.sort_indices()
+        lp = highspy.HighsLp()
+        lp.num_col_, lp.num_row_ = a.shape[1], a.shape[0]
+        lp.col_cost_ = np.asarray(model.cost, dtype=float)
+        lp.col_lower_ = np.asarray(model.col_lower, dtype=float)
+        lp.col_upper_ = np.asarray(model.col_upper, dtype=float)
+        lp.row_lower_ = np.asarray(model.row_lower, dtype=float)
+        lp.row_upper_ = np.asarray(model.row_upper, dtype=float)
+        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = a.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = a.indices.astype(np.int32)
+        lp.a_matrix_.value_ = a.data.astype(float)
+        self._is_mip = model.integer is not None and bool(np.any(model.integer))
+        if self._is_mip:
+            lp.integrality_ = [
+                highspy.HighsVarType.kInteger if flag else highspy.HighsVarType.kContinuous
+                for flag in model.integer
+            ]
+        self._highs.clearModel()
+        self._highs.setOptionValue("time_limit", float(time_limit) if time_limit else highspy.kHighsInf)
+        self._highs.passModel(lp)
+
+    def add_columns(self, cost: np.ndarray, lower: np.ndarray, upper: np.ndarray, columns: sp.csc_matrix) -> None:
+        cols = sp.csc_matrix(columns)
+        cols.sort_indices()
+        self._highs.addCols(
+            len(cost), np.asarray(cost, float), np.asarray(lower, float), np.asarray(upper, float),
+            cols.nnz, cols.indptr[:-1].astype(np.int32), cols.indices.astype(np.int32), cols.data.astype(float),
+        )
+
+    def solve(self) -> SolveResult:
+        start = time.perf_counter()
+        self._highs.run()
+        seconds = time.perf_counter() - start
+        status = self._highs.getModelStatus()
+        text = self._highs.modelStatusToString(status)
+        solution = self._highs.getSolution()
+        info = self._highs.getInfo()
+        has_x = solution.value_valid
+        x = np.asarray(solution.col_value) if has_x else np.zeros(0)
+        objective = info.objective_function_value if has_x else float("nan")
+        bound = info.mip_dual_bound if self._is_mip else objective
+        duals = np.asarray(solution.row_dual) if solution.dual_valid else np.zeros(0)
+        return SolveResult(
+            status=text, optimal=status == highspy.HighsModelStatus.kOptimal,
+            objective=objective, x=x, row_dual=duals, bound=bound, seconds=seconds,
+        )

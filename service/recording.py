@@ -1,0 +1,89 @@
+"""Labeled and unlabeled marker data as they cross the file and wire boundaries."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from service.errors import InputError
+
+
+@dataclass
+class Recording:
+    """Labeled 3D marker trajectories (ground truth, or a labeled first frame).
+
+    Attributes:
+        names: One label per marker, in column order.
+        positions: ``(frames, markers, 3)`` in millimetres; NaN where a marker is missing.
+        rate: Frames per second.
+    """
+
+    names: list[str]
+    positions: np.ndarray
+    rate: float
+
+    def __post_init__(self) -> None:
+        self.positions = np.asarray(self.positions, dtype=float)
+        if self.positions.ndim != 3 or self.positions.shape[2] != 3:
+            raise InputError(f"positions must be (frames, markers, 3), got {self.positions.shape}")
+        if self.positions.shape[1] != len(self.names):
+            raise InputError(
+                f"{len(self.names)} marker names for {self.positions.shape[1]} marker columns"
+            )
+        if not self.rate > 0:
+            raise InputError(f"frame rate must be positive, got {self.rate}")
+
+    @property
+    def n_frames(self) -> int:
+        return self.positions.shape[0]
+
+    @property
+    def n_markers(self) -> int:
+        return self.positions.shape[1]
+
+    def missing(self) -> np.ndarray:
+        """``(frames, markers)`` bool: NaN samples, or (0, 0, 0) as some exporters write gaps."""
+        p = self.positions
+        return np.isnan(p).any(axis=2) | (p == 0).all(axis=2)
+
+
+@dataclass
+class UnlabeledCloud:
+    """What a 3D capture hands markerflow: unlabeled points per frame.
+
+    Attributes:
+        points: One ``(points_in_frame, 3)`` array per frame, millimetres, in any order.
+        rate: Frames per second.
+    """
+
+    points: list[np.ndarray]
+    rate: float
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.points)
+
+
+@dataclass
+class LabeledTrajectories:
+    """markerflow's answer: every marker named in every frame.
+
+    Attributes:
+        names: Marker labels.
+        positions: ``(frames, markers, 3)`` millimetres; NaN where the marker is occluded.
+        occluded: ``(frames, markers)`` bool.
+        rate: Frames per second.
+        point_index: ``(frames, markers)`` index of the input point taken in that frame,
+            -1 where occluded. Empty when the input had no point identities.
+    """
+
+    names: list[str]
+    positions: np.ndarray
+    occluded: np.ndarray
+    rate: float
+    point_index: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=int))
+
+    @property
+    def n_frames(self) -> int:
+        return self.positions.shape[0]
