@@ -1,0 +1,134 @@
+"""A scenario: how the simulator degrades a labeled recording into labeler input."""
+
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+from service.errors import InputError
+
+MODES = ("cloud", "cameras")
+_NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Settings of one simulated capture, as read from a scenario TOML file.
+
+    ``configs/scenarios/README.md`` documents every key with its unit and range.
+
+    Attributes:
+        mode: ``"cloud"`` (unlabeled 3D points per frame); ``"cameras"`` is reserved.
+        noise_mm: Standard deviation of the isotropic Gaussian noise on every sample, mm.
+        drop_rate: Long-run fraction of marker-samples deleted, in ``[0, 1)``.
+        drop_burst_frames: Mean length of a run of deleted frames, >= 1.
+        ghosts_per_frame: Poisson mean of spurious points per frame.
+        ghost_spread_mm: Standard deviation of a ghost's Gaussian offset from the body, mm.
+        window: Frames per labeling window, >= 2.
+        seed: Seed of the numpy random generator; the simulation is a function of it.
+        start_frame: First frame of the recording used.
+        frames: Number of frames used; 0 means up to the end of the recording.
+        formulation: Name of the labeling formulation.
+    """
+
+    mode: str = "cloud"
+    noise_mm: float = 1.0
+    drop_rate: float = 0.1
+    drop_burst_frames: float = 10.0
+    ghosts_per_frame: float = 2.0
+    ghost_spread_mm: float = 200.0
+    window: int = 20
+    seed: int = 0
+    start_frame: int = 0
+    frames: int = 0
+    formulation: str = "lp-l1"
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, _typed(f.name, getattr(self, f.name), f.type))
+        self._check_ranges()
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Scenario":
+        """Build a scenario from a key/value mapping; missing keys take their defaults.
+
+        Raises:
+            InputError: On an unknown key, or a value of the wrong type or out of range.
+        """
+        known = [f.name for f in fields(cls)]
+        for key in d:
+            if key not in known:
+                raise InputError(f"unknown scenario key '{key}' (known keys: {', '.join(known)})")
+        return cls(**d)
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "Scenario":
+        """Read a scenario TOML file (top-level keys only).
+
+        Raises:
+            InputError: If the file cannot be read or parsed, or on any bad key or value.
+        """
+        try:
+            with open(path, "rb") as fh:
+                data = tomllib.load(fh)
+        except OSError as e:
+            raise InputError(f"cannot read scenario file {path}: {e.strerror}") from e
+        except tomllib.TOMLDecodeError as e:
+            raise InputError(f"scenario file {path} is not valid TOML: {e}") from e
+        return cls.from_dict(data)
+
+    @property
+    def deletion_transitions(self) -> tuple[float, float]:
+        """Per-frame transition probabilities of the visible/deleted Markov chain.
+
+        With ``r = drop_rate`` and ``b = drop_burst_frames``, a deleted run ends with
+        probability ``p_leave = 1/b`` per frame, so runs are geometric with mean ``b``.
+        The stationary deleted fraction ``p_enter / (p_enter + p_leave)`` equals ``r``
+        when ``p_enter = r / (b (1 - r))``.
+
+        Returns:
+            ``(p_enter, p_leave)``: visible -> deleted and deleted -> visible.
+        """
+        b, r = self.drop_burst_frames, self.drop_rate
+        return r / (b * (1.0 - r)), 1.0 / b
+
+    def _require(self, key: str, ok: bool, condition: str) -> None:
+        if not ok:
+            got = getattr(self, key)
+            raise InputError(f"scenario key '{key}' must be {condition}, got {got!r}")
+
+    def _check_ranges(self) -> None:
+        if self.mode not in MODES:
+            known = ", ".join(MODES)
+            raise InputError(f"scenario key 'mode' must be one of {known}, got '{self.mode}'")
+        if self.mode == "cameras":
+            raise InputError("scenario key 'mode': camera mode is not implemented yet")
+        for key in _NON_NEGATIVE:
+            self._require(key, getattr(self, key) >= 0, ">= 0")
+        self._require("drop_rate", 0.0 <= self.drop_rate < 1.0, "in [0, 1)")
+        self._require("drop_burst_frames", self.drop_burst_frames >= 1.0, ">= 1")
+        self._require("window", self.window >= 2, ">= 2")
+        self._require("formulation", self.formulation.strip() != "", "a non-empty name")
+        # p_enter is a probability: r / (b (1 - r)) <= 1, i.e. r <= b / (1 + b).
+        if self.deletion_transitions[0] > 1.0:
+            raise InputError(
+                f"scenario key 'drop_rate' {self.drop_rate} is unreachable with "
+                f"drop_burst_frames {self.drop_burst_frames}: need drop_rate <= b / (1 + b)"
+            )
+
+
+def _typed(key: str, value: Any, kind: type) -> Any:
+    """Check ``value`` against the field's annotation ``kind``; ints widen to float."""
+    # bool is an int subclass in Python, but `window = true` is a mistake, not 1.
+    if kind is float and isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not math.isfinite(value):
+            raise InputError(f"scenario key '{key}' must be a finite number, got {value}")
+        return float(value)
+    if kind is int and isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if kind is str and isinstance(value, str):
+        return value
+    expected = {float: "a number", int: "an integer", str: "a string"}[kind]
+    raise InputError(f"scenario key '{key}' must be {expected}, got {value!r}")
+
