@@ -26,7 +26,8 @@ class WindowCandidates:
         resources: ``(C, R)`` sparse 0/1, what each candidate consumes (point ids,
             (camera, detection) pairs); shared resources make conflict groups.
         occlusion_location: ``(N, M, D)`` location the layout term assumes while occluded.
-        motion: ``(N, M, D)`` expected displacement of each object into each frame.
+        motion: ``(N, M, D)`` expected displacement of each object into each frame; NaN
+            where unknown (the displacement term is then left out).
         appearance: ``(C, H)`` normalised histograms, or None.
         template_appearance: ``(N, H)`` histograms of the templates, or None.
     """

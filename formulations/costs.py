@@ -2,11 +2,13 @@
 
 For object n, an arc from node i (frame m) to node j (frame m+1) costs
 
-    c(i, j) = g(s_n, j) + lambda_1 g(i, j) + lambda_2 d(i, j)   i, j observations
+    c(i, j) = t g(s_n, j) + lambda_1 g(i, j) + lambda_2 d(i, j) i, j observations
             = c_a + g(s_n, j)                                    i occlusion, j observation
             = c_a + c_b                                          j occlusion or sink
 
-where g compares appearances (here: half the L1 distance of normalised histograms,
+where t = 1 in Jiang's paper (``template_on_track``; markers use t = 0: without
+appearance their template term is the distance to a prediction, which only matters where
+no previous position anchors the step), g compares appearances (here: half the L1 distance of normalised histograms,
 in [0, 1]) and g(s_n, j) is supplied per candidate by the candidate generator (it is the
 template term: appearance to the template, or distance to the predicted position for
 markers). d is the displacement off the expected motion of the object,
@@ -14,7 +16,8 @@ markers). d is the displacement off the expected motion of the object,
     d(i, j) = || r_j - r_i - delta_n(m+1) ||_2,
 
 which is Jiang's plain distance when the expected displacement delta is zero (boxes) and
-a constant-velocity residual when delta is a velocity estimate (markers).
+a constant-velocity residual when delta is a velocity estimate (markers). Where delta is
+unknown (NaN: a marker seen in one frame only) the d term is left out.
 """
 
 from __future__ import annotations
@@ -35,15 +38,17 @@ class ArcCostWeights:
         displacement: lambda_2, weight of d(i, j) (per unit of location, e.g. per mm).
         reappear: c_a, constant paid on entering occlusion, the sink, or leaving occlusion.
         disappear: c_b, constant added on entering occlusion or the sink.
+        template_on_track: t, factor of g(s_n, j) on observation-to-observation arcs.
     """
 
     appearance_change: float = 0.0
     displacement: float = 1.0
     reappear: float = 10.0
     disappear: float = 10.0
+    template_on_track: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("appearance_change", "displacement", "reappear", "disappear"):
+        for name in ("appearance_change", "displacement", "reappear", "disappear", "template_on_track"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
                 raise ValueError(f"arc cost weight '{name}' must be finite and >= 0, got {value}")
@@ -68,7 +73,7 @@ def arc_costs(
         kind: ``(V,)`` node kinds.
         location: ``(V, D)`` node locations.
         template_cost: ``(V,)`` g(s_n, v) per node (0 where not an observation).
-        motion: ``(V, D)`` expected displacement into each node's frame.
+        motion: ``(V, D)`` expected displacement into each node's frame (NaN: unknown).
         appearance: ``(V, H)`` normalised histograms, or None when there is no appearance.
         source_occluded: ``(V,)`` True for sources whose template is not visible: their
             out-arcs cost like arcs out of an occlusion node.
@@ -88,7 +93,8 @@ def arc_costs(
 
     t, h = tail[observed], head[observed]
     step = location[h] - location[t] - motion[h]
-    cost_obs = template_cost[h] + weights.displacement * np.sqrt(np.einsum("ad,ad->a", step, step))
+    distance = np.nan_to_num(np.sqrt(np.einsum("ad,ad->a", step, step)), nan=0.0)
+    cost_obs = weights.template_on_track * template_cost[h] + weights.displacement * distance
     if appearance is not None and weights.appearance_change > 0:
         change = 0.5 * np.abs(appearance[h] - appearance[t]).sum(axis=1)
         cost_obs += weights.appearance_change * change

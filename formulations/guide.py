@@ -1,0 +1,99 @@
+"""A frame-by-frame nearest-neighbour track that centres the gates of a window.
+
+Each frame: predict every marker (``MarkerState.predict``), assign points to markers
+by ``linear_sum_assignment`` on distance with a constant miss cost, and advance the
+state. The miss cost does not grow with the gate: after an occlusion the prediction
+from neighbouring markers is better than a far point, and a wrong pick here would
+move the gates of every later frame. This is the "standard tracking technique" of Ringer & Lasenby; here
+it only decides *where to look*. The window LP decides *what to take*.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial.distance import cdist
+
+from formulations.marker_state import MarkerState
+
+
+@dataclass(frozen=True)
+class Gate:
+    """Gate radius around a marker's prediction.
+
+    Attributes:
+        radius_mm: Radius for a marker seen in the previous frame.
+        growth_mm: Added per frame the marker has been unseen.
+        max_radius_mm: Upper limit while unseen.
+        unknown_velocity_radius_mm: Radius while a marker's velocity is unknown (just
+            after the labeled first frame): it must cover one frame of fast motion.
+    """
+
+    radius_mm: float = 30.0
+    growth_mm: float = 20.0
+    max_radius_mm: float = 400.0
+    unknown_velocity_radius_mm: float = 100.0
+
+    def radius(self, state: MarkerState) -> np.ndarray:
+        grown = np.minimum(self.radius_mm + self.growth_mm * state.unseen, max(self.max_radius_mm, self.radius_mm))
+        return np.where(state.velocity_known, grown, np.maximum(grown, self.unknown_velocity_radius_mm))
+
+
+@dataclass(frozen=True)
+class GuideTrack:
+    """Per frame 1..M: prediction, gate radius, velocity before the frame, assignment."""
+
+    predicted: np.ndarray  # (M, N, 3)
+    radius: np.ndarray  # (M, N)
+    velocity: np.ndarray  # (M, N, 3) displacement per frame expected into frame m; NaN if unknown
+    tracked: np.ndarray  # (M, N) the marker was seen in the frame before m (prediction reliable)
+    assigned: np.ndarray  # (M, N) point index, -1 where missed
+    final: MarkerState
+
+
+def guide_track(state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate()) -> GuideTrack:
+    """Run the nearest-neighbour tracker over ``frames`` from ``state``."""
+    m, n = len(frames), len(state.position)
+    predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
+    radius, assigned, tracked = np.empty((m, n)), np.full((m, n), -1), np.empty((m, n), bool)
+    for f, points in enumerate(frames):
+        predicted[f], tracked[f] = state.predict(), state.visible
+        # Predicted displacement: a marker's own velocity while seen, its neighbours'
+        # motion while occluded; unknown only right after the labeled first frame.
+        unknown = state.visible & ~state.velocity_known
+        velocity[f] = np.where(unknown[:, None], np.nan, predicted[f] - state.position)
+        radius[f] = gate.radius(state)
+        assigned[f] = assign_nearest(predicted[f], points, radius[f], miss_cost=gate.radius_mm)
+        seen = assigned[f] >= 0
+        taken = np.zeros((n, 3))
+        taken[seen] = points[assigned[f][seen]]
+        state = state.advance(taken, seen)
+    return GuideTrack(
+        predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, assigned=assigned, final=state
+    )
+
+
+def assign_nearest(predicted: np.ndarray, points: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+    """Optimal one-to-one assignment of points to predictions within each gate.
+
+    Solves min sum distance, a marker taking only points inside its gate, with a miss
+    of cost ``miss_cost`` allowed for every marker.
+
+    Returns:
+        ``(N,)`` point index per marker, -1 for a miss.
+    """
+    n = len(predicted)
+    if len(points) == 0:
+        return np.full(n, -1)
+    distance = cdist(predicted, points)
+    blocked = 1e9
+    cost = np.where(distance <= radius[:, None], distance, blocked)
+    miss = np.full((n, n), blocked)
+    np.fill_diagonal(miss, miss_cost)
+    rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
+    result = np.full(n, -1)
+    hit = cols < len(points)
+    result[rows[hit]] = cols[hit]
+    return result

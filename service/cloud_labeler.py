@@ -1,0 +1,133 @@
+"""Label an unlabeled 3D point cloud recording window by window.
+
+The per-window chain: points --cloud_candidates--> WindowCandidates --build_window-->
+WindowProblem --formulation--> WindowSolution --invert--> point index per marker and
+frame; the labeled last frame becomes the next window's template.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from formulations.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
+from formulations.costs import ArcCostWeights
+from formulations.formulation import Formulation
+from formulations.marker_state import MarkerState
+from formulations.network import build_window
+from formulations.registry import get_formulation
+from formulations.solution import WindowSolution
+from service.chaining import window_spans
+from service.errors import InputError
+from service.recording import LabeledTrajectories, UnlabeledCloud
+from service.window_stats import WindowStats
+
+MARKER_COSTS = ArcCostWeights(
+    appearance_change=0.0, displacement=1.0, reappear=15.0, disappear=15.0, template_on_track=1.0
+)
+
+
+@dataclass
+class CloudLabeler:
+    """Names every marker of an unlabeled cloud, given the labeled first frame.
+
+    Attributes:
+        formulation: Name or instance of the window formulation.
+        window: Frames per window, template included (Jiang II-E).
+        gating: Gates and the template term of the candidates.
+        weights: Arc cost weights (mm-based for markers).
+        layout_weight: mu of the L1 layout term (0 disables it).
+        layout_neighbours: Layout pairs join each marker to this many nearest markers
+            of the first frame.
+    """
+
+    formulation: str | Formulation = "lp-l1"
+    window: int = 20
+    gating: CloudGating = field(default_factory=CloudGating)
+    weights: ArcCostWeights = MARKER_COSTS
+    layout_weight: float = 0.0
+    layout_neighbours: int = 2
+
+    def label(
+        self, cloud: UnlabeledCloud, names: list[str], first_frame: np.ndarray,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> tuple[LabeledTrajectories, list[WindowStats]]:
+        """Label ``cloud``; ``first_frame`` is ``(markers, 3)``, the labeled frame 0."""
+        formulation = self._formulation()
+        state = self._first_state(names, first_frame)
+        n, frames = len(names), cloud.n_frames
+        point_index = np.full((frames, n), -1)
+        point_index[0] = self._match_first_frame(cloud.points[0], state.position)
+        pairs = _layout_pairs(state.neighbours[:, : self.layout_neighbours]) if self.layout_weight > 0 else None
+        stats: list[WindowStats] = []
+        spans = window_spans(frames, self.window)
+        for k, (start, last) in enumerate(spans):
+            window_points = cloud.points[start + 1 : last + 1]
+            began = time.perf_counter()
+            gated = cloud_candidates(state, window_points, self.gating)
+            problem, node_candidate = build_window(gated.candidates, self.weights, pairs, self.layout_weight)
+            prepared = time.perf_counter() - began
+            solution = formulation.solve(problem)
+            taken = _taken_points(gated, node_candidate, solution)
+            point_index[start + 1 : last + 1] = taken.T
+            state = _advance(state, window_points, taken)
+            stats.append(WindowStats.of(start, last, solution, prepared, time.perf_counter() - began))
+            if progress:
+                progress(k + 1, len(spans))
+        return _trajectories(cloud, names, point_index), stats
+
+    def _formulation(self) -> Formulation:
+        try:
+            return get_formulation(self.formulation)
+        except ValueError as error:
+            raise InputError(str(error)) from None
+
+    def _first_state(self, names: list[str], first_frame: np.ndarray) -> MarkerState:
+        first_frame = np.asarray(first_frame, dtype=float)
+        if first_frame.shape != (len(names), 3):
+            raise InputError(f"first frame must give (x, y, z) for each of the {len(names)} markers")
+        bad = np.flatnonzero(~np.isfinite(first_frame).all(axis=1))
+        if len(bad):
+            raise InputError(f"marker '{names[bad[0]]}' has no position in the first frame")
+        return MarkerState.from_first_frame(first_frame)
+
+    def _match_first_frame(self, points: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """The first frame's point of each labeled marker (the user labeled frame 0)."""
+        from formulations.guide import assign_nearest
+
+        radius = self.gating.gate.radius_mm
+        return assign_nearest(positions, points, np.full(len(positions), radius), miss_cost=radius)
+
+
+def _taken_points(gated: CloudWindow, node_candidate: np.ndarray, solution: WindowSolution) -> np.ndarray:
+    """``(N, M)`` point index taken by each marker in each window frame, -1 if occluded."""
+    candidate = node_candidate[solution.path]
+    return np.where(candidate >= 0, gated.point[np.maximum(candidate, 0)], -1)
+
+
+def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> MarkerState:
+    """Carry the marker state through the labeled frames to the next template."""
+    for m, points in enumerate(frames):
+        seen = taken[:, m] >= 0
+        observed = np.zeros((len(seen), 3))
+        observed[seen] = points[taken[seen, m]]
+        state = state.advance(observed, seen)
+    return state
+
+
+def _layout_pairs(neighbours: np.ndarray) -> np.ndarray:
+    pairs = np.column_stack([np.repeat(np.arange(len(neighbours)), neighbours.shape[1]), neighbours.ravel()])
+    return np.unique(np.sort(pairs, axis=1), axis=0)
+
+
+def _trajectories(cloud: UnlabeledCloud, names: list[str], point_index: np.ndarray) -> LabeledTrajectories:
+    positions = np.full(point_index.shape + (3,), np.nan)
+    for f, points in enumerate(cloud.points):
+        seen = point_index[f] >= 0
+        positions[f, seen] = points[point_index[f, seen]]
+    return LabeledTrajectories(
+        names=list(names), positions=positions, occluded=point_index < 0, rate=cloud.rate, point_index=point_index
+    )
