@@ -31,7 +31,7 @@ class Gate:
             after the labeled first frame): it must cover one frame of fast motion.
     """
 
-    radius_mm: float = 30.0
+    radius_mm: float = 60.0
     growth_mm: float = 20.0
     max_radius_mm: float = 400.0
     unknown_velocity_radius_mm: float = 100.0
@@ -48,18 +48,26 @@ class GuideTrack:
     predicted: np.ndarray  # (M, N, 3)
     radius: np.ndarray  # (M, N)
     velocity: np.ndarray  # (M, N, 3) displacement per frame expected into frame m; NaN if unknown
-    tracked: np.ndarray  # (M, N) the marker was seen in the frame before m (prediction reliable)
+    tracked: np.ndarray  # (M, N) seen in the frames before m, long enough to trust its prediction
+    unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
     assigned: np.ndarray  # (M, N) point index, -1 where missed
     final: MarkerState
 
 
-def guide_track(state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate()) -> GuideTrack:
-    """Run the nearest-neighbour tracker over ``frames`` from ``state``."""
+def guide_track(
+    state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate(), trust_after: int = 3
+) -> GuideTrack:
+    """Run the nearest-neighbour tracker over ``frames`` from ``state``.
+
+    A marker counts as tracked once seen ``trust_after`` frames in a row: a marker just
+    re-acquired may have been re-acquired wrongly, and others should not lean on it.
+    """
     m, n = len(frames), len(state.position)
     predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
     radius, assigned, tracked = np.empty((m, n)), np.full((m, n), -1), np.empty((m, n), bool)
+    unseen = np.empty((m, n), dtype=int)
     for f, points in enumerate(frames):
-        predicted[f], tracked[f] = state.predict(), state.visible
+        predicted[f], tracked[f], unseen[f] = state.predict(), state.streak >= trust_after, state.unseen
         # Predicted displacement: a marker's own velocity while seen, its neighbours'
         # motion while occluded; unknown only right after the labeled first frame.
         unknown = state.visible & ~state.velocity_known
@@ -71,7 +79,8 @@ def guide_track(state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate(
         taken[seen] = points[assigned[f][seen]]
         state = state.advance(taken, seen)
     return GuideTrack(
-        predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, assigned=assigned, final=state
+        predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen,
+        assigned=assigned, final=state,
     )
 
 

@@ -20,6 +20,7 @@ class MarkerState:
         velocity_known: ``(N,)`` False until a marker has been seen in two consecutive
             frames (the labeled first frame alone says nothing about motion).
         unseen: ``(N,)`` frames since the marker was last labeled (0 = seen now).
+        streak: ``(N,)`` consecutive frames the marker has been seen up to now.
         neighbours: ``(N, K)`` the K markers nearest each marker in the first frame.
         anchor: ``(N, 3)`` where each marker was last seen, and ``anchor_neighbours``
             ``(N, K, 3)`` where its neighbours were at that frame (``anchor_valid``
@@ -35,6 +36,7 @@ class MarkerState:
     velocity: np.ndarray
     velocity_known: np.ndarray
     unseen: np.ndarray
+    streak: np.ndarray
     neighbours: np.ndarray
     anchor: np.ndarray
     anchor_neighbours: np.ndarray
@@ -52,7 +54,7 @@ class MarkerState:
         neighbours = np.asarray(idx, dtype=int).reshape(n, k + 1)[:, 1:]
         return cls(
             position=position, velocity=np.zeros_like(position), velocity_known=np.zeros(n, bool),
-            unseen=np.zeros(n, int), neighbours=neighbours, anchor=position.copy(),
+            unseen=np.zeros(n, int), streak=np.ones(n, int), neighbours=neighbours, anchor=position.copy(),
             anchor_neighbours=position[neighbours], anchor_valid=np.ones(neighbours.shape, bool),
             distance_mean=np.linalg.norm(position[:, None] - position[neighbours], axis=2),
             distance_var=np.full(neighbours.shape, 100.0),
@@ -62,7 +64,7 @@ class MarkerState:
     def visible(self) -> np.ndarray:
         return self.unseen == 0
 
-    def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.05) -> MarkerState:
+    def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.01) -> MarkerState:
         """The state one frame later.
 
         Args:
@@ -83,7 +85,7 @@ class MarkerState:
         deviation = np.linalg.norm(position[:, None] - position[self.neighbours], axis=2) - self.distance_mean
         return replace(
             self, position=position, velocity=velocity, velocity_known=self.velocity_known | was_seen,
-            unseen=np.where(seen, 0, self.unseen + 1),
+            unseen=np.where(seen, 0, self.unseen + 1), streak=np.where(seen, self.streak + 1, 0),
             anchor=np.where(seen[:, None], position, self.anchor),
             anchor_neighbours=np.where(seen[:, None, None], position[self.neighbours], self.anchor_neighbours),
             anchor_valid=np.where(seen[:, None], seen[self.neighbours], self.anchor_valid),

@@ -8,11 +8,12 @@ frame; the labeled last frame becomes the next window's template.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
 
+from formulations.components import coupled_components
 from formulations.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
 from formulations.costs import ArcCostWeights
 from formulations.formulation import Formulation
@@ -20,13 +21,14 @@ from formulations.marker_state import MarkerState
 from formulations.network import build_window
 from formulations.registry import get_formulation
 from formulations.solution import WindowSolution
+from formulations.window import WindowProblem
 from service.chaining import window_spans
 from service.errors import InputError
 from service.recording import LabeledTrajectories, UnlabeledCloud
 from service.window_stats import WindowStats
 
 MARKER_COSTS = ArcCostWeights(
-    appearance_change=0.0, displacement=1.0, reappear=15.0, disappear=15.0, template_on_track=1.0
+    appearance_change=0.0, displacement=1.0, reappear=15.0, disappear=15.0, template_on_track=0.3
 )
 
 
@@ -40,8 +42,10 @@ class CloudLabeler:
         gating: Gates and the template term of the candidates.
         weights: Arc cost weights (mm-based for markers).
         layout_weight: mu of the L1 layout term (0 disables it).
-        layout_neighbours: Layout pairs join each marker to this many nearest markers
-            of the first frame.
+        layout_neighbours: Layout pairs join each marker to this many of its most rigid
+            neighbours (lowest distance variance), and only where the two markers are
+            already coupled by shared candidates: the term then breaks ties between
+            markers that compete for points without merging independent components.
     """
 
     formulation: str | Formulation = "lp-l1"
@@ -61,14 +65,15 @@ class CloudLabeler:
         n, frames = len(names), cloud.n_frames
         point_index = np.full((frames, n), -1)
         point_index[0] = self._match_first_frame(cloud.points[0], state.position)
-        pairs = _layout_pairs(state.neighbours[:, : self.layout_neighbours]) if self.layout_weight > 0 else None
         stats: list[WindowStats] = []
         spans = window_spans(frames, self.window)
         for k, (start, last) in enumerate(spans):
             window_points = cloud.points[start + 1 : last + 1]
             began = time.perf_counter()
             gated = cloud_candidates(state, window_points, self.gating)
-            problem, node_candidate = build_window(gated.candidates, self.weights, pairs, self.layout_weight)
+            problem, node_candidate = build_window(gated.candidates, self.weights)
+            if self.layout_weight > 0:
+                problem = _with_layout(problem, state, self.layout_neighbours, self.layout_weight)
             prepared = time.perf_counter() - began
             solution = formulation.solve(problem)
             taken = _taken_points(gated, node_candidate, solution)
@@ -118,9 +123,14 @@ def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) ->
     return state
 
 
-def _layout_pairs(neighbours: np.ndarray) -> np.ndarray:
-    pairs = np.column_stack([np.repeat(np.arange(len(neighbours)), neighbours.shape[1]), neighbours.ravel()])
-    return np.unique(np.sort(pairs, axis=1), axis=0)
+def _with_layout(problem: WindowProblem, state: MarkerState, per_marker: int, mu: float) -> WindowProblem:
+    """The problem with layout pairs between rigid neighbours already coupled by conflicts."""
+    rigid = np.take_along_axis(state.neighbours, np.argsort(state.distance_var, axis=1)[:, :per_marker], axis=1)
+    pairs = np.column_stack([np.repeat(np.arange(len(rigid)), rigid.shape[1]), rigid.ravel()])
+    pairs = np.unique(np.sort(pairs, axis=1), axis=0)
+    component = coupled_components(problem)
+    pairs = pairs[component[pairs[:, 0]] == component[pairs[:, 1]]]
+    return replace(problem, layout_pairs=pairs, layout_weight=np.full(len(pairs), mu))
 
 
 def _trajectories(cloud: UnlabeledCloud, names: list[str], point_index: np.ndarray) -> LabeledTrajectories:

@@ -1,0 +1,69 @@
+"""The ``markerflow`` command line."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.console import Console
+
+from service.errors import InputError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, help="Name every marker in every frame.")
+err = Console(stderr=True)
+
+FormulationOption = Annotated[Optional[str], typer.Option("--formulation", "-f", help="Window formulation, e.g. lp-l1.")]
+WindowOption = Annotated[Optional[int], typer.Option("--window", "-w", help="Frames per window, template included.")]
+
+
+@app.command()
+def demo(
+    out: Annotated[Path, typer.Option(help="Folder for the labeled C3D and the plot.")] = Path("out"),
+    frames: Annotated[int, typer.Option(help="Frames of the generated scene.")] = 600,
+    seed: Annotated[int, typer.Option(help="Seed of the scene and the simulated capture.")] = 0,
+) -> None:
+    """Label a generated scene (no data needed), print the scores, write a C3D and a plot."""
+    from service.commands.demo import run_demo
+
+    _guard(lambda: run_demo(out, frames, seed))
+
+
+@app.command()
+def track(
+    input: Annotated[Path, typer.Argument(help="Labeled .c3d/.trc: its first frame names the markers.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d or .csv.")],
+    formulation: FormulationOption = None,
+    window: WindowOption = None,
+    shuffle: Annotated[bool, typer.Option(help="Shuffle each frame's points before labeling.")] = True,
+) -> None:
+    """Relabel every frame of INPUT from its first frame and write the result."""
+    from service.commands.track import run_track
+
+    _guard(lambda: run_track(input, out, formulation or "lp-l1", window or 20, shuffle))
+
+
+@app.command("eval")
+def evaluate(
+    trajectories: Annotated[Path, typer.Argument(help="Labeled .c3d/.trc ground truth.")],
+    scenario: Annotated[Path, typer.Option(help="Scenario TOML (see configs/scenarios/README.md).")],
+    formulation: FormulationOption = None,
+    window: WindowOption = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout.")] = False,
+) -> None:
+    """Run a scenario on labeled trajectories and print the scores."""
+    from service.commands.evaluate import run_eval
+
+    _guard(lambda: run_eval(trajectories, scenario, formulation, window, as_json))
+
+
+def _guard(action) -> None:
+    """A user mistake is one line on stderr and exit code 2, never a traceback."""
+    try:
+        action()
+    except InputError as error:
+        err.print(f"[red]error:[/red] {error}", highlight=False)
+        raise typer.Exit(2) from None
