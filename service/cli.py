@@ -67,3 +67,7 @@ def _guard(action) -> None:
     except InputError as error:
         err.print(f"[red]error:[/red] {error}", highlight=False)
         raise typer.Exit(2) from None
+
+
+if __name__ == "__main__":
+    app()
