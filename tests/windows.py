@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from formulations.candidates import WindowCandidates
 from formulations.costs import ArcCostWeights
 from formulations.network import build_window
-from formulations.objective import layout_cost, path_arcs
+from formulations.objective import path_arcs
 from formulations.window import WindowProblem
 
 
@@ -45,29 +45,43 @@ def random_window(
 
 
 def brute_force(problem: WindowProblem) -> tuple[float, np.ndarray]:
-    """Optimum and optimal paths by enumerating every feasible joint assignment."""
+    """Optimum and optimal paths by enumerating every feasible joint assignment.
+
+    Each object's paths are enumerated with their arc costs; the joint assignments are
+    their Cartesian product, checked and priced with numpy in one go.
+    """
     first = problem.frame_nodes()
     inner = (problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames)
     block = problem.node_object[inner] * problem.n_frames + problem.node_frame[inner] - 1
     sizes = np.bincount(block, minlength=first.size).reshape(first.shape)
     groups = problem.conflict_groups.toarray()
-    per_object = []
+    paths, costs, usage = [], [], []
     for n in range(problem.n_objects):
         options = [range(first[n, m], first[n, m] + sizes[n, m]) for m in range(problem.n_frames)]
-        paths = np.array(list(itertools.product(*options)))
-        full = np.zeros((len(paths), problem.n_objects, problem.n_frames), dtype=int)
-        full[:] = first  # placeholder rows for other objects, not used
-        full[:, n] = paths
-        cost = np.array([problem.arc_cost[path_arcs(problem, f)[n]].sum() for f in full])
-        per_object.append((paths, cost, groups[:, paths].sum(axis=2)))
-    best, best_path = np.inf, None
-    for combo in itertools.product(*(range(len(p[0])) for p in per_object)):
-        use = sum(per_object[n][2][:, i] for n, i in enumerate(combo))
-        if (use > 1).any():
-            continue
-        path = np.array([per_object[n][0][i] for n, i in enumerate(combo)])
-        cost = sum(per_object[n][1][i] for n, i in enumerate(combo))
-        cost += layout_cost(problem, path)
-        if cost < best:
-            best, best_path = cost, path
-    return best, best_path
+        own = np.array(list(itertools.product(*options)))
+        full = np.repeat(first[None], len(own), axis=0)
+        full[:, n] = own
+        arcs = np.stack([path_arcs(problem, f)[n] for f in full])
+        paths.append(own)
+        costs.append(problem.arc_cost[arcs].sum(axis=1))
+        usage.append(groups[:, own].sum(axis=2).T)  # (paths, groups)
+    grids = np.meshgrid(*[np.arange(len(p)) for p in paths], indexing="ij")
+    choice = np.stack([g.ravel() for g in grids], axis=1)  # (J, N)
+    total = sum(costs[n][choice[:, n]] for n in range(problem.n_objects))
+    used = sum(usage[n][choice[:, n]] for n in range(problem.n_objects))
+    feasible = (used <= 1).all(axis=1) if groups.shape[0] else np.ones(len(choice), bool)
+    joint = np.stack([paths[n][choice[:, n]] for n in range(problem.n_objects)], axis=1)  # (J, N, M)
+    total = total + _layout_costs(problem, joint)
+    total[~feasible] = np.inf
+    best = int(np.argmin(total))
+    return float(total[best]), joint[best]
+
+
+def _layout_costs(problem: WindowProblem, joint: np.ndarray) -> np.ndarray:
+    """The L1 layout term of each joint assignment ``(J, N, M)``."""
+    if len(problem.layout_pairs) == 0:
+        return np.zeros(len(joint))
+    p = problem.node_location[joint]  # (J, N, M, D)
+    a, b = problem.layout_pairs[:, 0], problem.layout_pairs[:, 1]
+    change = np.abs(np.diff(p[:, a] - p[:, b], axis=2)).sum(axis=(2, 3))  # (J, P)
+    return change @ problem.layout_weight

@@ -1,0 +1,195 @@
+"""The ``markerflow`` command line, run for real as a subprocess on real recordings."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import ezc3d
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+SUMMARY_KEYS = {
+    "label_accuracy", "swaps", "ghost_precision", "ghost_recall", "integral_window_fraction",
+    "gap_median", "gap_max", "seconds_per_frame", "frames", "markers", "formulation",
+}  # fmt: skip
+
+
+def run_cli(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """``python -m service.cli ARGS`` from the repo root, on a narrow terminal.
+
+    A narrow COLUMNS makes any line wrapping of an error message show up as extra lines.
+    """
+    env = {**os.environ, "COLUMNS": "50"}
+    command = [sys.executable, "-m", "service.cli", *map(str, args)]
+    return subprocess.run(command, cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
+
+
+def write_scenario(path: Path, frames: int, extra: str = "") -> Path:
+    path.write_text(f"frames = {frames}\n{extra}", encoding="utf-8")
+    return path
+
+
+def cmu_points(frames: int) -> tuple[list[str], np.ndarray]:
+    """Labels and ``(3, markers, frames)`` points of the first frames of 85_02, in mm."""
+    c3d = ezc3d.c3d(str(CMU))
+    return list(c3d["parameters"]["POINT"]["LABELS"]["value"]), c3d["data"]["points"][:3, :, :frames]
+
+
+def write_c3d(path: Path, labels: list[str], points: np.ndarray, rate: float = 120.0) -> Path:
+    """A C3D of ``(3, markers, frames)`` mm points; NaN samples get residual -1."""
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = np.array([rate])
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = labels
+    c3d["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    missing = np.isnan(points).any(axis=0)
+    c3d["data"]["points"] = np.concatenate([np.nan_to_num(points), np.ones((1,) + points.shape[1:])])
+    c3d["data"]["meta_points"]["residuals"] = np.where(missing, -1.0, 0.0)[None]
+    c3d.write(str(path))
+    return path
+
+
+def read_c3d(path: Path) -> tuple[list[str], np.ndarray]:
+    """Labels and ``(3, markers, frames)`` points (NaN where residual < 0)."""
+    c3d = ezc3d.c3d(str(path))
+    return list(c3d["parameters"]["POINT"]["LABELS"]["value"]), c3d["data"]["points"][:3]
+
+
+def assert_input_error(result: subprocess.CompletedProcess[str], *words: str) -> None:
+    """Exit code 2 and one non-empty stderr line naming ``words``; no traceback anywhere."""
+    assert "Traceback" not in result.stdout + result.stderr, result.stderr
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+
+
+# -- the happy paths ---------------------------------------------------------------------
+
+
+def test_demo_prints_scores_and_writes_c3d_and_plot(tmp_path: Path) -> None:
+    result = run_cli("demo", "--out", tmp_path, "--frames", "150")
+    assert result.returncode == 0, result.stderr
+    assert "label accuracy" in result.stdout and "ghost precision" in result.stdout
+    labels, points = read_c3d(tmp_path / "demo_labeled.c3d")
+    assert len(labels) == 39 and len(set(labels)) == 39
+    assert points.shape == (3, 39, 150)
+    assert (tmp_path / "demo_trajectories.png").read_bytes().startswith(PNG_MAGIC)
+
+
+def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
+    result = run_cli("eval", CMU, "--scenario", write_scenario(tmp_path / "s.toml", 240), "--json")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == 1, result.stdout
+    summary = json.loads(lines[0])
+    assert set(summary) == SUMMARY_KEYS
+    assert (summary["frames"], summary["markers"], summary["formulation"]) == (240, 41, "lp-l1")
+    assert summary["label_accuracy"] > 0.99
+
+
+def test_eval_takes_the_formulation_option(tmp_path: Path) -> None:
+    scenario = write_scenario(tmp_path / "s.toml", 40)
+    result = run_cli("eval", CMU, "--scenario", scenario, "--json", "--formulation", "lp-l1-cvxpy")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads(result.stdout)
+    assert (summary["formulation"], summary["frames"]) == ("lp-l1-cvxpy", 40)
+
+
+def test_track_writes_c3d_that_puts_every_point_back_under_its_label(tmp_path: Path) -> None:
+    # The whole of 85_02 (810 frames) tracks in about 1.5 s, so no cut-down copy is needed.
+    result = run_cli("track", CMU, "--out", tmp_path / "x.c3d")
+    assert result.returncode == 0, result.stderr
+    labels, points = read_c3d(tmp_path / "x.c3d")
+    truth_labels, truth = read_c3d(CMU)
+    assert labels == truth_labels
+    # The input points are shuffled per frame: equal positions mean every label is right.
+    np.testing.assert_allclose(points, truth, rtol=0, atol=1e-3)
+
+
+def test_track_writes_csv(tmp_path: Path) -> None:
+    out = tmp_path / "x.csv"
+    result = run_cli("track", CMU, "--out", out)
+    assert result.returncode == 0, result.stderr
+    with out.open(newline="", encoding="utf-8") as f:
+        header, *rows = list(csv.reader(f))
+    labels, truth = read_c3d(CMU)
+    assert header == ["frame", "time"] + [f"{name}_{axis}" for name in labels for axis in "xyz"]
+    assert len(rows) == 810
+    last = np.array(rows[-1][2:], dtype=float).reshape(41, 3)
+    np.testing.assert_allclose(last, truth[:, :, -1].T, rtol=0, atol=1e-3)
+
+
+# -- bad input: one line on stderr, exit code 2 --------------------------------------------
+
+
+def truncated_c3d(tmp: Path) -> Path:
+    data = CMU.read_bytes()
+    (tmp / "half.c3d").write_bytes(data[: len(data) // 2])
+    return tmp / "half.c3d"
+
+
+def nan_first_frame_c3d(tmp: Path) -> Path:
+    labels, points = cmu_points(60)
+    points[:, 3, 0] = np.nan  # Male:RBWT
+    return write_c3d(tmp / "gap.c3d", labels, points)
+
+
+def blank_labels_c3d(tmp: Path) -> Path:
+    _, points = cmu_points(60)
+    return write_c3d(tmp / "blank.c3d", [""] * 3, points[:, :3])
+
+
+def no_points_c3d(tmp: Path) -> Path:
+    # ezc3d refuses to write points without labels, but it writes a file with no points.
+    return write_c3d(tmp / "empty.c3d", [], np.zeros((3, 0, 60)))
+
+
+def wrong_suffix(tmp: Path) -> Path:
+    """A real C3D under a suffix no reader takes."""
+    (tmp / "markers.xyz").write_bytes(CMU.read_bytes())
+    return tmp / "markers.xyz"
+
+
+def existing_file(tmp: Path) -> Path:
+    (tmp / "taken").write_text("not a folder", encoding="utf-8")
+    return tmp / "taken"
+
+
+Case = Callable[[Path], tuple[list[str | Path], list[str]]]
+BAD_INPUT: dict[str, Case] = {
+    "track missing input": lambda t: (["track", t / "absent.c3d", "-o", t / "x.c3d"], ["absent.c3d", "no such file"]),
+    "eval missing input": lambda t: (["eval", t / "absent.trc", "--scenario", write_scenario(t / "s.toml", 40)], ["absent.trc"]),
+    "markup in path": lambda t: (["track", t / "take[/1].c3d", "-o", t / "x.c3d"], ["take[/1].c3d"]),
+    "truncated c3d": lambda t: (["track", truncated_c3d(t), "-o", t / "x.c3d"], ["half.c3d", "truncated"]),
+    "unsupported suffix": lambda t: (["track", wrong_suffix(t), "-o", t / "x.c3d"], ["markers.xyz", ".xyz"]),
+    "track window 1": lambda t: (["track", CMU, "-o", t / "x.c3d", "--window", "1"], ["window", "1"]),
+    "track window 0": lambda t: (["track", CMU, "-o", t / "x.c3d", "--window", "0"], ["window", "0"]),
+    "eval window 1": lambda t: (["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40), "--window", "1"], ["window"]),
+    "track formulation": lambda t: (["track", CMU, "-o", t / "x.c3d", "--formulation", "nope"], ["'nope'"]),
+    "eval formulation": lambda t: (["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40), "-f", "nope"], ["'nope'"]),
+    "unknown scenario key": lambda t: (["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40, "bogus_key = 1\n")], ["bogus_key"]),
+    "track nan first frame": lambda t: (["track", nan_first_frame_c3d(t), "-o", t / "x.c3d"], ["Male:RBWT", "first frame"]),
+    "eval nan first frame": lambda t: (["eval", nan_first_frame_c3d(t), "--scenario", write_scenario(t / "s.toml", 40)], ["Male:RBWT"]),
+    "c3d without points": lambda t: (["track", no_points_c3d(t), "-o", t / "x.c3d"], ["empty.c3d", "no labeled points"]),
+    "c3d with blank labels": lambda t: (["track", blank_labels_c3d(t), "-o", t / "x.c3d"], ["blank.c3d", "no point labels"]),
+    "track out folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.c3d"], ["nowhere", "cannot write"]),
+    "track csv folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.csv"], ["nowhere", "cannot write"]),
+    "demo out is a file": lambda t: (["demo", "--out", existing_file(t), "--frames", "20"], ["taken", "folder"]),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", BAD_INPUT.values(), ids=BAD_INPUT.keys())
+def test_bad_input_is_one_line_and_exit_code_2(case: Case, tmp_path: Path) -> None:
+    args, words = case(tmp_path)
+    assert_input_error(run_cli(*args), *words)
