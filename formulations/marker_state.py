@@ -64,7 +64,7 @@ class MarkerState:
     def visible(self) -> np.ndarray:
         return self.unseen == 0
 
-    def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.01) -> MarkerState:
+    def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
         """The state one frame later.
 
         Args:
