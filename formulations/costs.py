@@ -62,7 +62,7 @@ def arc_costs(
     location: np.ndarray,
     template_cost: np.ndarray,
     motion: np.ndarray,
-    appearance: np.ndarray | None,
+    appearance_change: np.ndarray | None,
     source_occluded: np.ndarray,
 ) -> np.ndarray:
     """Cost of every arc, vectorised over arcs.
@@ -74,7 +74,7 @@ def arc_costs(
         location: ``(V, D)`` node locations.
         template_cost: ``(V,)`` g(s_n, v) per node (0 where not an observation).
         motion: ``(V, D)`` expected displacement into each node's frame (NaN: unknown).
-        appearance: ``(V, H)`` normalised histograms, or None when there is no appearance.
+        appearance_change: ``(A,)`` g(tail, head) per arc, or None when there is no appearance.
         source_occluded: ``(V,)`` True for sources whose template is not visible: their
             out-arcs cost like arcs out of an occlusion node.
 
@@ -95,9 +95,8 @@ def arc_costs(
     step = location[h] - location[t] - motion[h]
     distance = np.nan_to_num(np.sqrt(np.einsum("ad,ad->a", step, step)), nan=0.0)
     cost_obs = weights.template_on_track * template_cost[h] + weights.displacement * distance
-    if appearance is not None and weights.appearance_change > 0:
-        change = 0.5 * np.abs(appearance[h] - appearance[t]).sum(axis=1)
-        cost_obs += weights.appearance_change * change
+    if appearance_change is not None and weights.appearance_change > 0:
+        cost_obs += weights.appearance_change * appearance_change[observed]
     cost[observed] = cost_obs
     cost[into_gap] = c_ab
     return cost

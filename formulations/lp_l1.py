@@ -19,6 +19,8 @@ from formulations.solvers import create_backend
 from formulations.viterbi import shortest_paths
 from formulations.window import OCCLUSION, SINK, WindowProblem
 
+PRIMAL_SIMPLEX = 4  # HiGHS simplex_strategy
+
 
 @dataclass(frozen=True)
 class LpL1(Formulation):
@@ -39,7 +41,7 @@ class LpL1(Formulation):
     decompose: bool = True
     integrality_tolerance: float = 1e-6
     pricing_min_arcs: int = 4000
-    pricing_successors: int = 3
+    pricing_successors: int = 1
     time_limit: float | None = None
 
     def solve(self, problem: WindowProblem) -> WindowSolution:
@@ -52,10 +54,13 @@ class LpL1(Formulation):
         start = time.perf_counter()
         model = window_lp(problem)
         build = time.perf_counter() - start
-        backend = create_backend("highs")
         if problem.n_arcs > self.pricing_min_arcs:
-            result, _ = solve_with_pricing(model, backend, self._initial_columns(problem, len(model.cost)))
+            # Primal simplex: columns added by pricing keep the basis primal feasible.
+            backend = create_backend("highs", simplex_strategy=PRIMAL_SIMPLEX)
+            initial = self._initial_columns(problem, len(model.cost))
+            result, _ = solve_with_pricing(model, backend, initial, time_limit=self.time_limit)
         else:
+            backend = create_backend("highs")
             backend.set_model(model, self.time_limit)
             result = backend.solve()
         solve = time.perf_counter() - start - build
@@ -72,15 +77,30 @@ class LpL1(Formulation):
 
     def _initial_columns(self, problem: WindowProblem, n_columns: int) -> np.ndarray:
         """Cheapest successors of each node, every arc into occlusion or sink, Viterbi arcs."""
-        order = np.lexsort((problem.arc_cost, problem.arc_tail))
-        tails = problem.arc_tail[order]
-        group_start = np.flatnonzero(np.r_[True, tails[1:] != tails[:-1]])
-        rank = np.arange(len(order)) - np.repeat(group_start, np.diff(np.r_[group_start, len(order)]))
         initial = np.ones(n_columns, dtype=bool)
-        arcs = np.zeros(problem.n_arcs, dtype=bool)
-        arcs[order[rank < self.pricing_successors]] = True
+        arcs = _cheapest_per_tail(problem, self.pricing_successors)
         head_kind = problem.node_kind[problem.arc_head]
         arcs |= (head_kind == OCCLUSION) | (head_kind == SINK)
         arcs[path_arcs(problem, shortest_paths(problem)[0]).ravel()] = True
         initial[: problem.n_arcs] = arcs
         return initial
+
+
+def _cheapest_per_tail(problem: WindowProblem, k: int) -> np.ndarray:
+    """Mask of the k cheapest out-arcs of every node.
+
+    Arcs are built grouped by tail, so k passes of a segmented minimum do it without
+    sorting all arcs.
+    """
+    order = np.arange(problem.n_arcs) if np.all(np.diff(problem.arc_tail) >= 0) else np.argsort(problem.arc_tail, kind="stable")
+    tail, cost = problem.arc_tail[order], problem.arc_cost[order].copy()
+    starts = np.flatnonzero(np.r_[True, tail[1:] != tail[:-1]])
+    group = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(tail)]))
+    chosen = np.zeros(problem.n_arcs, dtype=bool)
+    for _ in range(k):
+        best = np.minimum.reduceat(cost, starts)
+        hits = np.flatnonzero((cost <= best[group]) & np.isfinite(cost))
+        first = hits[np.r_[True, group[hits][1:] != group[hits][:-1]]]
+        chosen[order[first]] = True
+        cost[first] = np.inf
+    return chosen

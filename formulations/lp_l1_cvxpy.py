@@ -60,16 +60,22 @@ class LpL1Cvxpy(Formulation):
         y = into @ xi
         inner = (problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames)
         constraints = [out[problem.node_kind == SOURCE] @ xi == 1, y[inner] == (out @ xi)[inner], xi <= 1]
-        users = problem.resources.tocsc()
-        for r in range(users.shape[1]):
-            nodes = users.indices[users.indptr[r]:users.indptr[r + 1]]
-            if len(np.unique(problem.node_object[nodes])) > 1:
-                constraints.append(cp.sum(y[nodes]) <= 1)
+        groups = _contested_resources(problem)
+        if groups.shape[0]:
+            constraints.append(groups @ y <= 1)
         objective = problem.arc_cost @ xi
         if len(problem.layout_pairs) and problem.n_frames > 1:
             term, extra = _layout_term(problem, y)
             objective, constraints = objective + term, constraints + extra
         return xi, cp.Problem(cp.Minimize(objective), constraints)
+
+
+def _contested_resources(problem: WindowProblem) -> sp.csr_matrix:
+    """(resources used by two or more objects) x nodes, from the (node, resource) pairs."""
+    usage = problem.resources.tocoo()
+    pairs = np.unique(np.column_stack([usage.col, problem.node_object[usage.row]]), axis=0)
+    contested = np.flatnonzero(np.bincount(pairs[:, 0], minlength=problem.resources.shape[1]) > 1)
+    return problem.resources.T.tocsr()[contested]
 
 
 def _layout_term(problem: WindowProblem, y: cp.Expression) -> tuple[cp.Expression, list[cp.Constraint]]:

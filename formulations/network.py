@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.spatial.distance import cdist
 
 from formulations.candidates import WindowCandidates
 from formulations.costs import ArcCostWeights, arc_costs
@@ -51,7 +52,7 @@ def build_window(
     is_candidate = candidate_of >= 0
     template_cost[is_candidate] = candidates.template_cost[candidate_of[is_candidate]]
 
-    tail, head = _layer_arcs(node_object, node_frame)
+    tail, head, block_pairs = _layer_arcs(node_object, node_frame)
     motion = np.zeros_like(location)
     inner = (node_frame >= 1) & (node_frame <= m)
     motion[inner] = candidates.motion[node_object[inner], node_frame[inner] - 1]
@@ -59,7 +60,7 @@ def build_window(
     source_occluded[source_of >= 0] = candidates.template_occluded[source_of[source_of >= 0]]
     cost = arc_costs(
         weights, tail, head, node_kind, location, template_cost, motion,
-        _node_appearance(candidates, order), source_occluded,
+        _appearance_change(_node_appearance(candidates, order), block_pairs), source_occluded,
     )
     problem = WindowProblem(
         n_objects=n, n_frames=m, node_kind=node_kind, node_object=node_object,
@@ -71,11 +72,14 @@ def build_window(
     return problem, candidate_of
 
 
-def _layer_arcs(node_object: np.ndarray, node_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _layer_arcs(node_object: np.ndarray, node_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """All arcs from each (object, frame) block to the next block of the same object.
 
-    A block pair with a tails and b heads gives a*b arcs; built with repeat/arange so
-    there is no Python loop over arcs or blocks.
+    A block pair with a tails and b heads gives a*b arcs, tail-major; built with
+    repeat/arange so there is no Python loop over arcs or blocks.
+
+    Returns:
+        Arc tails, arc heads, and per block pair (first tail, a, first head, b).
     """
     starts = np.flatnonzero(np.r_[True, (node_object[1:] != node_object[:-1]) | (node_frame[1:] != node_frame[:-1])])
     sizes = np.diff(np.r_[starts, len(node_object)])
@@ -87,7 +91,22 @@ def _layer_arcs(node_object: np.ndarray, node_frame: np.ndarray) -> tuple[np.nda
     b_rep = np.repeat(b, counts)
     tail = np.repeat(starts[linked], counts) + local // b_rep
     head = np.repeat(starts[linked + 1], counts) + local % b_rep
-    return tail, head
+    return tail, head, np.column_stack([starts[linked], a, starts[linked + 1], b])
+
+
+def _appearance_change(appearance: np.ndarray | None, block_pairs: np.ndarray) -> np.ndarray | None:
+    """g(i, j) = half the L1 distance of the histograms, for every arc in arc order.
+
+    One cdist per block pair (a loop over blocks, not arcs): indexing the histograms of
+    every arc instead would copy arcs x bins values twice.
+    """
+    if appearance is None:
+        return None
+    blocks = [
+        cdist(appearance[t : t + a], appearance[h : h + b], metric="cityblock").ravel()
+        for t, a, h, b in block_pairs
+    ]
+    return 0.5 * np.concatenate(blocks) if blocks else np.zeros(0)
 
 
 def _node_appearance(candidates: WindowCandidates, order: np.ndarray) -> np.ndarray | None:

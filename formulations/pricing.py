@@ -21,7 +21,7 @@ from formulations.solvers import LinearModel, SolveResult, SolverBackend
 
 def solve_with_pricing(
     model: LinearModel, backend: SolverBackend, initial: np.ndarray, tolerance: float = 1e-9,
-    max_new_columns: int = 5000,
+    max_new_columns: int = 5000, time_limit: float | None = None,
 ) -> tuple[SolveResult, int]:
     """Solve ``model`` by pricing columns in from ``initial``.
 
@@ -31,13 +31,14 @@ def solve_with_pricing(
         initial: ``(n,)`` bool, the columns to start with. Must give a feasible LP.
         tolerance: Reduced cost below ``-tolerance`` enters.
         max_new_columns: At most this many columns enter per round (most negative first).
+        time_limit: Seconds per restricted solve (None: no limit).
 
     Returns:
         The result with ``x`` mapped onto all columns, and the number of pricing rounds.
     """
     matrix = sp.csc_matrix(model.matrix)
     active = np.flatnonzero(initial)
-    backend.set_model(_columns(model, matrix, active))
+    backend.set_model(_columns(model, matrix, active), time_limit)
     result = backend.solve()
     rounds = 1
     while result.optimal:

@@ -10,6 +10,7 @@ from typing import Annotated, Optional
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from service.errors import InputError
 
@@ -43,7 +44,10 @@ def track(
     """Relabel every frame of INPUT from its first frame and write the result."""
     from service.commands.track import run_track
 
-    _guard(lambda: run_track(input, out, formulation or "lp-l1", window or 20, shuffle))
+    # `is None`, not `or`: `--window 0` is a mistake to report, not a request for the default.
+    formulation = "lp-l1" if formulation is None else formulation
+    window = 20 if window is None else window
+    _guard(lambda: run_track(input, out, formulation, window, shuffle))
 
 
 @app.command("eval")
@@ -65,7 +69,9 @@ def _guard(action) -> None:
     try:
         action()
     except InputError as error:
-        err.print(f"[red]error:[/red] {error}", highlight=False)
+        # escape: a path like `take[1].c3d` is text, not Rich markup; soft_wrap: one
+        # line however narrow the terminal, so scripts can read it.
+        err.print(f"[red]error:[/red] {escape(str(error))}", highlight=False, soft_wrap=True)
         raise typer.Exit(2) from None
 
 

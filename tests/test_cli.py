@@ -166,27 +166,37 @@ def existing_file(tmp: Path) -> Path:
     return tmp / "taken"
 
 
+def track(tmp: Path, source: Path, *more: str) -> list[str | Path]:
+    return ["track", source, "--out", tmp / "x.c3d", *more]
+
+
+def evaluate(tmp: Path, source: Path, *more: str) -> list[str | Path]:
+    return ["eval", source, "--scenario", write_scenario(tmp / "s.toml", 40), *more]
+
+
 Case = Callable[[Path], tuple[list[str | Path], list[str]]]
 BAD_INPUT: dict[str, Case] = {
-    "track missing input": lambda t: (["track", t / "absent.c3d", "-o", t / "x.c3d"], ["absent.c3d", "no such file"]),
-    "eval missing input": lambda t: (["eval", t / "absent.trc", "--scenario", write_scenario(t / "s.toml", 40)], ["absent.trc"]),
-    "markup in path": lambda t: (["track", t / "take[/1].c3d", "-o", t / "x.c3d"], ["take[/1].c3d"]),
-    "truncated c3d": lambda t: (["track", truncated_c3d(t), "-o", t / "x.c3d"], ["half.c3d", "truncated"]),
-    "unsupported suffix": lambda t: (["track", wrong_suffix(t), "-o", t / "x.c3d"], ["markers.xyz", ".xyz"]),
-    "track window 1": lambda t: (["track", CMU, "-o", t / "x.c3d", "--window", "1"], ["window", "1"]),
-    "track window 0": lambda t: (["track", CMU, "-o", t / "x.c3d", "--window", "0"], ["window", "0"]),
-    "eval window 1": lambda t: (["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40), "--window", "1"], ["window"]),
-    "track formulation": lambda t: (["track", CMU, "-o", t / "x.c3d", "--formulation", "nope"], ["'nope'"]),
-    "eval formulation": lambda t: (["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40), "-f", "nope"], ["'nope'"]),
-    "unknown scenario key": lambda t: (["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40, "bogus_key = 1\n")], ["bogus_key"]),
-    "track nan first frame": lambda t: (["track", nan_first_frame_c3d(t), "-o", t / "x.c3d"], ["Male:RBWT", "first frame"]),
-    "eval nan first frame": lambda t: (["eval", nan_first_frame_c3d(t), "--scenario", write_scenario(t / "s.toml", 40)], ["Male:RBWT"]),
-    "c3d without points": lambda t: (["track", no_points_c3d(t), "-o", t / "x.c3d"], ["empty.c3d", "no labeled points"]),
-    "c3d with blank labels": lambda t: (["track", blank_labels_c3d(t), "-o", t / "x.c3d"], ["blank.c3d", "no point labels"]),
+    "track missing input": lambda t: (track(t, t / "absent.c3d"), ["absent.c3d", "no such file"]),
+    "eval missing input": lambda t: (evaluate(t, t / "absent.trc"), ["absent.trc", "no such file"]),
+    "markup in path": lambda t: (track(t, t / "take[/1].c3d"), ["take[/1].c3d"]),
+    "truncated c3d": lambda t: (track(t, truncated_c3d(t)), ["half.c3d", "truncated"]),
+    "unsupported suffix": lambda t: (track(t, wrong_suffix(t)), ["markers.xyz", ".xyz"]),
+    "track window 1": lambda t: (track(t, CMU, "--window", "1"), ["window", "got 1"]),
+    "track window 0": lambda t: (track(t, CMU, "--window", "0"), ["window", "got 0"]),
+    "eval window 1": lambda t: (evaluate(t, CMU, "--window", "1"), ["window", "got 1"]),
+    "track formulation": lambda t: (track(t, CMU, "--formulation", "nope"), ["'nope'"]),
+    "eval formulation": lambda t: (evaluate(t, CMU, "-f", "nope"), ["'nope'"]),
+    "unknown scenario key": lambda t: (
+        ["eval", CMU, "--scenario", write_scenario(t / "s.toml", 40, "bogus_key = 1\n")], ["bogus_key"]
+    ),
+    "track nan first frame": lambda t: (track(t, nan_first_frame_c3d(t)), ["Male:RBWT", "first frame"]),
+    "eval nan first frame": lambda t: (evaluate(t, nan_first_frame_c3d(t)), ["Male:RBWT", "first frame"]),
+    "c3d without points": lambda t: (track(t, no_points_c3d(t)), ["empty.c3d", "no labeled points"]),
+    "c3d with blank labels": lambda t: (track(t, blank_labels_c3d(t)), ["blank.c3d", "no point labels"]),
     "track out folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.c3d"], ["nowhere", "cannot write"]),
     "track csv folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.csv"], ["nowhere", "cannot write"]),
     "demo out is a file": lambda t: (["demo", "--out", existing_file(t), "--frames", "20"], ["taken", "folder"]),
-}  # fmt: skip
+}
 
 
 @pytest.mark.parametrize("case", BAD_INPUT.values(), ids=BAD_INPUT.keys())

@@ -14,12 +14,15 @@ from formulations.solvers.base import LinearModel, SolveResult, SolverBackend
 class HighsBackend(SolverBackend):
     """Dual simplex for LPs (warm-startable after adding columns), branch and bound for MIPs."""
 
-    def __init__(self) -> None:
+    def __init__(self, **options: object) -> None:
         self._highs = highspy.Highs()
         self._highs.setOptionValue("output_flag", False)
         # One thread: windows are solved many at a time by the caller; HiGHS' parallel
         # simplex only adds overhead on problems this small.
         self._highs.setOptionValue("threads", 1)
+        for name, value in options.items():
+            if self._highs.setOptionValue(name, value) != highspy.HighsStatus.kOk:
+                raise ValueError(f"HiGHS rejected option {name}={value!r}")
         self._is_mip = False
 
     def set_model(self, model: LinearModel, time_limit: float | None = None) -> None:

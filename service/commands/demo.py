@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from service.commands.report import out, print_summary, window_progress
+from service.errors import InputError
 from service.evaluation import evaluate
 from service.formats import write_labeled
 from service.plot import plot_trajectories
@@ -17,6 +18,7 @@ DEMO_SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghos
 def run_demo(folder: Path, frames: int, seed: int) -> None:
     """Generate a walking figure, simulate a noisy capture, label it, report."""
     truth = generate_scene(n_frames=frames, seed=seed)
+    _make_folder(folder)
     scenario = Scenario(**{**DEMO_SCENARIO.__dict__, "seed": seed})
     out.print(
         f"Generated scene: {truth.n_markers} markers, {truth.n_frames} frames at {truth.rate:g} Hz; "
@@ -26,8 +28,15 @@ def run_demo(folder: Path, frames: int, seed: int) -> None:
     with window_progress("labeling demo scene") as progress:
         result = evaluate(truth, scenario, progress=progress)
     print_summary(result.summary(), "markerflow demo")
-    folder.mkdir(parents=True, exist_ok=True)
     c3d, png = folder / "demo_labeled.c3d", folder / "demo_trajectories.png"
     write_labeled(c3d, result.result)
     plot_trajectories(result.result, png, truth=result.capture.truth)
     out.print(f"Wrote {c3d} and {png}")
+
+
+def _make_folder(folder: Path) -> None:
+    """Create the output folder before the work, so a bad ``--out`` fails at once."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # e.g. a file of that name, or no permission
+        raise InputError(f"{folder}: cannot create the output folder ({exc.strerror})") from None

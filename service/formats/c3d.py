@@ -28,8 +28,8 @@ def read_c3d(path: str | Path) -> Recording:
     Missing samples (negative residual, or exactly (0, 0, 0)) become NaN.
 
     Raises:
-        InputError: missing, unreadable or truncated file; no labeled points; zero
-            frames; no frame rate; a length unit other than mm, cm or m.
+        InputError: missing, unreadable or truncated file; no labeled points or a
+            blank label; zero frames; no frame rate; a length unit other than mm, cm or m.
     """
     path = require_file(path)
     c3d = _load(path)
@@ -87,7 +87,14 @@ def _labels(c3d: ezc3d.c3d, n_markers: int, path: Path) -> list[str]:
         raise InputError(f"{path}: C3D file has no labeled points")
     if len(labels) < n_markers:
         raise InputError(f"{path}: C3D file has {len(labels)} point labels for {n_markers} points")
-    return labels[:n_markers]
+    labels = labels[:n_markers]
+    # A blank label names nothing: the output would hold markers no one can tell apart.
+    blank = [i for i, label in enumerate(labels) if not label]
+    if len(blank) == n_markers:
+        raise InputError(f"{path}: C3D file has no point labels (all {n_markers} are blank)")
+    if blank:
+        raise InputError(f"{path}: C3D point {blank[0] + 1} of {n_markers} has a blank label")
+    return labels
 
 
 def _check_complete(c3d: ezc3d.c3d, path: Path) -> None:
