@@ -8,12 +8,13 @@ import numpy as np
 
 from service.cloud_labeler import CloudLabeler
 from service.commands.report import out, window_progress
-from service.formats import read_labeled, write_labeled
+from service.formats import check_output, read_labeled, write_labeled
 from service.recording import Recording, UnlabeledCloud
 
 
 def run_track(input: Path, output: Path, formulation: str, window: int, shuffle: bool) -> None:
     """Treat every frame of ``input`` as unlabeled points, label them, write ``output``."""
+    check_output(output)
     recording = read_labeled(input)
     cloud = unlabeled_cloud(recording, shuffle)
     labeler = CloudLabeler(formulation=formulation, window=window)

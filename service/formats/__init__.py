@@ -34,6 +34,18 @@ def write_labeled(path: str | Path, traj: LabeledTrajectories) -> None:
     _by_suffix(_WRITERS, path, "write")(path, traj)
 
 
+def check_output(path: str | Path) -> None:
+    """Fail early, before long work, if ``path`` cannot take labeled output.
+
+    Raises:
+        InputError: unsupported suffix, or a folder that does not exist.
+    """
+    _by_suffix(_WRITERS, path, "write")
+    folder = Path(path).parent
+    if not folder.is_dir():
+        raise InputError(f"{path}: folder {folder} does not exist")
+
+
 def _by_suffix(
     table: dict[str, Callable[..., Any]], path: str | Path, verb: str
 ) -> Callable[..., Any]:

@@ -1,0 +1,57 @@
+"""Label accuracy, integrality and speed with and without the L1 layout term.
+
+CMU 85_02 through the issue's cloud scenario, one run per seed, for several mu; layout
+pairs join each marker to its two most rigid neighbours where the two are already coupled.
+
+    .venv/bin/python bench/layout_weight.py [--seeds 6] [--mu 0 0.05 0.2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from service.cloud_labeler import CloudLabeler  # noqa: E402
+from service.formats import read_labeled  # noqa: E402
+from service.scenario import Scenario  # noqa: E402
+from service.scores import label_scores  # noqa: E402
+from service.simulate_cloud import simulate_cloud  # noqa: E402
+
+RECORDING = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seeds", type=int, default=6)
+    parser.add_argument("--mu", type=float, nargs="+", default=[0.0, 0.05, 0.2])
+    args = parser.parse_args()
+    truth = read_labeled(RECORDING)
+    captures = [simulate_cloud(truth, Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10,
+                                               ghosts_per_frame=2.0, seed=s)) for s in range(args.seeds)]
+    print(f"{'mu':>5s} {'accuracy per seed':40s} {'median':>7s} {'swaps':>5s} {'integral':>8s} {'max gap':>8s} {'ms/frame':>8s}")
+    for mu in args.mu:
+        accuracy, swaps, integral, gaps, speed = [], 0, [], [], []
+        for capture in captures:
+            start = time.perf_counter()
+            result, windows = CloudLabeler(layout_weight=mu).label(
+                capture.cloud, capture.first_frame.names, capture.first_frame.positions[0])
+            speed.append((time.perf_counter() - start) / capture.cloud.n_frames)
+            scores = label_scores(capture, result)
+            accuracy.append(scores.label_accuracy)
+            swaps += scores.swaps
+            integral += [w.integral for w in windows]
+            gaps += [w.gap for w in windows]
+        per_seed = " ".join(f"{a:.4f}" for a in accuracy)
+        print(f"{mu:5.2f} {per_seed:40s} {np.median(accuracy):7.4f} {swaps:5d} {np.mean(integral):8.1%} "
+              f"{max(gaps):8.1e} {1000 * np.median(speed):8.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,65 @@
+"""Seconds per frame for a 41-marker, 120 Hz recording labeled in 20-frame windows.
+
+CMU 85_02 and 135_02 (41 markers, 120 Hz) through the issue's cloud scenario (1 mm
+noise, 10 % deletions in 10-frame bursts, 2 ghosts per frame). Prints medians over runs
+of the whole labeling per frame and where the time goes. Goal: <= 4 ms per frame.
+
+    .venv/bin/python bench/markers_realtime.py [--runs 5] [--frames 1200]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from service.cloud_labeler import CloudLabeler  # noqa: E402
+from service.formats import read_labeled  # noqa: E402
+from service.scenario import Scenario  # noqa: E402
+from service.simulate_cloud import simulate_cloud  # noqa: E402
+
+DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"
+
+
+def measure(path: Path, frames: int, runs: int) -> dict[str, float]:
+    truth = read_labeled(path)
+    scenario = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0,
+                        frames=min(frames, truth.n_frames))
+    capture = simulate_cloud(truth, scenario)
+    names, first = capture.first_frame.names, capture.first_frame.positions[0]
+    rows = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        _, windows = CloudLabeler().label(capture.cloud, names, first)
+        total = time.perf_counter() - start
+        n = capture.cloud.n_frames - 1
+        prepare = sum(w.prepare_seconds for w in windows)
+        formulation = sum(w.build_seconds + w.solve_seconds + w.round_seconds for w in windows)
+        lp_windows = sum(w.components.get("coupled", 0) > 0 for w in windows)
+        rows.append({"total": total / n, "prepare": prepare / n, "formulation": formulation / n,
+                     "other": (total - prepare - formulation) / n, "lp_window_share": lp_windows / len(windows)})
+    return {k: float(np.median([r[k] for r in rows])) for k in rows[0]} | {"frames": capture.cloud.n_frames}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--frames", type=int, default=1200)
+    args = parser.parse_args()
+    print(f"{'recording':12s} {'frames':>6s} {'ms/frame':>9s} {'candidates+network':>19s} "
+          f"{'formulation':>12s} {'other':>7s} {'windows with an LP':>19s}")
+    for name in ("85_02.c3d", "135_02.c3d"):
+        m = measure(DATA / name, args.frames, args.runs)
+        print(f"{name:12s} {m['frames']:6d} {1000 * m['total']:9.2f} {1000 * m['prepare']:19.2f} "
+              f"{1000 * m['formulation']:12.2f} {1000 * m['other']:7.2f} {m['lp_window_share']:19.0%}")
+    print(f"(medians of {args.runs} runs; real time at 120 Hz is 8.33 ms per frame, the goal 4 ms)")
+
+
+if __name__ == "__main__":
+    main()
