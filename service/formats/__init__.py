@@ -43,7 +43,7 @@ def check_output(path: str | Path) -> None:
     _by_suffix(_WRITERS, path, "write")
     folder = Path(path).parent
     if not folder.is_dir():
-        raise InputError(f"{path}: folder {folder} does not exist")
+        raise InputError(f"{path}: cannot write there, folder {folder} does not exist")
 
 
 def _by_suffix(
