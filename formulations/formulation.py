@@ -13,8 +13,12 @@ class Formulation(ABC):
     """Poses and solves one window.
 
     Subclasses are small frozen dataclasses whose fields are their parameters (with
-    defaults), and whose ``solve`` returns integral paths with their objective evaluated
-    by ``formulations.objective.path_cost``, so costs compare across formulations.
+    defaults, documented under ``Attributes``), and whose ``solve`` returns integral paths
+    with their objective evaluated by ``formulations.objective.path_cost``, so costs
+    compare across formulations. ``lower_bound`` is a proven bound on the optimum (the
+    optimum itself for exact methods, -inf when a method proves none); ``integral`` is True
+    only when the returned paths are proven optimal. A parameter out of range, or a
+    problem the formulation cannot take, raises ``FormulationError`` naming it.
     """
 
     name: ClassVar[str]
