@@ -5,6 +5,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from typing import ClassVar
 
+from formulations.errors import FormulationError
 from formulations.solution import WindowSolution
 from formulations.window import WindowProblem
 
@@ -26,3 +27,23 @@ class Formulation(ABC):
     @abstractmethod
     def solve(self, problem: WindowProblem) -> WindowSolution:
         """Integral paths for the window, with their certificate."""
+
+
+def check_parameters(
+    formulation: Formulation, positive: tuple[str, ...] = (), non_negative: tuple[str, ...] = (),
+    optional_positive: tuple[str, ...] = (),
+) -> None:
+    """Raise ``FormulationError`` naming the first parameter out of range."""
+    def bad(name: str, value: object, rule: str) -> FormulationError:
+        return FormulationError(f"{formulation.name}: parameter '{name}' must be {rule}, got {value!r}")
+
+    for name in positive + non_negative + optional_positive:
+        value = getattr(formulation, name)
+        if value is None and name in optional_positive:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
+            raise bad(name, value, "a number")
+        if name in non_negative and value < 0:
+            raise bad(name, value, ">= 0")
+        if name not in non_negative and value <= 0:
+            raise bad(name, value, "> 0")

@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 
 from formulations.decomposed import solve_decomposed
-from formulations.formulation import Formulation
+from formulations.formulation import Formulation, check_parameters
 from formulations.lp_model import inflow_matrix, window_lp
 from formulations.objective import path_arcs, path_cost
 from formulations.pricing import solve_with_pricing
@@ -43,6 +43,10 @@ class LpL1(Formulation):
     pricing_min_arcs: int = 4000
     pricing_successors: int = 1
     time_limit: float | None = None
+
+    def __post_init__(self) -> None:
+        check_parameters(self, positive=("integrality_tolerance", "pricing_successors"),
+                         non_negative=("pricing_min_arcs",), optional_positive=("time_limit",))
 
     def solve(self, problem: WindowProblem) -> WindowSolution:
         if self.decompose:

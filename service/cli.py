@@ -17,7 +17,7 @@ from service.errors import InputError
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="Name every marker in every frame.")
 err = Console(stderr=True)
 
-FormulationOption = Annotated[Optional[str], typer.Option("--formulation", "-f", help="Window formulation, e.g. lp-l1.")]
+FormulationOption = Annotated[Optional[str], typer.Option("--formulation", "-f", help="Formulation name (see `markerflow formulations`) or a TOML file with a [formulation] table.")]
 WindowOption = Annotated[Optional[int], typer.Option("--window", "-w", help="Frames per window, template included.")]
 
 
@@ -62,6 +62,25 @@ def evaluate(
     from service.commands.evaluate import run_eval
 
     _guard(lambda: run_eval(trajectories, scenario, formulation, window, as_json))
+
+
+@app.command("formulations")
+def list_formulations() -> None:
+    """List the window formulations with their parameters and defaults."""
+    from service.commands.formulations import run_formulations
+
+    _guard(run_formulations)
+
+
+@app.command()
+def integrality(
+    formulation: Annotated[str, typer.Option("--formulation", "-f", help="Name or TOML with a [formulation] table.")] = "lp-l1",
+    corpus: Annotated[Optional[Path], typer.Option(help="Corpus folder (default: the repo's tests/fixtures/integrality).")] = None,
+) -> None:
+    """Integral windows, gaps and agreement with the ILP optimum on the window corpus."""
+    from service.commands.integrality import run_integrality
+
+    _guard(lambda: run_integrality(formulation, corpus))
 
 
 def _guard(action) -> None:

@@ -16,6 +16,7 @@ import numpy as np
 from formulations.components import coupled_components
 from formulations.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
 from formulations.costs import ArcCostWeights
+from formulations.errors import FormulationError
 from formulations.formulation import Formulation
 from formulations.marker_state import MarkerState
 from formulations.network import build_window
@@ -58,8 +59,17 @@ class CloudLabeler:
     def label(
         self, cloud: UnlabeledCloud, names: list[str], first_frame: np.ndarray,
         progress: Callable[[int, int], None] | None = None,
+        observer: Callable[[int, WindowProblem, WindowSolution], None] | None = None,
     ) -> tuple[LabeledTrajectories, list[WindowStats]]:
-        """Label ``cloud``; ``first_frame`` is ``(markers, 3)``, the labeled frame 0."""
+        """Label ``cloud``; ``first_frame`` is ``(markers, 3)``, the labeled frame 0.
+
+        Args:
+            cloud: The unlabeled points.
+            names: Marker names.
+            first_frame: ``(markers, 3)`` labeled positions of frame 0.
+            progress: Called with (windows done, windows) after each window.
+            observer: Called with (template frame, problem, solution) after each window.
+        """
         formulation = self._formulation()
         state = self._first_state(names, first_frame)
         n, frames = len(names), cloud.n_frames
@@ -75,11 +85,13 @@ class CloudLabeler:
             if self.layout_weight > 0:
                 problem = _with_layout(problem, state, self.layout_neighbours, self.layout_weight)
             prepared = time.perf_counter() - began
-            solution = formulation.solve(problem)
+            solution = _solve(formulation, problem, start)
             taken = _taken_points(gated, node_candidate, solution)
             point_index[start + 1 : last + 1] = taken.T
             state = _advance(state, window_points, taken)
             stats.append(WindowStats.of(start, last, solution, prepared, time.perf_counter() - began))
+            if observer:
+                observer(start, problem, solution)
             if progress:
                 progress(k + 1, len(spans))
         return _trajectories(cloud, names, point_index), stats
@@ -87,7 +99,7 @@ class CloudLabeler:
     def _formulation(self) -> Formulation:
         try:
             return get_formulation(self.formulation)
-        except ValueError as error:
+        except FormulationError as error:
             raise InputError(str(error)) from None
 
     def _first_state(self, names: list[str], first_frame: np.ndarray) -> MarkerState:
@@ -105,6 +117,14 @@ class CloudLabeler:
 
         radius = self.gating.gate.radius_mm
         return assign_nearest(positions, points, np.full(len(positions), radius), miss_cost=radius)
+
+
+def _solve(formulation: Formulation, problem: WindowProblem, template: int) -> WindowSolution:
+    """A formulation that cannot take this window is the user's choice to revisit: one line."""
+    try:
+        return formulation.solve(problem)
+    except FormulationError as error:
+        raise InputError(f"window from frame {template}: {error}") from None
 
 
 def _taken_points(gated: CloudWindow, node_candidate: np.ndarray, solution: WindowSolution) -> np.ndarray:

@@ -9,6 +9,7 @@ from typing import Callable
 import numpy as np
 
 from service.cloud_labeler import CloudLabeler
+from service.formulation_spec import formulation_from_table
 from service.recording import LabeledTrajectories, Recording
 from service.scenario import Scenario
 from service.scores import LabelScores, label_scores
@@ -52,7 +53,9 @@ def evaluate(
     progress: Callable[[int, int], None] | None = None,
 ) -> Evaluation:
     """Simulate ``scenario`` on ``truth``, label it, and score the result."""
-    labeler = labeler or CloudLabeler(formulation=scenario.formulation, window=scenario.window)
+    if labeler is None:
+        table = {"name": scenario.formulation, **scenario.formulation_parameters}
+        labeler = CloudLabeler(formulation=formulation_from_table(table, "scenario"), window=scenario.window)
     capture = simulate_cloud(truth, scenario)
     start = time.perf_counter()
     result, windows = labeler.label(capture.cloud, capture.first_frame.names, capture.first_frame.positions[0], progress)

@@ -2,7 +2,7 @@
 
 import math
 import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,9 @@ class Scenario:
         seed: Seed of the numpy random generator; the simulation is a function of it.
         start_frame: First frame of the recording used.
         frames: Number of frames used; 0 means up to the end of the recording.
-        formulation: Name of the labeling formulation.
+        formulation: Name of the labeling formulation. In TOML also a table
+            ``[formulation]`` with ``name`` and the formulation's parameters.
+        formulation_parameters: The parameters of that table (filled by ``from_dict``).
     """
 
     mode: str = "cloud"
@@ -43,6 +45,7 @@ class Scenario:
     start_frame: int = 0
     frames: int = 0
     formulation: str = "lp-l1"
+    formulation_parameters: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -56,8 +59,15 @@ class Scenario:
         Raises:
             InputError: On an unknown key, or a value of the wrong type or out of range.
         """
-        known = [f.name for f in fields(cls)]
+        d = dict(d)
+        if isinstance(d.get("formulation"), dict):
+            table = dict(d["formulation"])
+            d["formulation"] = table.pop("name", "")
+            d["formulation_parameters"] = table
+        known = [f.name for f in fields(cls) if f.name != "formulation_parameters"]
         for key in d:
+            if key == "formulation_parameters":
+                continue
             if key not in known:
                 raise InputError(f"unknown scenario key '{key}' (known keys: {', '.join(known)})")
         return cls(**d)
@@ -129,6 +139,8 @@ def _typed(key: str, value: Any, kind: type) -> Any:
         return value
     if kind is str and isinstance(value, str):
         return value
-    expected = {float: "a number", int: "an integer", str: "a string"}[kind]
+    if kind is dict and isinstance(value, dict):
+        return value
+    expected = {float: "a number", int: "an integer", str: "a string", dict: "a table"}[kind]
     raise InputError(f"scenario key '{key}' must be {expected}, got {value!r}")
 

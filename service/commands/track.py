@@ -9,6 +9,7 @@ import numpy as np
 from service.cloud_labeler import CloudLabeler
 from service.commands.report import out, window_progress
 from service.formats import check_output, read_labeled, write_labeled
+from service.formulation_spec import formulation_from_spec
 from service.recording import Recording, UnlabeledCloud
 
 
@@ -17,7 +18,7 @@ def run_track(input: Path, output: Path, formulation: str, window: int, shuffle:
     check_output(output)
     recording = read_labeled(input)
     cloud = unlabeled_cloud(recording, shuffle)
-    labeler = CloudLabeler(formulation=formulation, window=window)
+    labeler = CloudLabeler(formulation=formulation_from_spec(formulation), window=window)
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeler.label(cloud, recording.names, recording.positions[0], progress)
     write_labeled(output, result)

@@ -1,0 +1,59 @@
+"""Formulations are swapped by one argument: name, instance, or TOML table."""
+
+import dataclasses
+
+import pytest
+
+from formulations.errors import FormulationError
+from formulations.lp_l1 import LpL1
+from formulations.registry import describe, get_formulation, names
+from service.errors import InputError
+from service.formulation_spec import formulation_from_spec
+from service.scenario import Scenario
+
+
+def test_every_formulation_lists_its_parameters_with_docs_and_defaults():
+    for description in describe():
+        assert description.doc
+        fields = {f.name for f in dataclasses.fields(get_formulation(description.name))}
+        assert {p.name for p in description.parameters} == fields
+        assert all(p.doc for p in description.parameters), description.name
+
+
+def test_name_with_parameters_builds_the_instance():
+    chosen = get_formulation("lp-l1", decompose=False, pricing_successors=2)
+    assert chosen == LpL1(decompose=False, pricing_successors=2)
+    assert get_formulation(chosen) is chosen
+
+
+@pytest.mark.parametrize("name,parameters,named", [
+    ("nope", {}, "nope"),
+    ("lp-l1", {"pricing_sucessors": 2}, "pricing_sucessors"),
+    ("lp-l1", {"pricing_successors": -1}, "pricing_successors"),
+    ("lp-l1", {"integrality_tolerance": 0}, "integrality_tolerance"),
+    ("lp-l1", {"time_limit": -5.0}, "time_limit"),
+])
+def test_bad_choices_name_what_is_wrong(name, parameters, named):
+    with pytest.raises(FormulationError, match=named):
+        get_formulation(name, **parameters)
+
+
+def test_toml_table_and_scenario_table_choose_the_same_formulation(tmp_path):
+    preset = tmp_path / "whole.toml"
+    preset.write_text('[formulation]\nname = "lp-l1"\ndecompose = false\n')
+    assert formulation_from_spec(str(preset)) == LpL1(decompose=False)
+    scenario = Scenario.from_dict({"formulation": {"name": "lp-l1", "decompose": False}})
+    assert (scenario.formulation, scenario.formulation_parameters) == ("lp-l1", {"decompose": False})
+
+
+def test_toml_errors_are_one_line_input_errors(tmp_path):
+    nameless = tmp_path / "nameless.toml"
+    nameless.write_text("[formulation]\ndecompose = false\n")
+    with pytest.raises(InputError, match="needs name"):
+        formulation_from_spec(str(nameless))
+    with pytest.raises(InputError, match="bogus"):
+        formulation_from_spec(str(tmp_path / "bogus.toml"))
+
+
+def test_all_documented_names_are_registered():
+    assert {"lp-l1", "lp-l1-cvxpy"} <= set(names())
