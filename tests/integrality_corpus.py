@@ -1,7 +1,11 @@
-"""The fixed corpus of the integrality regression: windows and how lp-l1 does on them.
+"""Build the integrality corpus: windows saved as fixture files with their recorded figures.
 
-Run ``python tests/integrality_corpus.py`` to print the figures and rewrite
-``fixtures/integrality.json`` (only when a change is meant to move the baseline).
+    .venv/bin/python tests/integrality_corpus.py
+
+writes ``tests/fixtures/integrality/<corpus>/<n>.npz`` and ``recorded.json`` (per window:
+the LP objective, whether the LP optimum was integral, the rounded cost and the ILP
+optimum). Run it only when a change is meant to move the baseline; the regression test
+and ``markerflow integrality`` read what it wrote.
 """
 
 from __future__ import annotations
@@ -12,40 +16,77 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
-from formulations.lp_l1 import LpL1  # noqa: E402
+from formulations.components import coupled_components, restrict  # noqa: E402
 from formulations.network import build_window  # noqa: E402
+from formulations.objective import conflicts  # noqa: E402
+from formulations.registry import get_formulation  # noqa: E402
+from formulations.viterbi import shortest_paths  # noqa: E402
+from service.cloud_labeler import CloudLabeler  # noqa: E402
+from service.formats import read_labeled  # noqa: E402
+from service.integrality import RECORD  # noqa: E402
 from service.jiang_instance import jiang_instance  # noqa: E402
+from service.scenario import Scenario  # noqa: E402
+from service.simulate_cloud import simulate_cloud  # noqa: E402
+from service.window_files import save_window  # noqa: E402
 from windows import random_window  # noqa: E402
 
-FIXTURE = Path(__file__).parent / "fixtures" / "integrality.json"
+FOLDER = ROOT / "tests" / "fixtures" / "integrality"
+DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"
+LP = get_formulation("lp-l1", decompose=False)
 
 
-def corpora() -> dict[str, list]:
-    """Named lists of windows: generated at several sizes, with and without layout."""
-    instances = [jiang_instance(n_frames=10, n_observations=12, seed=s) for s in range(8)]
-    jiang = [build_window(i.candidates, i.weights)[0] for i in instances]
+def generated() -> dict[str, list]:
+    """Generated windows across sizes and clutter."""
+    jiang = [jiang_instance(n_frames=10, n_observations=k, seed=s) for k in (8, 16, 24) for s in range(5)]
     return {
-        "jiang-10x12-mu0": jiang,
-        "random-3x4-mu0": [random_window(s, n_objects=3, n_frames=4, n_points=4, per_object=3) for s in range(30)],
-        "random-3x3-mu0.3": [random_window(s, n_objects=3, n_frames=3, n_points=4, per_object=2, mu=0.3) for s in range(30)],
+        "random-3x4": [random_window(s, n_objects=3, n_frames=4, n_points=4, per_object=3) for s in range(20)],
+        "jiang-3x10-clutter": [build_window(i.candidates, i.weights)[0] for i in jiang],
+        "random-3x3-layout": [random_window(s, n_objects=3, n_frames=3, n_points=4, per_object=2, mu=0.3) for s in range(20)],
     }
 
 
-def measure(windows: list) -> dict[str, float]:
-    solutions = [LpL1(decompose=False).solve(w) for w in windows]
-    gaps = np.array([s.gap for s in solutions])
-    return {
-        "windows": len(windows),
-        "integral_fraction": float(np.mean([s.integral for s in solutions])),
-        "gap_median": float(np.median(gaps)),
-        "gap_max": float(gaps.max()),
-    }
+def from_recording(name: str, seeds: range, frames: int, limit: int) -> list:
+    """Coupled components whose objects' Viterbi paths collide: what reaches the LP."""
+    truth = read_labeled(DATA / name)
+    found: list = []
+
+    def keep(_template, problem, _solution) -> None:
+        label = coupled_components(problem)
+        colliding = set(problem.node_object[problem.conflict_groups[conflicts(problem, shortest_paths(problem)[0])].indices])
+        for component in {label[o] for o in colliding}:
+            found.append(restrict(problem, np.flatnonzero(label == component))[0])
+
+    for seed in seeds:
+        capture = simulate_cloud(truth, Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10,
+                                                 ghosts_per_frame=2.0, seed=seed, frames=frames))
+        CloudLabeler().label(capture.cloud, capture.first_frame.names, capture.first_frame.positions[0], observer=keep)
+    return found[:limit]
+
+
+def record(name: str, windows: list) -> list[dict]:
+    ilp = get_formulation("ilp", decompose=False, time_limit=300.0)
+    folder = FOLDER / name
+    folder.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for i, problem in enumerate(windows):
+        file = f"{name}/{i:03d}.npz"
+        save_window(FOLDER / file, problem)
+        lp, exact = LP.solve(problem), ilp.solve(problem)
+        assert exact.integral, f"{file}: ILP not proven optimal ({exact.status})"
+        rows.append({"file": file, "lp_objective": lp.lower_bound, "lp_integral": lp.integral,
+                     "rounded_cost": lp.cost, "ilp_optimum": exact.cost})
+    return rows
 
 
 if __name__ == "__main__":
-    figures = {name: measure(windows) for name, windows in corpora().items()}
-    print(json.dumps(figures, indent=2))
-    FIXTURE.write_text(json.dumps(figures, indent=2) + "\n")
+    corpora = generated() | {
+        "cmu-85-02-cloud": from_recording("85_02.c3d", range(2), 0, 30),
+        "cmu-135-02-cloud": from_recording("135_02.c3d", range(1), 1500, 30),
+    }
+    recorded = {name: record(name, windows) for name, windows in corpora.items()}
+    (FOLDER / RECORD).write_text(json.dumps(recorded, indent=1) + "\n")
+    for name, rows in recorded.items():
+        print(f"{name:22s} {len(rows):3d} windows, LP integral {np.mean([r['lp_integral'] for r in rows]):.0%}")
