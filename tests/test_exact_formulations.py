@@ -11,7 +11,7 @@ from formulations.lp_l1 import LpL1
 from formulations.network import build_window
 from formulations.objective import conflicts, path_cost
 from service.jiang_instance import jiang_instance
-from windows import brute_force, random_window
+from windows import assert_feasible, brute_force, random_window
 
 # (seed, objects, frames): 2-3 objects drawing 2 of 3 shared points per frame, so most
 # windows are coupled by conflicts (and by the layout term when mu > 0).
@@ -21,14 +21,6 @@ MU = [0.0, 0.4]
 
 def window(seed, n_objects, n_frames, mu):
     return random_window(seed, n_objects=n_objects, n_frames=n_frames, n_points=3, per_object=2, mu=mu)
-
-
-def assert_feasible(problem, path):
-    """One node of the object's own block per frame, no conflict group used twice."""
-    assert path.shape == (problem.n_objects, problem.n_frames)
-    assert (problem.node_object[path] == np.arange(problem.n_objects)[:, None]).all()
-    assert (problem.node_frame[path] == np.arange(1, problem.n_frames + 1)).all()
-    assert len(conflicts(problem, path)) == 0
 
 
 @pytest.mark.parametrize("seed,n_objects,n_frames", SMALL)

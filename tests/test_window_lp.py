@@ -7,17 +7,9 @@ from formulations.lp_l1 import LpL1
 from formulations.lp_l1_cvxpy import LpL1Cvxpy
 from formulations.objective import conflicts, path_cost
 from formulations.viterbi import shortest_paths
-from windows import brute_force, random_window
+from windows import assert_feasible, brute_force, random_window
 
 TINY = [(seed, n_obj, per_object) for seed in range(12) for n_obj, per_object in ((2, 2), (3, 2), (3, 3))]
-
-
-def assert_feasible(problem, path):
-    """One node of the object's own block per frame, no conflict group used twice."""
-    assert path.shape == (problem.n_objects, problem.n_frames)
-    assert (problem.node_object[path] == np.arange(problem.n_objects)[:, None]).all()
-    assert (problem.node_frame[path] == np.arange(1, problem.n_frames + 1)).all()
-    assert len(conflicts(problem, path)) == 0
 
 
 @pytest.mark.parametrize("seed,n_objects,per_object", TINY)

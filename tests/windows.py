@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from formulations.candidates import WindowCandidates
 from formulations.costs import ArcCostWeights
 from formulations.network import build_window
-from formulations.objective import path_arcs
+from formulations.objective import conflicts, path_arcs
 from formulations.window import WindowProblem
 
 
@@ -85,3 +85,11 @@ def _layout_costs(problem: WindowProblem, joint: np.ndarray) -> np.ndarray:
     a, b = problem.layout_pairs[:, 0], problem.layout_pairs[:, 1]
     change = np.abs(np.diff(p[:, a] - p[:, b], axis=2)).sum(axis=(2, 3))  # (J, P)
     return change @ problem.layout_weight
+
+
+def assert_feasible(problem, path):
+    """One node of the object's own block per frame, no conflict group used twice."""
+    assert path.shape == (problem.n_objects, problem.n_frames)
+    assert (problem.node_object[path] == np.arange(problem.n_objects)[:, None]).all()
+    assert (problem.node_frame[path] == np.arange(1, problem.n_frames + 1)).all()
+    assert len(conflicts(problem, path)) == 0
