@@ -9,7 +9,7 @@ from formulations.errors import FormulationError
 from formulations.ilp import Ilp
 from formulations.lp_l1 import LpL1
 from formulations.network import build_window
-from formulations.objective import conflicts, path_cost
+from formulations.objective import path_cost
 from service.jiang_instance import jiang_instance
 from windows import assert_feasible, brute_force, random_window
 

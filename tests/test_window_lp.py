@@ -1,6 +1,5 @@
 """The window LP against exhaustive search and against a plain cvxpy model."""
 
-import numpy as np
 import pytest
 
 from formulations.lp_l1 import LpL1

@@ -6,7 +6,7 @@ import dataclasses
 import json
 from pathlib import Path
 
-from service.commands.report import out, print_summary, window_progress
+from service.commands.report import print_summary, window_progress
 from service.cloud_labeler import CloudLabeler
 from service.evaluation import evaluate
 from service.formulation_spec import formulation_from_spec
