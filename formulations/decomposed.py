@@ -9,12 +9,14 @@ integral optimum is feasible. Only the remaining components reach ``solve_couple
 from __future__ import annotations
 
 import time
+from abc import abstractmethod
 from collections import Counter
 from typing import Callable
 
 import numpy as np
 
 from formulations.components import coupled_components, restrict
+from formulations.formulation import Formulation
 from formulations.objective import conflicts, path_cost
 from formulations.solution import WindowSolution
 from formulations.viterbi import shortest_paths
@@ -52,3 +54,22 @@ def solve_decomposed(
         build_seconds=sum(p.build_seconds for p in parts), solve_seconds=solve_seconds,
         round_seconds=sum(p.round_seconds for p in parts), components=dict(counts),
     )
+
+
+class ComponentwiseFormulation(Formulation):
+    """A formulation that solves each coupled component with ``solve_coupled``.
+
+    Subclasses have a ``decompose`` parameter; when it is False the whole window goes to
+    ``solve_coupled`` at once.
+    """
+
+    decompose: bool
+
+    def solve(self, problem: WindowProblem) -> WindowSolution:
+        if self.decompose:
+            return solve_decomposed(problem, self.solve_coupled)
+        return self.solve_coupled(problem)
+
+    @abstractmethod
+    def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
+        """Solve one (sub-)window as a whole."""

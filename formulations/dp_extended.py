@@ -26,9 +26,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
 
-from formulations.decomposed import solve_decomposed
+from formulations.decomposed import ComponentwiseFormulation
 from formulations.errors import FormulationError
-from formulations.formulation import Formulation, check_parameters
+from formulations.formulation import check_parameters
 from formulations.objective import path_cost
 from formulations.solution import WindowSolution
 from formulations.window import WindowProblem
@@ -37,7 +37,7 @@ CHUNK_ELEMENTS = 1 << 20  # transition entries per chunk: 8 MB of float64, cache
 
 
 @dataclass(frozen=True)
-class DpExtended(Formulation):
+class DpExtended(ComponentwiseFormulation):
     """Exact multi-object Viterbi on the joint trellis (extended DP), layout term included.
 
     Attributes:
@@ -56,11 +56,6 @@ class DpExtended(Formulation):
         check_parameters(self, positive=("max_states",))
         if not isinstance(self.max_states, numbers.Integral):
             raise FormulationError(f"{self.name}: parameter 'max_states' must be an integer, got {self.max_states!r}")
-
-    def solve(self, problem: WindowProblem) -> WindowSolution:
-        if self.decompose:
-            return solve_decomposed(problem, self.solve_coupled)
-        return self.solve_coupled(problem)
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """Joint Viterbi over the whole (sub-)window."""

@@ -21,8 +21,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from formulations.decomposed import solve_decomposed
-from formulations.formulation import Formulation, check_parameters
+from formulations.decomposed import ComponentwiseFormulation
+from formulations.formulation import check_parameters
 from formulations.lp_model import inflow_matrix, window_lp
 from formulations.objective import path_cost
 from formulations.rounding import round_greedy
@@ -32,7 +32,7 @@ from formulations.window import WindowProblem
 
 
 @dataclass(frozen=True)
-class Ilp(Formulation):
+class Ilp(ComponentwiseFormulation):
     """Jiang's 0/1 program solved to proven optimality by HiGHS branch and bound.
 
     ``integral`` is True only when HiGHS proves the incumbent optimal (within
@@ -55,11 +55,6 @@ class Ilp(Formulation):
 
     def __post_init__(self) -> None:
         check_parameters(self, non_negative=("mip_gap",), optional_positive=("time_limit",))
-
-    def solve(self, problem: WindowProblem) -> WindowSolution:
-        if self.decompose:
-            return solve_decomposed(problem, self.solve_coupled)
-        return self.solve_coupled(problem)
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """Build and solve one 0/1 program over the whole (sub-)window."""

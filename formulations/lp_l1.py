@@ -8,8 +8,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from formulations.decomposed import solve_decomposed
-from formulations.formulation import Formulation, check_parameters
+from formulations.decomposed import ComponentwiseFormulation
+from formulations.formulation import check_parameters
 from formulations.lp_model import inflow_matrix, window_lp
 from formulations.objective import path_arcs, path_cost
 from formulations.pricing import solve_with_pricing
@@ -23,7 +23,7 @@ PRIMAL_SIMPLEX = 4  # HiGHS simplex_strategy
 
 
 @dataclass(frozen=True)
-class LpL1(Formulation):
+class LpL1(ComponentwiseFormulation):
     """The LP relaxation of multi-path flow with conflict groups (Jiang et al. 2008, II-D).
 
     Solved with HiGHS dual simplex; a fractional optimum is rounded greedily (II-D) and
@@ -47,11 +47,6 @@ class LpL1(Formulation):
     def __post_init__(self) -> None:
         check_parameters(self, positive=("integrality_tolerance", "pricing_successors"),
                          non_negative=("pricing_min_arcs",), optional_positive=("time_limit",))
-
-    def solve(self, problem: WindowProblem) -> WindowSolution:
-        if self.decompose:
-            return solve_decomposed(problem, self.solve_coupled)
-        return self.solve_coupled(problem)
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """Build, solve, round and certify one LP over the whole (sub-)window."""
