@@ -21,6 +21,11 @@ from formulations.formulation import Formulation
 _FORMULATIONS = {
     "lp-l1": "formulations.lp_l1:LpL1",
     "lp-l1-cvxpy": "formulations.lp_l1_cvxpy:LpL1Cvxpy",
+    "qp-l2": "formulations.qp_l2:QpL2",
+    "ilp": "formulations.ilp:Ilp",
+    "dp-sequential": "formulations.dp_sequential:DpSequential",
+    "dp-extended": "formulations.dp_extended:DpExtended",
+    "nn-hungarian": "formulations.nn_hungarian:NnHungarian",
 }
 
 

@@ -56,4 +56,4 @@ def test_toml_errors_are_one_line_input_errors(tmp_path):
 
 
 def test_all_documented_names_are_registered():
-    assert {"lp-l1", "lp-l1-cvxpy"} <= set(names())
+    assert set(names()) == {"lp-l1", "lp-l1-cvxpy", "qp-l2", "ilp", "dp-sequential", "dp-extended", "nn-hungarian"}
