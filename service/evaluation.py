@@ -30,7 +30,10 @@ class Evaluation:
     formulation: str
 
     def summary(self) -> dict[str, float | int | str]:
-        """The stable figures ``markerflow eval --json`` prints."""
+        """The stable figures ``markerflow eval --json`` prints.
+
+        Gaps are None where a formulation proves no bound (heuristics): JSON has no inf.
+        """
         gaps = np.array([w.gap for w in self.windows]) if self.windows else np.zeros(1)
         frames = self.capture.cloud.n_frames
         return {
@@ -39,13 +42,17 @@ class Evaluation:
             "ghost_precision": self.scores.ghost_precision,
             "ghost_recall": self.scores.ghost_recall,
             "integral_window_fraction": float(np.mean([w.integral for w in self.windows])) if self.windows else 1.0,
-            "gap_median": float(np.median(gaps)),
-            "gap_max": float(np.max(gaps)),
+            "gap_median": _finite_or_none(np.median(gaps)),
+            "gap_max": _finite_or_none(np.max(gaps)),
             "seconds_per_frame": self.seconds / max(frames - 1, 1),
             "frames": frames,
             "markers": len(self.capture.first_frame.names),
             "formulation": self.formulation,
         }
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
 
 
 def evaluate(

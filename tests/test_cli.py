@@ -106,6 +106,14 @@ def test_eval_takes_the_formulation_option(tmp_path: Path) -> None:
     assert (summary["formulation"], summary["frames"]) == ("lp-l1-cvxpy", 40)
 
 
+def test_eval_json_is_strict_json_when_a_heuristic_proves_no_bound(tmp_path: Path) -> None:
+    scenario = write_scenario(tmp_path / "s.toml", frames=40)
+    result = run_cli("eval", CMU, "--scenario", scenario, "--json", "--formulation", "nn-hungarian")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads(result.stdout, parse_constant=lambda name: pytest.fail(f"non-JSON constant {name}"))
+    assert (summary["gap_median"], summary["gap_max"], summary["integral_window_fraction"]) == (None, None, 0.0)
+
+
 def test_track_writes_c3d_that_puts_every_point_back_under_its_label(tmp_path: Path) -> None:
     # The whole of 85_02 (810 frames) tracks in about 1.5 s, so no cut-down copy is needed.
     result = run_cli("track", CMU, "--out", tmp_path / "x.c3d")

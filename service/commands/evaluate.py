@@ -26,6 +26,6 @@ def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, w
     with window_progress(f"labeling {trajectories.name}") as progress:
         result = evaluate(truth, scenario, labeler, progress=progress)
     if as_json:
-        print(json.dumps(result.summary()))
+        print(json.dumps(result.summary(), allow_nan=False))
     else:
         print_summary(result.summary(), f"{trajectories.name} · {scenario_path.name}")

@@ -34,7 +34,12 @@ def print_summary(summary: dict, title: str) -> None:
     table = Table(title=title, show_header=False)
     for key, value in summary.items():
         label, fmt = LABELS.get(key, (key, "{}"))
-        text = f"{1000 * value:.2f}" if key == "seconds_per_frame" else fmt.format(value)
+        if value is None:
+            text = "none proven"
+        elif key == "seconds_per_frame":
+            text = f"{1000 * value:.2f}"
+        else:
+            text = fmt.format(value)
         table.add_row(label, text)
     out.print(table)
 
