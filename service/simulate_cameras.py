@@ -1,8 +1,6 @@
 """Camera-mode simulator: labeled trajectories -> per-camera 2D detections through a rig."""
 
-import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -10,6 +8,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from formulations.cameras import Camera
 from service.errors import InputError
 from service.recording import Recording
 
@@ -36,24 +35,16 @@ class CameraRig:
     image_size: np.ndarray
 
     @classmethod
-    def from_pose2sim_toml(cls, path: str | Path) -> "CameraRig":
-        """Read a Pose2Sim calibration (one table per camera; translation in metres)."""
-        with open(path, "rb") as fh:
-            tables = [
-                t
-                for t in tomllib.load(fh).values()
-                if isinstance(t, dict) and "matrix" in t
-            ]
-
-        def stack(key: str) -> np.ndarray:
-            return np.array([t[key] for t in tables], dtype=float)
-
+    def from_cameras(cls, cameras: list[Camera]) -> "CameraRig":
+        """Stack validated cameras (e.g. from ``service.calibration``, in mm) into a rig."""
+        width = max(len(c.distortion) for c in cameras)
+        distortion = np.zeros((len(cameras), width))
+        for i, camera in enumerate(cameras):
+            distortion[i, : len(camera.distortion)] = camera.distortion
         return cls(
-            K=stack("matrix"),
-            distortion=stack("distortions"),
-            rvec=stack("rotation"),
-            tvec=1000.0 * stack("translation"),
-            image_size=stack("size"),
+            K=np.stack([c.K for c in cameras]), distortion=distortion,
+            rvec=np.stack([c.rvec for c in cameras]), tvec=np.stack([c.t for c in cameras]),
+            image_size=np.stack([np.asarray(c.image_size, dtype=float) for c in cameras]),
         )
 
     def rotations(self) -> np.ndarray:

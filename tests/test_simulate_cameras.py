@@ -8,6 +8,7 @@ from conftest import DATA
 
 from service.errors import InputError
 from service.recording import Recording
+from service.calibration import load_pose2sim_toml
 from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
 
 CALIBRATION = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"
@@ -24,7 +25,7 @@ CLEAN = {
 
 @pytest.fixture(scope="module")
 def rig() -> CameraRig:
-    return CameraRig.from_pose2sim_toml(CALIBRATION)
+    return rig_from(CALIBRATION)
 
 
 @pytest.fixture(scope="module")
@@ -164,3 +165,7 @@ def test_bad_settings_and_unlabeled_first_frame_are_input_errors(placed, rig):
     gappy[0, 4] = np.nan
     with pytest.raises(InputError, match=placed.names[4]):
         simulate_cameras(Recording(placed.names, gappy, 120.0), rig, **CLEAN)
+
+
+def rig_from(path) -> CameraRig:
+    return CameraRig.from_cameras(load_pose2sim_toml(path, units="mm"))
