@@ -18,6 +18,7 @@ from formulations.cloud_candidates import CloudGating, CloudWindow, cloud_candid
 from formulations.costs import ArcCostWeights
 from formulations.errors import FormulationError
 from formulations.formulation import Formulation
+from formulations.guide import assign_nearest
 from formulations.marker_state import MarkerState
 from formulations.network import build_window
 from formulations.registry import get_formulation
@@ -113,8 +114,6 @@ class CloudLabeler:
 
     def _match_first_frame(self, points: np.ndarray, positions: np.ndarray) -> np.ndarray:
         """The first frame's point of each labeled marker (the user labeled frame 0)."""
-        from formulations.guide import assign_nearest
-
         radius = self.gating.gate.radius_mm
         return assign_nearest(positions, points, np.full(len(positions), radius), miss_cost=radius)
 
