@@ -23,6 +23,7 @@ import numpy as np
 
 from formulations.decomposed import ComponentwiseFormulation
 from formulations.formulation import check_parameters
+from formulations.lp_l1 import LpL1
 from formulations.lp_model import inflow_matrix, window_lp
 from formulations.objective import path_cost
 from formulations.rounding import round_greedy
@@ -46,18 +47,30 @@ class Ilp(ComponentwiseFormulation):
         mip_gap: Relative gap (cost - bound) / |cost| at which HiGHS stops (its
             ``mip_rel_gap``).
         decompose: Solve independent components apart (Viterbi where exact).
+        lp_first: Solve the LP relaxation first and skip branch and bound when its
+            optimum is integral (it is then the global optimum: Jiang's observation that
+            the LP almost always is, which makes this much faster).
     """
 
     name: ClassVar[str] = "ilp"
     time_limit: float | None = 60.0
     mip_gap: float = 1e-6
     decompose: bool = True
+    lp_first: bool = True
 
     def __post_init__(self) -> None:
         check_parameters(self, non_negative=("mip_gap",), optional_positive=("time_limit",))
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
-        """Build and solve one 0/1 program over the whole (sub-)window."""
+        """The LP's optimum if integral, else one 0/1 program over the whole (sub-)window."""
+        if self.lp_first:
+            relaxed = LpL1(decompose=False, time_limit=self.time_limit).solve_coupled(problem)
+            if relaxed.integral:
+                relaxed.status = "Optimal (LP relaxation integral)"
+                return relaxed
+        return self._branch_and_bound(problem)
+
+    def _branch_and_bound(self, problem: WindowProblem) -> WindowSolution:
         start = time.perf_counter()
         model = window_lp(problem, integer=True)
         build = time.perf_counter() - start
