@@ -68,8 +68,20 @@ class CloudWindow:
     guide: GuideTrack
 
 
-def cloud_candidates(state: MarkerState, frames: list[np.ndarray], gating: CloudGating = CloudGating()) -> CloudWindow:
-    """Gate every frame's points around the guide track's predictions."""
+def cloud_candidates(
+    state: MarkerState, frames: list[np.ndarray], gating: CloudGating = CloudGating(),
+    point_resources: list[sp.csr_matrix] | None = None,
+) -> CloudWindow:
+    """Gate every frame's points around the guide track's predictions.
+
+    Args:
+        state: The markers at the template frame.
+        frames: ``(points, 3)`` per window frame.
+        gating: Gates and template-term weights.
+        point_resources: Per frame, ``(points, R_f)`` 0/1: what each point consumes when
+            points are not independent (triangulated points sharing a camera detection).
+            None: each point is its own resource.
+    """
     guide = guide_track(state, frames, gating.gate)
     objects, frame_of, points = [], [], []
     for f, cloud in enumerate(frames):
@@ -83,7 +95,6 @@ def cloud_candidates(state: MarkerState, frames: list[np.ndarray], gating: Cloud
     obj, frame, point = (np.concatenate(a) if a else np.zeros(0, int) for a in (objects, frame_of, points))
     offsets = np.cumsum([0] + [len(c) for c in frames])
     location = np.concatenate(frames)[offsets[frame - 1] + point] if len(point) else np.zeros((0, 3))
-    resource = offsets[frame - 1] + point
     off_prediction = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1)
     sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[frame - 1, obj]
     template_cost = gating.prediction_weight * np.minimum(off_prediction / sigma, gating.prediction_cap_sigmas)
@@ -92,7 +103,7 @@ def cloud_candidates(state: MarkerState, frames: list[np.ndarray], gating: Cloud
         template_location=state.position, template_occluded=~state.visible, n_frames=len(frames),
         object=obj, frame=frame, location=location,
         template_cost=template_cost,
-        resources=sp.csr_matrix((np.ones(len(point)), (np.arange(len(point)), resource)), shape=(len(point), offsets[-1])),
+        resources=_window_resources(frames, point_resources)[offsets[frame - 1] + point],
         occlusion_location=guide.predicted.transpose(1, 0, 2), motion=guide.velocity.transpose(1, 0, 2),
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)
@@ -108,3 +119,10 @@ def _shape_deviation(
     weight = guide.tracked[frame[:, None] - 1, neighbours] / (state.distance_var[obj] + 1.0)
     deviation = np.minimum(np.abs(distance - state.distance_mean[obj]), SHAPE_CAP_MM)
     return (weight * deviation).sum(axis=1) / np.maximum(weight.sum(axis=1), SHAPE_WEIGHT_FLOOR)
+
+
+def _window_resources(frames: list[np.ndarray], point_resources: list[sp.csr_matrix] | None) -> sp.csr_matrix:
+    """Resources of every point of the window, frames on the diagonal (no sharing across frames)."""
+    if point_resources is None:
+        return sp.identity(sum(len(c) for c in frames), format="csr")
+    return sp.block_diag(point_resources, format="csr")

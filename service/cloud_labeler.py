@@ -81,7 +81,8 @@ class CloudLabeler:
         for k, (start, last) in enumerate(spans):
             window_points = cloud.points[start + 1 : last + 1]
             began = time.perf_counter()
-            gated = cloud_candidates(state, window_points, self.gating)
+            window_resources = cloud.resources[start + 1 : last + 1] if cloud.resources is not None else None
+            gated = cloud_candidates(state, window_points, self.gating, window_resources)
             problem, node_candidate = build_window(gated.candidates, self.weights)
             if self.layout_weight > 0:
                 problem = _with_layout(problem, state, self.layout_neighbours, self.layout_weight)

@@ -55,10 +55,14 @@ class UnlabeledCloud:
     Attributes:
         points: One ``(points_in_frame, 3)`` array per frame, millimetres, in any order.
         rate: Frames per second.
+        resources: Optional, per frame ``(points_in_frame, R_f)`` sparse 0/1: what each point
+            consumes when points are not independent (points triangulated from camera
+            detections share the detections they use). None: each point stands alone.
     """
 
     points: list[np.ndarray]
     rate: float
+    resources: list | None = None
 
     @property
     def n_frames(self) -> int:
