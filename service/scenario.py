@@ -9,6 +9,7 @@ from typing import Any
 from service.errors import InputError
 
 MODES = ("cloud", "cameras")
+ASSOCIATIONS = ("joint-3d", "per-camera")
 _NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames")
 
 
@@ -19,7 +20,8 @@ class Scenario:
     ``configs/scenarios/README.md`` documents every key with its unit and range.
 
     Attributes:
-        mode: ``"cloud"`` (unlabeled 3D points per frame); ``"cameras"`` is reserved.
+        mode: ``"cloud"`` (unlabeled 3D points per frame) or ``"cameras"`` (2D detections
+            per calibrated camera).
         noise_mm: Standard deviation of the isotropic Gaussian noise on every sample, mm.
         drop_rate: Long-run fraction of marker-samples deleted, in ``[0, 1)``.
         drop_burst_frames: Mean length of a run of deleted frames, >= 1.
@@ -32,6 +34,15 @@ class Scenario:
         formulation: Name of the labeling formulation. In TOML also a table
             ``[formulation]`` with ``name`` and the formulation's parameters.
         formulation_parameters: The parameters of that table (filled by ``from_dict``).
+        calibration: Camera mode: calibration file (Pose2Sim TOML, caliscope TOML or our
+            JSON); a relative path is taken from the scenario file's folder.
+        pixel_noise: Camera mode: standard deviation of the detection noise, px.
+        merge_radius_px: Camera mode: projections closer than this merge into one blob.
+        occlusion_rate: Camera mode: long-run fraction of (camera, marker) samples hidden.
+        occlusion_burst_frames: Camera mode: mean length of a hidden run, frames.
+        clutter_per_camera: Camera mode: Poisson mean of spurious detections per camera.
+        association: Camera mode: ``"joint-3d"`` (``"per-camera"`` is not built yet).
+        up_axis: Camera mode: the recording's vertical axis (0, 1 or 2) for placing it.
     """
 
     mode: str = "cloud"
@@ -46,6 +57,14 @@ class Scenario:
     frames: int = 0
     formulation: str = "lp-l1"
     formulation_parameters: dict = field(default_factory=dict)
+    calibration: str = ""
+    pixel_noise: float = 0.5
+    merge_radius_px: float = 3.0
+    occlusion_rate: float = 0.1
+    occlusion_burst_frames: float = 15.0
+    clutter_per_camera: float = 2.0
+    association: str = "joint-3d"
+    up_axis: int = 2
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -86,6 +105,9 @@ class Scenario:
             raise InputError(f"cannot read scenario file {path}: {e.strerror}") from e
         except tomllib.TOMLDecodeError as e:
             raise InputError(f"scenario file {path} is not valid TOML: {e}") from e
+        calibration = data.get("calibration")
+        if isinstance(calibration, str) and calibration and not Path(calibration).is_absolute():
+            data["calibration"] = str(Path(path).parent / calibration)
         return cls.from_dict(data)
 
     @property
@@ -108,12 +130,23 @@ class Scenario:
             got = getattr(self, key)
             raise InputError(f"scenario key '{key}' must be {condition}, got {got!r}")
 
+    def _check_cameras(self) -> None:
+        self._require("calibration", self.calibration.strip() != "", "the path of a calibration file")
+        self._require("association", self.association in ASSOCIATIONS, f"one of {', '.join(ASSOCIATIONS)}")
+        if self.association == "per-camera":
+            raise InputError("scenario key 'association': per-camera association is not built yet; use joint-3d")
+        for key in ("pixel_noise", "merge_radius_px", "clutter_per_camera"):
+            self._require(key, getattr(self, key) >= 0, ">= 0")
+        self._require("occlusion_rate", 0.0 <= self.occlusion_rate < 1.0, "in [0, 1)")
+        self._require("occlusion_burst_frames", self.occlusion_burst_frames >= 1.0, ">= 1")
+        self._require("up_axis", self.up_axis in (0, 1, 2), "0, 1 or 2")
+
     def _check_ranges(self) -> None:
         if self.mode not in MODES:
             known = ", ".join(MODES)
             raise InputError(f"scenario key 'mode' must be one of {known}, got '{self.mode}'")
         if self.mode == "cameras":
-            raise InputError("scenario key 'mode': camera mode is not implemented yet")
+            self._check_cameras()
         for key in _NON_NEGATIVE:
             self._require(key, getattr(self, key) >= 0, ">= 0")
         self._require("drop_rate", 0.0 <= self.drop_rate < 1.0, "in [0, 1)")

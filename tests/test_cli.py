@@ -114,6 +114,17 @@ def test_eval_json_is_strict_json_when_a_heuristic_proves_no_bound(tmp_path: Pat
     assert (summary["gap_median"], summary["gap_max"], summary["integral_window_fraction"]) == (None, None, 0.0)
 
 
+def test_eval_runs_a_camera_scenario_through_a_real_calibration(tmp_path: Path) -> None:
+    calibration = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"
+    scenario = tmp_path / "cameras.toml"
+    scenario.write_text(f'mode = "cameras"\ncalibration = "{calibration}"\nframes = 120\n')
+    result = run_cli("eval", CMU, "--scenario", scenario, "--json")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads(result.stdout)
+    assert summary["frames"] == 120 and summary["label_accuracy"] >= 0.98
+    assert 0 < summary["rmse_mm"] <= 3.0
+
+
 def test_track_writes_c3d_that_puts_every_point_back_under_its_label(tmp_path: Path) -> None:
     # The whole of 85_02 (810 frames) tracks in about 1.5 s, so no cut-down copy is needed.
     result = run_cli("track", CMU, "--out", tmp_path / "x.c3d")

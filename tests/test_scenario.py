@@ -87,9 +87,13 @@ def test_bad_value_names_the_key(bad: dict) -> None:
         Scenario.from_dict(bad)
 
 
-def test_camera_mode_is_known_but_not_implemented() -> None:
-    with pytest.raises(InputError, match="camera mode is not implemented yet"):
+def test_camera_mode_needs_a_calibration_and_valid_camera_keys() -> None:
+    with pytest.raises(InputError, match="'calibration'"):
         Scenario.from_dict({"mode": "cameras"})
+    with pytest.raises(InputError, match="per-camera association is not built yet"):
+        Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-camera"})
+    with pytest.raises(InputError, match="'occlusion_rate'"):
+        Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "occlusion_rate": 1.5})
 
 
 def test_unreadable_files_are_input_errors(tmp_path: Path) -> None:

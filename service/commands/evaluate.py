@@ -8,8 +8,9 @@ from pathlib import Path
 
 from service.commands.report import print_summary, window_progress
 from service.cloud_labeler import CloudLabeler
+from service.evaluate_cameras import evaluate_cameras
 from service.evaluation import evaluate
-from service.formulation_spec import formulation_from_spec
+from service.formulation_spec import formulation_from_spec, formulation_from_table
 from service.formats import read_labeled
 from service.scenario import Scenario
 
@@ -19,12 +20,17 @@ def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, w
     scenario = Scenario.from_toml(scenario_path)
     if window is not None:
         scenario = dataclasses.replace(scenario, window=window)
-    labeler = None
     if formulation is not None:
-        labeler = CloudLabeler(formulation=formulation_from_spec(formulation), window=scenario.window)
+        chosen = formulation_from_spec(formulation)
+    else:
+        chosen = formulation_from_table({"name": scenario.formulation, **scenario.formulation_parameters}, str(scenario_path))
+    labeler = CloudLabeler(formulation=chosen, window=scenario.window)
     truth = read_labeled(trajectories)
     with window_progress(f"labeling {trajectories.name}") as progress:
-        result = evaluate(truth, scenario, labeler, progress=progress)
+        if scenario.mode == "cameras":
+            result = evaluate_cameras(truth, scenario, labeler, progress=progress)
+        else:
+            result = evaluate(truth, scenario, labeler, progress=progress)
     if as_json:
         print(json.dumps(result.summary(), allow_nan=False))
     else:

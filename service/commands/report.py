@@ -26,6 +26,8 @@ LABELS = {
     "frames": ("frames", "{}"),
     "markers": ("markers", "{}"),
     "formulation": ("formulation", "{}"),
+    "rmse_mm": ("3D RMSE (mm)", "{:.2f}"),
+    "filled_rmse_mm": ("filled RMSE (mm)", "{:.2f}"),
 }
 
 
@@ -35,7 +37,7 @@ def print_summary(summary: dict, title: str) -> None:
     for key, value in summary.items():
         label, fmt = LABELS.get(key, (key, "{}"))
         if value is None:
-            text = "none proven"
+            text = "none proven" if key.startswith("gap") else "-"
         elif key == "seconds_per_frame":
             text = f"{1000 * value:.2f}"
         else:
