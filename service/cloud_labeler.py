@@ -76,6 +76,7 @@ class CloudLabeler:
         n, frames = len(names), cloud.n_frames
         point_index = np.full((frames, n), -1)
         point_index[0] = self._match_first_frame(cloud.points[0], state.position)
+        filled = np.full((frames, n, 3), np.nan)
         stats: list[WindowStats] = []
         spans = window_spans(frames, self.window)
         for k, (start, last) in enumerate(spans):
@@ -90,13 +91,13 @@ class CloudLabeler:
             solution = _solve(formulation, problem, start)
             taken = _taken_points(gated, node_candidate, solution)
             point_index[start + 1 : last + 1] = taken.T
-            state = _advance(state, window_points, taken)
+            state, filled[start + 1 : last + 1] = _advance(state, window_points, taken)
             stats.append(WindowStats.of(start, last, solution, prepared, time.perf_counter() - began))
             if observer:
                 observer(start, problem, solution)
             if progress:
                 progress(k + 1, len(spans))
-        return _trajectories(cloud, names, point_index), stats
+        return _trajectories(cloud, names, point_index, filled), stats
 
     def _formulation(self) -> Formulation:
         try:
@@ -133,14 +134,21 @@ def _taken_points(gated: CloudWindow, node_candidate: np.ndarray, solution: Wind
     return np.where(candidate >= 0, gated.point[np.maximum(candidate, 0)], -1)
 
 
-def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> MarkerState:
-    """Carry the marker state through the labeled frames to the next template."""
+def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> tuple[MarkerState, np.ndarray]:
+    """Carry the marker state through the labeled frames to the next template.
+
+    Returns:
+        The state at the last frame, and ``(M, N, 3)`` the predicted position of every
+        marker in every frame where it was occluded (NaN where it was seen): the fill.
+    """
+    filled = np.full((len(frames),) + state.position.shape, np.nan)
     for m, points in enumerate(frames):
         seen = taken[:, m] >= 0
         observed = np.zeros((len(seen), 3))
         observed[seen] = points[taken[seen, m]]
         state = state.advance(observed, seen)
-    return state
+        filled[m, ~seen] = state.position[~seen]
+    return state, filled
 
 
 def _with_layout(problem: WindowProblem, state: MarkerState, per_marker: int, mu: float) -> WindowProblem:
@@ -153,11 +161,12 @@ def _with_layout(problem: WindowProblem, state: MarkerState, per_marker: int, mu
     return replace(problem, layout_pairs=pairs, layout_weight=np.full(len(pairs), mu))
 
 
-def _trajectories(cloud: UnlabeledCloud, names: list[str], point_index: np.ndarray) -> LabeledTrajectories:
+def _trajectories(cloud: UnlabeledCloud, names: list[str], point_index: np.ndarray, filled: np.ndarray) -> LabeledTrajectories:
     positions = np.full(point_index.shape + (3,), np.nan)
     for f, points in enumerate(cloud.points):
         seen = point_index[f] >= 0
         positions[f, seen] = points[point_index[f, seen]]
     return LabeledTrajectories(
-        names=list(names), positions=positions, occluded=point_index < 0, rate=cloud.rate, point_index=point_index
+        names=list(names), positions=positions, occluded=point_index < 0, rate=cloud.rate, point_index=point_index,
+        filled=filled,
     )

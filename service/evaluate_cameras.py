@@ -44,7 +44,7 @@ class CameraEvaluation:
             "gap_median": finite(np.median(gaps)), "gap_max": finite(np.max(gaps)),
             "seconds_per_frame": self.seconds / max(self.frames - 1, 1), "frames": self.frames,
             "markers": self.markers, "formulation": self.formulation,
-            "rmse_mm": finite(self.scores.rmse_mm), "filled_rmse_mm": None,
+            "rmse_mm": finite(self.scores.rmse_mm), "filled_rmse_mm": finite(self.scores.filled_rmse_mm),
         }
 
 

@@ -24,11 +24,14 @@ class CameraScores:
         label_accuracy: Over marker-frames seen by two or more cameras (frame 0 excluded):
             the marker took a point all of whose detections are that marker's.
         rmse_mm: 3D error of the correctly labeled points.
+        filled_rmse_mm: 3D error of the predicted positions filled in where a marker was
+            occluded (seen by fewer than two cameras, or not labeled).
         marker_frames: Marker-frames counted.
     """
 
     label_accuracy: float
     rmse_mm: float
+    filled_rmse_mm: float
     marker_frames: int
 
 
@@ -69,8 +72,13 @@ def camera_scores(
         correct[f, took] = agree
     counted = correct & seen_twice
     error = np.linalg.norm(result.positions - truth, axis=2)[counted]
+    filled_error = np.linalg.norm(result.filled - truth, axis=2)
+    filled_error = filled_error[result.occluded & np.isfinite(filled_error)]
     return CameraScores(
         label_accuracy=float(counted.sum() / max(seen_twice.sum(), 1)),
-        rmse_mm=float(np.sqrt(np.mean(error**2))) if len(error) else float("nan"),
-        marker_frames=int(seen_twice.sum()),
+        rmse_mm=_rms(error), filled_rmse_mm=_rms(filled_error), marker_frames=int(seen_twice.sum()),
     )
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if len(values) else float("nan")

@@ -80,6 +80,8 @@ class LabeledTrajectories:
         rate: Frames per second.
         point_index: ``(frames, markers)`` index of the input point taken in that frame,
             -1 where occluded. Empty when the input had no point identities.
+        filled: ``(frames, markers, 3)`` where a marker is occluded, its predicted position
+            (from the rigid motion of its neighbours), NaN elsewhere. Empty when unknown.
     """
 
     names: list[str]
@@ -87,6 +89,7 @@ class LabeledTrajectories:
     occluded: np.ndarray
     rate: float
     point_index: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=int))
+    filled: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
 
     @property
     def n_frames(self) -> int:

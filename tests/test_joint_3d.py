@@ -33,4 +33,7 @@ def test_joint_3d_labels_cmu_85_02_through_the_pose2sim_rig():
     assert scores.marker_frames > 0.9 * (FRAMES - 1) * len(truth.names)
     assert scores.label_accuracy >= 0.99
     assert scores.rmse_mm <= 3.0
+    # Occluded markers carry their predicted position, flagged by `occluded`.
+    assert np.isfinite(result.filled[result.occluded]).all() and np.isnan(result.filled[~result.occluded]).all()
+    assert scores.rmse_mm < scores.filled_rmse_mm < 100.0
     assert np.mean([w.integral for w in windows]) == 1.0
