@@ -60,7 +60,7 @@ class DpExtended(ComponentwiseFormulation):
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """Joint Viterbi over the whole (sub-)window."""
         start = time.perf_counter()
-        first, sizes = _blocks(problem)
+        first, sizes = problem.blocks()
         # Python ints: k^N overflows int64 long before it stops being worth reporting.
         counts = [math.prod(sizes[:, f].tolist()) for f in range(1, problem.n_frames + 1)]
         if max(counts, default=0) > self.max_states:
@@ -97,15 +97,6 @@ class DpExtended(ComponentwiseFormulation):
             path=path, cost=cost, lower_bound=cost, integral=True, n_variables=sum(len(s) for s in states[1:-1]),
             build_seconds=build, solve_seconds=solve, round_seconds=time.perf_counter() - start - build - solve,
         )
-
-
-def _blocks(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray]:
-    """``(N, M+2)`` first node and node count of every (object, frame) block, frames 0..M+1."""
-    starts = np.flatnonzero(np.r_[True, (problem.node_object[1:] != problem.node_object[:-1])
-                                  | (problem.node_frame[1:] != problem.node_frame[:-1])])
-    sizes = np.diff(np.r_[starts, problem.n_nodes])
-    shape = (problem.n_objects, problem.n_frames + 2)
-    return starts.reshape(shape), sizes.reshape(shape)
 
 
 def _joint_states(first: np.ndarray, sizes: np.ndarray, groups: sp.csr_matrix) -> np.ndarray:

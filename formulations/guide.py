@@ -43,15 +43,13 @@ class Gate:
 
 @dataclass(frozen=True)
 class GuideTrack:
-    """Per frame 1..M: prediction, gate radius, velocity before the frame, assignment."""
+    """Per frame 1..M: prediction, gate radius and velocity before the frame, tracking state."""
 
     predicted: np.ndarray  # (M, N, 3)
     radius: np.ndarray  # (M, N)
     velocity: np.ndarray  # (M, N, 3) displacement per frame expected into frame m; NaN if unknown
     tracked: np.ndarray  # (M, N) seen in the frames before m, long enough to trust its prediction
     unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
-    assigned: np.ndarray  # (M, N) point index, -1 where missed
-    final: MarkerState
 
 
 def guide_track(
@@ -64,7 +62,7 @@ def guide_track(
     """
     m, n = len(frames), len(state.position)
     predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
-    radius, assigned, tracked = np.empty((m, n)), np.full((m, n), -1), np.empty((m, n), bool)
+    radius, tracked = np.empty((m, n)), np.empty((m, n), bool)
     unseen = np.empty((m, n), dtype=int)
     for f, points in enumerate(frames):
         predicted[f], tracked[f], unseen[f] = state.predict(), state.streak >= trust_after, state.unseen
@@ -73,14 +71,13 @@ def guide_track(
         unknown = state.visible & ~state.velocity_known
         velocity[f] = np.where(unknown[:, None], np.nan, predicted[f] - state.position)
         radius[f] = gate.radius(state)
-        assigned[f] = assign_nearest(predicted[f], points, radius[f], miss_cost=gate.radius_mm)
-        seen = assigned[f] >= 0
+        assigned = assign_nearest(predicted[f], points, radius[f], miss_cost=gate.radius_mm)
+        seen = assigned >= 0
         taken = np.zeros((n, 3))
-        taken[seen] = points[assigned[f][seen]]
+        taken[seen] = points[assigned[seen]]
         state = state.advance(taken, seen)
     return GuideTrack(
         predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen,
-        assigned=assigned, final=state,
     )
 
 

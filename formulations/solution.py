@@ -23,7 +23,8 @@ class WindowSolution:
         n_variables: Number of variables in the models solved.
         status: Solver status ("Optimal", or why not).
         build_seconds, solve_seconds, round_seconds: Where the time went.
-        components: How the window was split: counts per method, e.g. {"viterbi": 38, "lp": 1}.
+        components: How the window was split, e.g. {"viterbi": 38, "coupled": 1}: objects
+            solved exactly by Viterbi, and coupled components handed to the solver.
     """
 
     path: np.ndarray

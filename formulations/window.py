@@ -77,11 +77,16 @@ class WindowProblem:
         objects_per_resource = _distinct_objects_per_row(used, self.node_object)
         return used[objects_per_resource >= 2]
 
+    def blocks(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(N, M+2)`` first node and node count of every (object, frame) block, frames 0..M+1."""
+        starts = np.flatnonzero(_block_starts(self.node_object, self.node_frame))
+        sizes = np.diff(np.r_[starts, self.n_nodes])
+        shape = (self.n_objects, self.n_frames + 2)
+        return starts.reshape(shape), sizes.reshape(shape)
+
     def frame_nodes(self) -> np.ndarray:
-        """``(N, M)`` index of the first node of each (object, frame) block."""
-        inner = (self.node_frame >= 1) & (self.node_frame <= self.n_frames)
-        first = np.flatnonzero(inner & _block_starts(self.node_object, self.node_frame))
-        return first.reshape(self.n_objects, self.n_frames)
+        """``(N, M)`` index of the first node of each (object, frame) block, frames 1..M."""
+        return self.blocks()[0][:, 1:-1]
 
     def occlusion_nodes(self) -> np.ndarray:
         """``(N, M)`` index of the occlusion node of each (object, frame)."""

@@ -11,7 +11,6 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
 
 from service.calibration import load_calibration
 from service.cloud_labeler import CloudLabeler
@@ -19,7 +18,7 @@ from service.joint_3d import CameraScores, camera_scores, cross_camera_cloud
 from service.recording import Recording
 from service.scenario import Scenario
 from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
-from service.window_stats import WindowStats
+from service.window_stats import WindowStats, certificate_figures, finite_or_none
 
 
 @dataclass
@@ -35,16 +34,14 @@ class CameraEvaluation:
 
     def summary(self) -> dict[str, float | int | str | None]:
         """The ``markerflow eval --json`` figures; swaps and ghosts are cloud-mode only (None)."""
-        gaps = np.array([w.gap for w in self.windows])
-        finite = lambda v: float(v) if np.isfinite(v) else None  # noqa: E731 - JSON has no inf
         return {
             "label_accuracy": self.scores.label_accuracy, "swaps": None,
             "ghost_precision": None, "ghost_recall": None,
-            "integral_window_fraction": float(np.mean([w.integral for w in self.windows])),
-            "gap_median": finite(np.median(gaps)), "gap_max": finite(np.max(gaps)),
+            **certificate_figures(self.windows),
             "seconds_per_frame": self.seconds / max(self.frames - 1, 1), "frames": self.frames,
             "markers": self.markers, "formulation": self.formulation,
-            "rmse_mm": finite(self.scores.rmse_mm), "filled_rmse_mm": finite(self.scores.filled_rmse_mm),
+            "rmse_mm": finite_or_none(self.scores.rmse_mm),
+            "filled_rmse_mm": finite_or_none(self.scores.filled_rmse_mm),
         }
 
 

@@ -6,7 +6,6 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
 
 from service.cloud_labeler import CloudLabeler
 from service.formulation_spec import formulation_from_table
@@ -15,7 +14,7 @@ from service.scenario import Scenario
 from service.scores import LabelScores, label_scores
 from service.simulate_cloud import simulate_cloud
 from service.simulated import SimulatedCapture
-from service.window_stats import WindowStats
+from service.window_stats import WindowStats, certificate_figures
 
 
 @dataclass
@@ -34,25 +33,18 @@ class Evaluation:
 
         Gaps are None where a formulation proves no bound (heuristics): JSON has no inf.
         """
-        gaps = np.array([w.gap for w in self.windows]) if self.windows else np.zeros(1)
         frames = self.capture.cloud.n_frames
         return {
             "label_accuracy": self.scores.label_accuracy,
             "swaps": self.scores.swaps,
             "ghost_precision": self.scores.ghost_precision,
             "ghost_recall": self.scores.ghost_recall,
-            "integral_window_fraction": float(np.mean([w.integral for w in self.windows])) if self.windows else 1.0,
-            "gap_median": _finite_or_none(np.median(gaps)),
-            "gap_max": _finite_or_none(np.max(gaps)),
+            **certificate_figures(self.windows),
             "seconds_per_frame": self.seconds / max(frames - 1, 1),
             "frames": frames,
             "markers": len(self.capture.first_frame.names),
             "formulation": self.formulation,
         }
-
-
-def _finite_or_none(value: float) -> float | None:
-    return float(value) if np.isfinite(value) else None
 
 
 def evaluate(

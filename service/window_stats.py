@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from formulations.solution import WindowSolution
 
 
@@ -51,3 +53,18 @@ class WindowStats:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def finite_or_none(value: float) -> float | None:
+    """JSON has no inf: a figure nothing proved (a heuristic's gap) becomes None."""
+    return float(value) if np.isfinite(value) else None
+
+
+def certificate_figures(windows: list[WindowStats]) -> dict[str, float | None]:
+    """Integral fraction and gap median/max over a run's windows."""
+    gaps = np.array([w.gap for w in windows]) if windows else np.zeros(1)
+    return {
+        "integral_window_fraction": float(np.mean([w.integral for w in windows])) if windows else 1.0,
+        "gap_median": finite_or_none(np.median(gaps)),
+        "gap_max": finite_or_none(np.max(gaps)),
+    }

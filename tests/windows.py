@@ -50,10 +50,7 @@ def brute_force(problem: WindowProblem) -> tuple[float, np.ndarray]:
     Each object's paths are enumerated with their arc costs; the joint assignments are
     their Cartesian product, checked and priced with numpy in one go.
     """
-    first = problem.frame_nodes()
-    inner = (problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames)
-    block = problem.node_object[inner] * problem.n_frames + problem.node_frame[inner] - 1
-    sizes = np.bincount(block, minlength=first.size).reshape(first.shape)
+    first, sizes = (b[:, 1:-1] for b in problem.blocks())
     groups = problem.conflict_groups.toarray()
     paths, costs, usage = [], [], []
     for n in range(problem.n_objects):
