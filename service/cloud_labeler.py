@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from formulations.window import WindowProblem
 from service.chaining import window_spans
 from service.errors import InputError
 from service.recording import LabeledTrajectories, UnlabeledCloud
+from service.window_outcome import WindowOutcome
 from service.window_stats import WindowStats
 
 MARKER_COSTS = ArcCostWeights(
@@ -71,15 +72,31 @@ class CloudLabeler:
             progress: Called with (windows done, windows) after each window.
             observer: Called with (template frame, problem, solution) after each window.
         """
+        outcomes = []
+        n_windows = len(window_spans(cloud.n_frames, self.window))
+        for outcome in self.windows(cloud, names, first_frame, observer=observer):
+            outcomes.append(outcome)
+            if progress:
+                progress(outcome.index + 1, n_windows)
+        return self.assemble(cloud, names, first_frame, outcomes), [o.stats for o in outcomes]
+
+    def windows(
+        self, cloud: UnlabeledCloud, names: list[str], first_frame: np.ndarray,
+        after: WindowOutcome | None = None,
+        observer: Callable[[int, WindowProblem, WindowSolution], None] | None = None,
+    ) -> Iterator[WindowOutcome]:
+        """Label window by window, yielding each outcome as it is finished.
+
+        Args:
+            after: The last finished window of an interrupted run: labeling resumes with
+                the next window from its marker state, and gives exactly what an
+                uninterrupted run would.
+        """
         formulation = self._formulation()
-        state = self._first_state(names, first_frame)
-        n, frames = len(names), cloud.n_frames
-        point_index = np.full((frames, n), -1)
-        point_index[0] = self._match_first_frame(cloud.points[0], state.position)
-        filled = np.full((frames, n, 3), np.nan)
-        stats: list[WindowStats] = []
-        spans = window_spans(frames, self.window)
-        for k, (start, last) in enumerate(spans):
+        state = self._first_state(names, first_frame) if after is None else after.state
+        spans = window_spans(cloud.n_frames, self.window)
+        for k in range(0 if after is None else after.index + 1, len(spans)):
+            start, last = spans[k]
             window_points = cloud.points[start + 1 : last + 1]
             began = time.perf_counter()
             window_resources = cloud.resources[start + 1 : last + 1] if cloud.resources is not None else None
@@ -90,14 +107,24 @@ class CloudLabeler:
             prepared = time.perf_counter() - began
             solution = _solve(formulation, problem, start)
             taken = _taken_points(gated, node_candidate, solution)
-            point_index[start + 1 : last + 1] = taken.T
-            state, filled[start + 1 : last + 1] = _advance(state, window_points, taken)
-            stats.append(WindowStats.of(start, last, solution, prepared, time.perf_counter() - began))
+            state, filled = _advance(state, window_points, taken)
+            stats = WindowStats.of(start, last, solution, prepared, time.perf_counter() - began)
             if observer:
                 observer(start, problem, solution)
-            if progress:
-                progress(k + 1, len(spans))
-        return _trajectories(cloud, names, point_index, filled), stats
+            yield WindowOutcome(index=k, point_index=taken.T, filled=filled, stats=stats, state=state)
+
+    def assemble(
+        self, cloud: UnlabeledCloud, names: list[str], first_frame: np.ndarray, outcomes: list[WindowOutcome]
+    ) -> LabeledTrajectories:
+        """The labeled trajectories from every window's outcome, in order."""
+        n, frames = len(names), cloud.n_frames
+        point_index = np.full((frames, n), -1)
+        point_index[0] = self._match_first_frame(cloud.points[0], np.asarray(first_frame, dtype=float))
+        filled = np.full((frames, n, 3), np.nan)
+        for outcome in outcomes:
+            rows = slice(outcome.stats.template + 1, outcome.stats.last + 1)
+            point_index[rows], filled[rows] = outcome.point_index, outcome.filled
+        return _trajectories(cloud, names, point_index, filled)
 
     def _formulation(self) -> Formulation:
         try:

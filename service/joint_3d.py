@@ -7,6 +7,8 @@ pairs each point uses, so two candidates sharing a detection conflict in the win
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+from typing import Any
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,23 +37,51 @@ class CameraScores:
     marker_frames: int
 
 
+class LazyFrames(Sequence):
+    """A per-frame sequence whose items are computed when first asked for, then kept."""
+
+    def __init__(self, n_frames: int, compute: Callable[[int], Any]) -> None:
+        self._n, self._compute, self._done = n_frames, compute, {}
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, f):  # type: ignore[override]
+        if isinstance(f, slice):
+            return [self[k] for k in range(*f.indices(self._n))]
+        if not -self._n <= f < self._n:
+            raise IndexError(f)
+        f %= self._n
+        if f not in self._done:
+            self._done[f] = self._compute(f)
+        return self._done[f]
+
+
 def cross_camera_cloud(
     cameras: list[Camera], detections: list[list[np.ndarray]], rate: float,
     epipolar_px: float = 3.0, max_reprojection_px: float = 2.0,
-) -> tuple[UnlabeledCloud, list[CrossCameraPoints]]:
-    """Per frame, the cross-camera points as a cloud with detection resources."""
-    matched, resources = [], []
-    for frame in detections:
-        points = match_across_cameras(cameras, frame, epipolar_px, max_reprojection_px)
-        offsets = np.cumsum([0] + [len(d) for d in frame])
-        matched.append(points)
-        resources.append(points.resources(offsets[:-1], int(offsets[-1])))
-    cloud = UnlabeledCloud(points=[m.points for m in matched], rate=rate, resources=resources)
-    return cloud, matched
+) -> tuple[UnlabeledCloud, Sequence[CrossCameraPoints]]:
+    """The cross-camera points of every frame as a cloud with detection resources.
+
+    Frames are matched on demand: a long job labels (and reports) its first window without
+    matching every frame first, and a resumed job matches only the frames it still needs.
+    """
+
+    def match(f: int) -> CrossCameraPoints:
+        return match_across_cameras(cameras, detections[f], epipolar_px, max_reprojection_px)
+
+    def resources(f: int):
+        offsets = np.cumsum([0] + [len(d) for d in detections[f]])
+        return matched[f].resources(offsets[:-1], int(offsets[-1]))
+
+    n = len(detections)
+    matched = LazyFrames(n, match)
+    points = LazyFrames(n, lambda f: matched[f].points)
+    return UnlabeledCloud(points=points, rate=rate, resources=LazyFrames(n, resources)), matched
 
 
 def camera_scores(
-    marker_detection: np.ndarray, truth: np.ndarray, result: LabeledTrajectories, matched: list[CrossCameraPoints]
+    marker_detection: np.ndarray, truth: np.ndarray, result: LabeledTrajectories, matched: Sequence[CrossCameraPoints]
 ) -> CameraScores:
     """Score labels whose ``point_index`` indexes each frame's cross-camera points.
 

@@ -1,0 +1,74 @@
+"""Label a capture in any input mode, window by window, resumably.
+
+This is the one entry point the CLI, the HTTP jobs and the Dask workers share:
+
+    labeling = CaptureLabeling(capture, LabelingOptions(formulation="ilp"))
+    outcomes = []
+    for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
+        outcomes.append(outcome)  # persist it here to survive a crash
+    result = labeling.result(outcomes)
+
+3D points are labeled by the window LP directly; camera detections are first matched
+across cameras (``joint-3d``) into 3D points whose resources are their detections.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+from service.capture import Capture, LabelingOptions
+from service.chaining import window_spans
+from service.cloud_labeler import CloudLabeler
+from service.errors import InputError
+from service.formulation_spec import formulation_from_table
+from service.joint_3d import cross_camera_cloud
+from service.recording import LabeledTrajectories, UnlabeledCloud
+from service.window_outcome import WindowOutcome
+from service.window_stats import WindowStats
+
+
+class CaptureLabeling:
+    """One capture's labeling: its windows, and the trajectories they assemble into.
+
+    Args:
+        capture: What to label.
+        options: Formulation, window size, association.
+
+    Raises:
+        InputError: Unknown formulation or parameter, bad window size, or an
+            association that does not apply.
+    """
+
+    def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
+        table = {"name": options.formulation} if isinstance(options.formulation, str) else options.formulation
+        formulation = formulation_from_table(table, "formulation")
+        self.capture = capture
+        self.labeler = CloudLabeler(formulation=formulation, window=options.window)
+        self.n_windows = len(window_spans(capture.n_frames, options.window))
+        self.cloud = self._cloud(capture, options.association)
+
+    @staticmethod
+    def _cloud(capture: Capture, association: str) -> UnlabeledCloud:
+        if capture.mode == "points":
+            return UnlabeledCloud(points=capture.points, rate=capture.rate)
+        if association != "joint-3d":
+            raise InputError(f"association {association!r} is not available; use joint-3d")
+        return cross_camera_cloud(capture.cameras, capture.detections, capture.rate)[0]
+
+    def windows(self, after: WindowOutcome | None = None) -> Iterator[WindowOutcome]:
+        """Each window's outcome as it finishes; ``after`` resumes after a finished window."""
+        capture = self.capture
+        return self.labeler.windows(self.cloud, capture.names, capture.first_frame, after=after)
+
+    def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
+        """The labeled trajectories from all windows' outcomes."""
+        return self.labeler.assemble(self.cloud, self.capture.names, self.capture.first_frame, outcomes)
+
+    def label(self, progress: Callable[[int, int], None] | None = None) -> tuple[LabeledTrajectories, list[WindowStats]]:
+        """Label every window in one go."""
+        outcomes = []
+        for outcome in self.windows():
+            outcomes.append(outcome)
+            if progress:
+                progress(len(outcomes), self.n_windows)
+        return self.result(outcomes), [o.stats for o in outcomes]
