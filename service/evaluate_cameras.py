@@ -11,10 +11,10 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-
 from service.calibration import load_calibration
+from service.camera_scores import CameraScores, camera_scores
 from service.cloud_labeler import CloudLabeler
-from service.joint_3d import CameraScores, camera_scores, cross_camera_cloud
+from service.joint_3d import cross_camera_cloud
 from service.recording import Recording
 from service.scenario import Scenario
 from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras

@@ -6,12 +6,13 @@ the level reached so far (issue 3 asks for 99.5 %); they may not get worse.
 """
 
 import numpy as np
-
 from conftest import DATA
+
 from service.calibration import load_pose2sim_toml
+from service.camera_scores import camera_scores
 from service.cloud_labeler import CloudLabeler
 from service.formats import read_labeled
-from service.joint_3d import camera_scores, cross_camera_cloud
+from service.joint_3d import cross_camera_cloud
 from service.recording import Recording
 from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
 
