@@ -138,6 +138,21 @@ class CaptureDocument(BaseModel):
         ]
         return Capture(list(self.markers), first_frame, self.rate, cameras=cameras, detections=detections)
 
+    @classmethod
+    def of(cls, capture: Capture, options: LabelingOptions = LabelingOptions()) -> CaptureDocument:
+        """The document of a capture (mm), e.g. to write an example or submit a job."""
+        fields = {"rate": capture.rate, "markers": capture.names, "first_frame": capture.first_frame.tolist(),
+                  "formulation": options.formulation, "window": options.window, "association": options.association}
+        if capture.points is not None:
+            return cls(points=[frame.tolist() for frame in capture.points], **fields)
+        cameras = [
+            {"name": c.name, "K": c.K.tolist(), "distortion": c.distortion.tolist(), "R": c.R.tolist(),
+             "t": c.t.tolist(), "image_size": list(c.image_size)}
+            for c in capture.cameras
+        ]
+        detections = {c.name: [frame[i].tolist() for frame in capture.detections] for i, c in enumerate(capture.cameras)}
+        return cls(cameras=cameras, detections=detections, **fields)
+
     def options(self) -> LabelingOptions:
         return LabelingOptions(formulation=self.formulation, window=self.window, association=self.association)
 

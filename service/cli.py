@@ -32,18 +32,18 @@ def demo(
 
 @app.command()
 def track(
-    input: Annotated[Path, typer.Argument(help="Labeled .c3d/.trc: its first frame names the markers.")],
+    input: Annotated[Path, typer.Argument(help="Capture .json (see docs/capture-json.md), or a labeled .c3d/.trc whose first frame names the markers.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d or .csv.")],
     formulation: FormulationOption = None,
     window: WindowOption = None,
-    shuffle: Annotated[bool, typer.Option(help="Shuffle each frame's points before labeling.")] = True,
+    shuffle: Annotated[bool, typer.Option(help="C3D/TRC input: shuffle each frame's points before labeling.")] = True,
 ) -> None:
-    """Relabel every frame of INPUT from its first frame and write the result."""
+    """Label INPUT and write the named trajectories.
+
+    A capture JSON carries its own options; --formulation and --window override them.
+    """
     from service.commands.track import run_track
 
-    # `is None`, not `or`: `--window 0` is a mistake to report, not a request for the default.
-    formulation = "lp-l1" if formulation is None else formulation
-    window = 20 if window is None else window
     _guard(lambda: run_track(input, out, formulation, window, shuffle))
 
 

@@ -37,7 +37,15 @@ def formulation_from_spec(spec: str) -> Formulation:
     """``spec`` is a formulation name, or the path of a TOML file with a ``[formulation]`` table."""
     if not spec.endswith(".toml"):
         return formulation_from_table({"name": spec}, "--formulation")
-    path = Path(spec)
+    return formulation_from_table(formulation_table(Path(spec)), spec)
+
+
+def formulation_table(path: Path) -> dict[str, Any]:
+    """The ``[formulation]`` table of a TOML preset.
+
+    Raises:
+        InputError: Unreadable file, bad TOML, or no ``[formulation]`` table.
+    """
     try:
         data = tomllib.loads(path.read_text())
     except OSError as error:
@@ -46,4 +54,4 @@ def formulation_from_spec(spec: str) -> Formulation:
         raise InputError(f"{path}: not valid TOML ({error})") from None
     if not isinstance(data.get("formulation"), dict):
         raise InputError(f"{path}: no [formulation] table")
-    return formulation_from_table(data["formulation"], str(path))
+    return data["formulation"]

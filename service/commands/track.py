@@ -1,41 +1,67 @@
-"""``markerflow track``: relabel a recording from its labeled first frame."""
+"""``markerflow track``: label a capture JSON, or relabel a recording from its first frame."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from service.cloud_labeler import CloudLabeler
+from service.capture import Capture, LabelingOptions
+from service.capture_document import read_capture_document
+from service.capture_labeling import CaptureLabeling
 from service.commands.report import out, window_progress
+from service.errors import InputError
 from service.formats import check_output, read_labeled, write_labeled
-from service.formulation_spec import formulation_from_spec
-from service.recording import Recording, UnlabeledCloud
+from service.formulation_spec import formulation_table
+from service.recording import Recording
 
 
-def run_track(input: Path, output: Path, formulation: str, window: int, shuffle: bool) -> None:
-    """Treat every frame of ``input`` as unlabeled points, label them, write ``output``."""
+def run_track(input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool) -> None:
+    """Label ``input`` (capture .json, or labeled .c3d/.trc) and write ``output``.
+
+    ``formulation`` and ``window`` override a JSON document's own options when given.
+    """
     check_output(output)
-    recording = read_labeled(input)
-    cloud = unlabeled_cloud(recording, shuffle)
-    labeler = CloudLabeler(formulation=formulation_from_spec(formulation), window=window)
+    capture, options = _read_input(input, shuffle)
+    if formulation is not None:
+        options = replace(options, formulation=_formulation_table(formulation))
+    if window is not None:
+        options = replace(options, window=window)
+    labeling = CaptureLabeling(capture, options)
     with window_progress(f"labeling {input.name}") as progress:
-        result, windows = labeler.label(cloud, recording.names, recording.positions[0], progress)
+        result, windows = labeling.label(progress)
     write_labeled(output, result)
     integral = np.mean([w.integral for w in windows]) if windows else 1.0
     out.print(
-        f"{input.name}: {recording.n_markers} markers x {recording.n_frames} frames -> {output} "
+        f"{input.name}: {len(capture.names)} markers x {capture.n_frames} frames ({capture.mode}) -> {output} "
         f"({result.occluded.mean():.1%} occluded, {integral:.0%} windows integral, "
         f"max gap {max((w.gap for w in windows), default=0.0):.1e})"
     )
 
 
-def unlabeled_cloud(recording: Recording, shuffle: bool, seed: int = 0) -> UnlabeledCloud:
-    """The points of each frame without their labels (missing samples dropped)."""
+def _read_input(input: Path, shuffle: bool) -> tuple[Capture, LabelingOptions]:
+    if input.suffix.lower() != ".json":
+        return capture_from_recording(read_labeled(input), shuffle), LabelingOptions()
+    try:
+        text = input.read_bytes()
+    except OSError as error:
+        raise InputError(f"{input}: cannot read ({error.strerror})") from None
+    document = read_capture_document(text, str(input))
+    return document.capture(), document.options()
+
+
+def _formulation_table(spec: str) -> str | dict:
+    """A name stays a name; a TOML preset becomes its ``[formulation]`` table."""
+    return formulation_table(Path(spec)) if spec.endswith(".toml") else spec
+
+
+def capture_from_recording(recording: Recording, shuffle: bool, seed: int = 0) -> Capture:
+    """The points of each frame without their labels (missing samples dropped); frame 0 labeled."""
     rng = np.random.default_rng(seed)
     present = ~recording.missing()
     frames = []
     for f in range(recording.n_frames):
         points = recording.positions[f][present[f]]
         frames.append(points[rng.permutation(len(points))] if shuffle else points)
-    return UnlabeledCloud(points=frames, rate=recording.rate)
+    return Capture(list(recording.names), recording.positions[0], recording.rate, points=frames)

@@ -1,0 +1,30 @@
+"""Small captures in both input modes, from real motion, for document and resume tests."""
+
+from __future__ import annotations
+
+from conftest import DATA
+from service.calibration import load_pose2sim_toml
+from service.capture import Capture
+from service.formats import read_labeled
+from service.recording import Recording
+from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.commands.track import capture_from_recording
+
+CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
+POSE2SIM = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"
+
+
+def points_capture(frames: int) -> Capture:
+    truth = read_labeled(CMU)
+    return capture_from_recording(Recording(truth.names, truth.positions[:frames], truth.rate), shuffle=True)
+
+
+def camera_capture(frames: int, markers: int = 41, seed: int = 0) -> Capture:
+    cameras = load_pose2sim_toml(POSE2SIM, units="mm")
+    truth = read_labeled(CMU)
+    rig = CameraRig.from_cameras(cameras)
+    placed = Recording(truth.names[:markers], place_in_volume(truth.positions[:frames, :markers], rig), truth.rate)
+    simulated = simulate_cameras(placed, rig, pixel_noise=0.5, merge_radius_px=3.0, occlusion_rate=0.1,
+                                 occlusion_burst_frames=15, clutter_per_camera=2, seed=seed)
+    return Capture(placed.names, simulated.first_frame.positions[0], truth.rate, cameras=cameras,
+                   detections=simulated.detections)

@@ -1,0 +1,72 @@
+"""A labeling interrupted after any window resumes to exactly the uninterrupted result."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from capture_fixtures import camera_capture, points_capture
+from service.capture import LabelingOptions
+from service.capture_labeling import CaptureLabeling
+from service.errors import InputError
+from service.window_outcome import WindowOutcome
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    return np.array_equal(a, b, equal_nan=True)
+
+
+@pytest.mark.parametrize(
+    ("make", "window"), [(lambda: points_capture(frames=120), 20), (lambda: camera_capture(frames=50), 10)],
+    ids=["points", "cameras"],
+)
+def test_resume_after_a_stored_window_gives_the_uninterrupted_result(make, window):
+    capture = make()
+    options = LabelingOptions(window=window)
+    uninterrupted = list(CaptureLabeling(capture, options).windows())
+    expected = CaptureLabeling(capture, options).result(uninterrupted)
+    assert len(uninterrupted) >= 5
+
+    stored = [WindowOutcome.from_bytes(o.to_bytes()) for o in uninterrupted[:3]]  # then the process died
+    restarted = CaptureLabeling(capture, options)
+    outcomes = stored + list(restarted.windows(after=stored[-1]))
+    result = restarted.result(outcomes)
+    assert [o.index for o in outcomes] == list(range(len(uninterrupted)))
+    assert _same(result.positions, expected.positions) and _same(result.filled, expected.filled)
+    assert np.array_equal(result.point_index, expected.point_index)
+    assert [o.stats.cost for o in outcomes] == [o.stats.cost for o in uninterrupted]
+
+
+def test_resuming_needs_the_stored_marker_state():
+    """Without the carried state (the first frame's instead) the rest of the labels change."""
+    capture = points_capture(frames=120)
+    labeling = CaptureLabeling(capture, LabelingOptions(window=20))
+    uninterrupted = list(labeling.windows())
+    first_state = labeling.labeler._first_state(capture.names, capture.first_frame)
+    stale = replace(uninterrupted[2], state=first_state)
+    resumed = list(CaptureLabeling(capture, LabelingOptions(window=20)).windows(after=stale))
+    assert any(not np.array_equal(a.point_index, b.point_index) for a, b in zip(resumed, uninterrupted[3:]))
+
+
+def test_window_outcome_bytes_round_trip_exactly():
+    outcome = next(CaptureLabeling(points_capture(frames=30)).windows())
+    back = WindowOutcome.from_bytes(outcome.to_bytes())
+    assert back.index == outcome.index and back.stats == outcome.stats
+    assert _same(back.filled, outcome.filled) and np.array_equal(back.point_index, outcome.point_index)
+    for name in outcome.state.__dataclass_fields__:
+        assert _same(getattr(back.state, name), getattr(outcome.state, name)), name
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (LabelingOptions(formulation="simplex-magic"), "unknown formulation 'simplex-magic'"),
+        (LabelingOptions(formulation={"name": "ilp", "time_limit": -1}), "time_limit"),
+        (LabelingOptions(window=1), "window must be at least 2 frames"),
+    ],
+)
+def test_bad_options_are_input_errors(options, message):
+    with pytest.raises(InputError, match=message):
+        CaptureLabeling(points_capture(frames=5), options)
