@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from service.capture import Capture
+from service.capture_document import CaptureDocument
 from service.commands.report import out, print_summary, window_progress
 from service.errors import InputError
 from service.evaluation import evaluate
@@ -11,6 +13,7 @@ from service.formats import write_labeled
 from service.plot import plot_trajectories
 from service.scenario import Scenario
 from service.scene import generate_scene
+from service.simulated import SimulatedCapture
 
 DEMO_SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)
 
@@ -28,10 +31,19 @@ def run_demo(folder: Path, frames: int, seed: int) -> None:
     with window_progress("labeling demo scene") as progress:
         result = evaluate(truth, scenario, progress=progress)
     print_summary(result.summary(), "markerflow demo")
-    c3d, png = folder / "demo_labeled.c3d", folder / "demo_trajectories.png"
+    c3d, png, capture = folder / "demo_labeled.c3d", folder / "demo_trajectories.png", folder / "demo_capture.json"
     write_labeled(c3d, result.result)
     plot_trajectories(result.result, png, truth=result.capture.truth)
-    out.print(f"Wrote {c3d} and {png}")
+    _write_capture(capture, result.capture)
+    out.print(f"Wrote {c3d}, {png} and the unlabeled input as {capture} "
+              f"(try: markerflow track {capture} --out {folder / 'relabeled.csv'})")
+
+
+def _write_capture(path: Path, simulated: SimulatedCapture) -> None:
+    """The demo's input as a capture JSON: what a user would hand ``track`` or the service."""
+    first = simulated.first_frame
+    capture = Capture(first.names, first.positions[0], simulated.cloud.rate, points=simulated.cloud.points)
+    path.write_text(CaptureDocument.of(capture).model_dump_json())
 
 
 def _make_folder(folder: Path) -> None:
