@@ -85,6 +85,9 @@ def test_demo_prints_scores_and_writes_c3d_and_plot(tmp_path: Path) -> None:
     assert len(labels) == 39 and len(set(labels)) == 39
     assert points.shape == (3, 39, 150)
     assert (tmp_path / "demo_trajectories.png").read_bytes().startswith(PNG_MAGIC)
+    relabeled = run_cli("track", tmp_path / "demo_capture.json", "--out", tmp_path / "relabeled.c3d")
+    assert relabeled.returncode == 0, relabeled.stderr
+    assert read_c3d(tmp_path / "relabeled.c3d")[0] == labels
 
 
 def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
