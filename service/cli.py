@@ -80,6 +80,20 @@ def integrality(
     _guard(lambda: run_integrality(formulation, corpus))
 
 
+@app.command()
+def serve(
+    host: Annotated[Optional[str], typer.Option(help="Address to bind (default 127.0.0.1; another needs tokens).")] = None,
+    port: Annotated[Optional[int], typer.Option(help="Port (default 8000; 0 picks a free one).")] = None,
+    db: Annotated[Optional[str], typer.Option(help="SQLAlchemy URL of the job store (default sqlite:///markerflow.db in the working folder).")] = None,
+    dask: Annotated[Optional[str], typer.Option(help="Dask scheduler address (tcp://...): run jobs there.")] = None,
+    config: Annotated[Optional[Path], typer.Option(help="Service TOML (see configs/service.toml).")] = None,
+) -> None:
+    """Run the HTTP service: submit captures as jobs, follow them, fetch labeled results."""
+    from service.commands.serve import run_serve
+
+    _guard(lambda: run_serve(host, port, db, dask, config))
+
+
 def _guard(action) -> None:
     """A user mistake is one line on stderr and exit code 2, never a traceback."""
     try:

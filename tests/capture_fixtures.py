@@ -8,7 +8,7 @@ from service.capture import Capture
 from service.formats import read_labeled
 from service.recording import Recording
 from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
-from service.commands.track import capture_from_recording
+from service.recording_capture import capture_from_recording
 
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 POSE2SIM = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"

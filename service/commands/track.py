@@ -14,7 +14,7 @@ from service.commands.report import out, window_progress
 from service.errors import InputError
 from service.formats import check_output, read_labeled, write_labeled
 from service.formulation_spec import formulation_table
-from service.recording import Recording
+from service.recording_capture import capture_from_recording
 
 
 def run_track(input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool) -> None:
@@ -55,13 +55,3 @@ def _formulation_table(spec: str) -> str | dict:
     """A name stays a name; a TOML preset becomes its ``[formulation]`` table."""
     return formulation_table(Path(spec)) if spec.endswith(".toml") else spec
 
-
-def capture_from_recording(recording: Recording, shuffle: bool, seed: int = 0) -> Capture:
-    """The points of each frame without their labels (missing samples dropped); frame 0 labeled."""
-    rng = np.random.default_rng(seed)
-    present = ~recording.missing()
-    frames = []
-    for f in range(recording.n_frames):
-        points = recording.positions[f][present[f]]
-        frames.append(points[rng.permutation(len(points))] if shuffle else points)
-    return Capture(list(recording.names), recording.positions[0], recording.rate, points=frames)

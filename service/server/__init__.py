@@ -1,0 +1,1 @@
+"""markerflow's HTTP service: durable labeling jobs over FastAPI (``markerflow serve``)."""

@@ -1,0 +1,111 @@
+"""The FastAPI application: ``create_app(settings)``.
+
+On start it opens the store and the executor and re-queues every ``queued`` or
+``running`` job, which resumes after its last stored window. Errors are JSON
+``{"message": ...}``: a user's mistake is a 4xx naming the field, and only a bug is a 500.
+"""
+
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.openapi.utils import get_openapi
+from fastapi.responses import JSONResponse
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
+
+from service.capture_document import CaptureDocument
+from service.errors import InputError
+from service.server import routes_info, routes_jobs, routes_solve
+from service.server.executor import DaskExecutor, Executor, ThreadExecutor
+from service.server.limits import BodyLimit
+from service.server.metrics import metrics_registry
+from service.server.settings import Settings
+from service.server.store import store_for
+
+log = logging.getLogger("markerflow.server")
+
+
+def create_app(settings: Settings) -> FastAPI:
+    """The service, configured by ``settings``.
+
+    Raises:
+        InputError: A non-loopback host without tokens.
+    """
+    settings.check_exposure()
+    app = FastAPI(
+        title="markerflow", version="1", lifespan=_lifespan,
+        description="Label optical motion-capture markers as durable jobs: submit, follow, fetch.",
+    )
+    app.state.settings = settings
+    app.state.owners = settings.owners()
+    app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes)
+    for router in (routes_jobs.router, routes_solve.router, routes_info.router):
+        app.include_router(router)
+    app.add_exception_handler(InputError, _input_error)
+    app.add_exception_handler(RequestValidationError, _validation_error)
+    app.add_exception_handler(HTTPException, _http_error)
+    app.add_exception_handler(Exception, _bug)
+    app.openapi = lambda: _openapi(app)
+    return app
+
+
+def _executor(settings: Settings) -> Executor:
+    if settings.dask:
+        return DaskExecutor(settings.db, settings.dask)
+    return ThreadExecutor(settings.db, settings.max_parallel_jobs)
+
+
+@asynccontextmanager
+async def _lifespan(app: FastAPI):
+    settings: Settings = app.state.settings
+    store = await run_in_threadpool(store_for, settings.db)
+    executor = await run_in_threadpool(_executor, settings)
+    app.state.store, app.state.executor, app.state.metrics = store, executor, metrics_registry(store)
+    unfinished = await run_in_threadpool(store.unfinished)
+    for job_id in unfinished:
+        await run_in_threadpool(executor.submit, job_id)
+    if unfinished:
+        log.info("resumed %d unfinished jobs", len(unfinished))
+    yield
+    await run_in_threadpool(executor.close)
+
+
+def _openapi(app: FastAPI) -> dict:
+    """FastAPI's schema plus ``CaptureDocument``, which the hand-read bodies refer to."""
+    if app.openapi_schema is None:
+        schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+        document = CaptureDocument.model_json_schema(ref_template="#/components/schemas/{model}")
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        components.update(document.pop("$defs", {}))
+        components["CaptureDocument"] = document
+        app.openapi_schema = schema
+    return app.openapi_schema
+
+
+async def _input_error(request: Request, error: InputError) -> JSONResponse:
+    return JSONResponse({"message": str(error)}, status_code=422)
+
+
+async def _validation_error(request: Request, error: RequestValidationError) -> JSONResponse:
+    """``query.limit: Input should be ...``: the field path first, as for capture documents."""
+    problems = error.errors()
+    first = problems[0]
+    path = ".".join(str(part) for part in first["loc"])
+    message = f"{path}: {first['msg'].removeprefix('Value error, ')}"
+    if len(problems) > 1:
+        message += f" (and {len(problems) - 1} more problems)"
+    detail = [{"loc": list(p["loc"]), "msg": p["msg"], "type": p["type"]} for p in problems]
+    return JSONResponse({"message": message, "detail": detail}, status_code=422)
+
+
+async def _http_error(request: Request, error: HTTPException) -> JSONResponse:
+    return JSONResponse({"message": str(error.detail)}, status_code=error.status_code, headers=error.headers)
+
+
+async def _bug(request: Request, error: Exception) -> JSONResponse:
+    log.exception("internal error on %s %s", request.method, request.url.path)
+    return JSONResponse({"message": "internal error; the server log has the details"}, status_code=500)

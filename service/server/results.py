@@ -1,0 +1,61 @@
+"""A job's labeled trajectories: stored as npz, served as JSON, CSV or C3D.
+
+The result is stored once, when the job finishes (not assembled on each fetch): in
+camera mode assembling needs the cross-camera cloud, which is costly to rebuild.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from service.formats import write_labeled
+from service.recording import LabeledTrajectories
+
+MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3d": "application/octet-stream"}
+
+
+def trajectories_to_bytes(traj: LabeledTrajectories) -> bytes:
+    """Exact, pickle-free bytes of ``traj`` (names and rate in a JSON header)."""
+    buffer = io.BytesIO()
+    header = json.dumps({"names": list(traj.names), "rate": float(traj.rate)})
+    np.savez_compressed(buffer, header=np.array(header), positions=traj.positions, occluded=traj.occluded,
+                        point_index=traj.point_index, filled=traj.filled)
+    return buffer.getvalue()
+
+
+def trajectories_from_bytes(data: bytes) -> LabeledTrajectories:
+    with np.load(io.BytesIO(data), allow_pickle=False) as stored:
+        header = json.loads(str(stored["header"]))
+        return LabeledTrajectories(
+            names=header["names"], positions=stored["positions"], occluded=stored["occluded"], rate=header["rate"],
+            point_index=stored["point_index"], filled=stored["filled"],
+        )
+
+
+def nullable(values: np.ndarray) -> list:
+    """Nested lists with None where NaN (JSON has no NaN)."""
+    return np.where(np.isnan(values), None, values).tolist()
+
+
+def trajectories_json(traj: LabeledTrajectories) -> dict:
+    """``positions`` ``[frame][marker] = [x, y, z]`` mm or null where occluded; ``filled`` the
+    predicted position where occluded, null elsewhere."""
+    return {
+        "markers": list(traj.names), "rate": traj.rate, "positions": nullable(traj.positions),
+        "occluded": traj.occluded.tolist(), "filled": nullable(traj.filled) if traj.filled.size else None,
+    }
+
+
+def render(traj: LabeledTrajectories, format: str) -> bytes:
+    """The result file's bytes; CSV and C3D through ``write_labeled``, as the CLI writes them."""
+    if format == "json":
+        return json.dumps(trajectories_json(traj)).encode()
+    with tempfile.TemporaryDirectory(prefix="markerflow-result-") as folder:
+        path = Path(folder) / f"result.{format}"
+        write_labeled(path, traj)
+        return path.read_bytes()

@@ -1,0 +1,114 @@
+"""``/v1/jobs``: submit, list, follow, fetch and cancel labeling jobs."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
+from fastapi.responses import StreamingResponse
+from starlette.concurrency import run_in_threadpool
+
+from service.server.auth import caller
+from service.server.bodies import read_submission, request_body
+from service.server.events import job_events
+from service.server.results import MEDIA_TYPES, render, trajectories_from_bytes
+from service.server.schemas import ErrorBody, JobAccepted, JobPage, JobStatus, JobSummary, LabeledResult, WindowSummary
+from service.server.store import ACTIVE, Job, JobStore
+
+ERRORS = {401: {"model": ErrorBody}, 404: {"model": ErrorBody, "description": "No such job for this caller."}}
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses={401: {"model": ErrorBody}})
+
+
+def _store(request: Request) -> JobStore:
+    return request.app.state.store
+
+
+async def _job(request: Request, job_id: str, owner: str) -> Job:
+    """The caller's job; another owner's job is 404 too, so its existence is not revealed."""
+    job = await run_in_threadpool(_store(request).get, job_id, owner)
+    if job is None:
+        raise HTTPException(404, f"no job {job_id}")
+    return job
+
+
+async def _status(request: Request, job: Job) -> JobStatus:
+    windows = await run_in_threadpool(_store(request).windows, job.id)
+    return JobStatus(**JobSummary.of(job).model_dump(), windows=[WindowSummary.of_stored(w) for w in windows])
+
+
+@router.post(
+    "", status_code=202, response_model=JobAccepted, openapi_extra=request_body(
+        "A capture document (JSON), or a labeled .c3d/.trc upload relabeled from its first frame.", upload=True),
+    responses={413: {"model": ErrorBody}, 415: {"model": ErrorBody}, 422: {"model": ErrorBody}},
+)
+async def submit_job(request: Request, response: Response, owner: str = Depends(caller)) -> JobAccepted:
+    """Queue a capture for labeling; answered once the job and its input are committed."""
+    submission = await read_submission(request, request.app.state.settings.limits, upload=True)
+    job = await run_in_threadpool(_store(request).add, owner, submission.source, submission.stored(), submission.n_windows)
+    await run_in_threadpool(request.app.state.executor.submit, job.id)
+    base = f"/v1/jobs/{job.id}"
+    response.headers["Location"] = base
+    return JobAccepted(**JobSummary.of(job).model_dump(),
+                       links={"status": base, "events": f"{base}/events", "result": f"{base}/result"})
+
+
+@router.get("", response_model=JobPage)
+async def list_jobs(
+    request: Request, owner: str = Depends(caller),
+    limit: int = Query(50, ge=1, le=500), offset: int = Query(0, ge=0, le=2**62),
+) -> JobPage:
+    """The caller's jobs, newest first."""
+    jobs, total = await run_in_threadpool(_store(request).page, owner, limit, offset)
+    return JobPage(jobs=[JobSummary.of(job) for job in jobs], total=total, limit=limit, offset=offset)
+
+
+@router.get("/{job_id}", response_model=JobStatus, responses=ERRORS)
+async def get_job(request: Request, job_id: str, owner: str = Depends(caller)) -> JobStatus:
+    """State, windows done / total, each window's certificate, and the error if it failed."""
+    return await _status(request, await _job(request, job_id, owner))
+
+
+@router.delete("/{job_id}", response_model=JobStatus, responses={**ERRORS, 409: {"model": ErrorBody}})
+async def cancel_job(request: Request, job_id: str, owner: str = Depends(caller)) -> JobStatus:
+    """Cancel a queued or running job; a running job stops after its current window."""
+    job = await _job(request, job_id, owner)
+    if job.state in ACTIVE:
+        await run_in_threadpool(_store(request).cancel, job.id)
+        job = await _job(request, job_id, owner)
+    if job.state != "cancelled":
+        raise HTTPException(409, f"job {job_id} is already {job.state}")
+    return await _status(request, job)
+
+
+@router.get(
+    "/{job_id}/events", responses={**ERRORS, 200: {"content": {"text/event-stream": {"schema": {"type": "string"}}},
+                                                   "description": "`window` events, then `state` events."}},
+)
+async def job_progress(request: Request, job_id: str, owner: str = Depends(caller)) -> StreamingResponse:
+    """Server-sent events: one `window` event per finished window, `state` at each change; ends with the job."""
+    job = await _job(request, job_id, owner)
+    poll = request.app.state.settings.events_poll_seconds
+    return StreamingResponse(job_events(_store(request), job.id, poll), media_type="text/event-stream",
+                             headers={"Cache-Control": "no-cache"})
+
+
+@router.get(
+    "/{job_id}/result", response_model=LabeledResult,
+    responses={**ERRORS, 409: {"model": ErrorBody, "description": "The job is not done."},
+               200: {"content": {"text/csv": {"schema": {"type": "string"}},
+                                 "application/octet-stream": {"schema": {"type": "string", "format": "binary"}}},
+                     "description": "JSON (below), CSV, or C3D."}},
+)
+async def job_result(
+    request: Request, job_id: str, owner: str = Depends(caller),
+    format: Literal["json", "csv", "c3d"] = Query("json", description="json, csv or c3d."),
+) -> Response:
+    """The labeled trajectories, once the job is done."""
+    job = await _job(request, job_id, owner)
+    if job.state != "done":
+        raise HTTPException(409, f"job {job_id} is {job.state}, not done")
+    stored = await run_in_threadpool(_store(request).result, job.id)
+    content = await run_in_threadpool(lambda: render(trajectories_from_bytes(stored), format))
+    disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
+    return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
+

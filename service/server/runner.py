@@ -1,0 +1,54 @@
+"""Run or resume one stored job: the code path of the in-process pool and of Dask workers.
+
+Each finished window is committed (outcome + stats + count) before the next is computed,
+so a restart resumes after the last stored window and recomputes nothing: the library
+guarantees ``windows(after=last)`` gives what an uninterrupted run would.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+from collections.abc import Callable
+
+from service.capture_document import CaptureDocument
+from service.capture_labeling import CaptureLabeling
+from service.errors import InputError
+from service.server.results import trajectories_to_bytes
+from service.server.store import WindowTaken, store_for
+
+log = logging.getLogger("markerflow.server")
+
+
+def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) -> str:
+    """Label the job's remaining windows and store the result; returns the job's state.
+
+    Args:
+        db_url: The store's URL (a Dask worker opens its own connection from it).
+        job_id: The job.
+        stop: Asked between windows; True leaves the job ``running``, to resume on restart.
+    """
+    store = store_for(db_url)
+    worker = f"{socket.gethostname()}:{os.getpid()}"  # which process computed each window
+    if not store.start(job_id):
+        return store.get(job_id).state
+    try:
+        document = CaptureDocument.model_validate_json(store.input(job_id))
+        labeling = CaptureLabeling(document.capture(), document.options())
+        outcomes = store.outcomes(job_id)
+        for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
+            store.save_window(job_id, outcome, worker)
+            outcomes.append(outcome)
+            # Between windows: a cancel (from any process) or a shutdown stops the job here.
+            if stop() or store.get(job_id).state != "running":
+                return store.get(job_id).state
+        store.finish(job_id, trajectories_to_bytes(labeling.result(outcomes)))
+    except WindowTaken as taken:
+        log.warning("%s; another runner has the job", taken)
+    except InputError as error:  # e.g. a formulation that cannot take one of the windows
+        store.fail(job_id, str(error))
+    except Exception as error:  # a bug: the job fails with its name, the server keeps serving
+        log.exception("job %s failed", job_id)
+        store.fail(job_id, f"internal error: {type(error).__name__}: {error}")
+    return store.get(job_id).state

@@ -1,0 +1,186 @@
+"""The job store: jobs, their inputs, every finished window and the final result, in SQL.
+
+Any SQLAlchemy URL works (``postgresql+psycopg://...``); a SQLite file is the embedded
+default. Each state change is one short transaction, so a process killed at any instant
+leaves the store at the last committed step: a job accepted (202) is in it with its
+input, and a window is either wholly stored (outcome, stats, ``windows_done``) or absent.
+"""
+
+from __future__ import annotations
+
+import json
+import uuid
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from functools import cache
+
+from sqlalchemy import case, func, select, update
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import sessionmaker
+
+from service.server.tables import JobRow, WindowRow, engine_for
+from service.window_outcome import WindowOutcome
+
+ACTIVE = ("queued", "running")
+STATES = ("queued", "running", "done", "failed", "cancelled")
+
+
+@dataclass(frozen=True)
+class Job:
+    """A job as the API shows it (input and result stay in the store)."""
+
+    id: str
+    owner: str
+    state: str
+    source: str
+    created_at: datetime
+    updated_at: datetime
+    windows_total: int
+    windows_done: int
+    error: str | None
+
+    @classmethod
+    def of(cls, row: JobRow) -> Job:
+        return cls(row.id, row.owner, row.state, row.source, _utc(row.created_at), _utc(row.updated_at),
+                   row.windows_total, row.windows_done, row.error)
+
+
+@dataclass(frozen=True)
+class StoredWindow:
+    index: int
+    stats: dict
+    worker: str
+
+
+class WindowTaken(Exception):
+    """Another runner stored this window first (a job resumed twice): this runner stops."""
+
+
+def _now() -> datetime:
+    return datetime.now(timezone.utc)
+
+
+def _utc(moment: datetime) -> datetime:
+    """SQLite hands back naive datetimes; every stored time is UTC."""
+    return moment if moment.tzinfo else moment.replace(tzinfo=timezone.utc)
+
+
+@cache
+def store_for(url: str) -> JobStore:
+    """One store (one connection pool) per database URL per process."""
+    return JobStore(url)
+
+
+class JobStore:
+    """Jobs and their windows, one transaction per step.
+
+    Args:
+        url: SQLAlchemy database URL.
+    """
+
+    def __init__(self, url: str) -> None:
+        self.engine = engine_for(url)
+        self.session = sessionmaker(self.engine, expire_on_commit=False)
+
+    def add(self, owner: str, source: str, document: bytes, windows_total: int) -> Job:
+        now = _now()
+        row = JobRow(id=uuid.uuid4().hex, owner=owner, state="queued", source=source, created_at=now,
+                     updated_at=now, windows_total=windows_total, windows_done=0, input=document)
+        with self.session.begin() as session:
+            session.add(row)
+        return Job.of(row)
+
+    def get(self, job_id: str, owner: str | None = None) -> Job | None:
+        """The job, or None if it does not exist or belongs to another owner."""
+        query = select(JobRow).where(JobRow.id == job_id)
+        if owner is not None:
+            query = query.where(JobRow.owner == owner)
+        with self.session() as session:
+            row = session.scalars(query).first()
+            return Job.of(row) if row else None
+
+    def page(self, owner: str, limit: int, offset: int) -> tuple[list[Job], int]:
+        """The owner's jobs, newest first, and how many there are."""
+        with self.session() as session:
+            rows = session.scalars(
+                select(JobRow).where(JobRow.owner == owner).order_by(JobRow.seq.desc()).limit(limit).offset(offset)
+            ).all()
+            total = session.scalar(select(func.count()).select_from(JobRow).where(JobRow.owner == owner))
+            return [Job.of(row) for row in rows], int(total)
+
+    def unfinished(self) -> list[str]:
+        with self.session() as session:
+            return list(session.scalars(select(JobRow.id).where(JobRow.state.in_(ACTIVE)).order_by(JobRow.seq)))
+
+    def input(self, job_id: str) -> bytes:
+        with self.session() as session:
+            return session.scalar(select(JobRow.input).where(JobRow.id == job_id))
+
+    def result(self, job_id: str) -> bytes | None:
+        with self.session() as session:
+            return session.scalar(select(JobRow.result).where(JobRow.id == job_id))
+
+    def outcomes(self, job_id: str) -> list[WindowOutcome]:
+        with self.session() as session:
+            stored = session.scalars(select(WindowRow.outcome).where(WindowRow.job_id == job_id).order_by(WindowRow.index))
+            return [WindowOutcome.from_bytes(data) for data in stored]
+
+    def windows(self, job_id: str, after: int = -1) -> list[StoredWindow]:
+        """Stored windows with index > ``after``, in order."""
+        query = (select(WindowRow.index, WindowRow.stats, WindowRow.worker)
+                 .where(WindowRow.job_id == job_id, WindowRow.index > after).order_by(WindowRow.index))
+        with self.session() as session:
+            return [StoredWindow(i, json.loads(stats), worker) for i, stats, worker in session.execute(query)]
+
+    def start(self, job_id: str) -> bool:
+        """Mark the job running; False if it is no longer queued or running (cancelled, finished)."""
+        return self._move(job_id, ACTIVE, state="running")
+
+    def save_window(self, job_id: str, outcome: WindowOutcome, worker: str) -> None:
+        """Store one finished window and count it, in one transaction.
+
+        Raises:
+            WindowTaken: The window is already stored.
+        """
+        row = WindowRow(job_id=job_id, index=outcome.index, outcome=outcome.to_bytes(),
+                        stats=json.dumps(outcome.stats.to_dict()), solve_seconds=outcome.stats.solve_seconds,
+                        worker=worker, finished_at=_now())
+        try:
+            with self.session.begin() as session:
+                session.add(row)
+                session.flush()
+                session.execute(update(JobRow).where(JobRow.id == job_id)
+                                .values(windows_done=outcome.index + 1, updated_at=_now()))
+        except IntegrityError:
+            raise WindowTaken(f"job {job_id} window {outcome.index} is already stored") from None
+
+    def finish(self, job_id: str, result: bytes) -> bool:
+        return self._move(job_id, ("running",), state="done", result=result)
+
+    def fail(self, job_id: str, error: str) -> bool:
+        return self._move(job_id, ("running",), state="failed", error=error)
+
+    def cancel(self, job_id: str) -> bool:
+        return self._move(job_id, ACTIVE, state="cancelled")
+
+    def _move(self, job_id: str, allowed: tuple[str, ...], **values) -> bool:
+        """Change the job only if its state is in ``allowed``: a cancel is never overwritten."""
+        with self.session.begin() as session:
+            moved = session.execute(
+                update(JobRow).where(JobRow.id == job_id, JobRow.state.in_(allowed)).values(updated_at=_now(), **values)
+            )
+            return moved.rowcount == 1
+
+    def count_by_state(self) -> dict[str, int]:
+        with self.session() as session:
+            counts = dict(session.execute(select(JobRow.state, func.count()).group_by(JobRow.state)).all())
+        return {state: int(counts.get(state, 0)) for state in STATES}
+
+    def solve_time_histogram(self, bounds: tuple[float, ...]) -> tuple[list[int], int, float]:
+        """Windows with solve time <= each bound, all windows, and the seconds summed (one query)."""
+        columns = [func.coalesce(func.sum(case((WindowRow.solve_seconds <= b, 1), else_=0)), 0) for b in bounds]
+        with self.session() as session:
+            *below, count, total = session.execute(
+                select(*columns, func.count(), func.coalesce(func.sum(WindowRow.solve_seconds), 0.0))
+            ).one()
+        return [int(n) for n in below], int(count), float(total)

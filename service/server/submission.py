@@ -1,0 +1,141 @@
+"""A submitted capture, checked whole before it is accepted: a job never fails on bad input.
+
+Two bodies are accepted: a capture document (``application/json``), or a labeled
+``.c3d``/``.trc`` upload (``multipart/form-data``) relabeled from its first frame, as
+``markerflow track`` does. Both become the same validated ``CaptureDocument``, which is
+what the store keeps as the job's input. Every problem is an ``InputError`` whose
+message starts with the field path.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from pydantic import ValidationError
+from starlette.datastructures import FormData, UploadFile
+
+from formulations.registry import describe
+from service.capture import LabelingOptions
+from service.capture_document import CaptureDocument, describe_validation_error
+from service.capture_labeling import CaptureLabeling
+from service.chaining import window_spans
+from service.errors import InputError
+from service.formats import read_labeled
+from service.formulation_spec import formulation_from_table
+from service.recording import Recording
+from service.recording_capture import capture_from_recording
+from service.server.limits import check_limits
+from service.server.settings import Limits
+
+UPLOAD_FIELDS = ("file", "formulation", "window")
+UPLOAD_SUFFIXES = (".c3d", ".trc")
+
+
+@dataclass(frozen=True)
+class Submission:
+    """A checked capture: the document, where it came from, and its window count."""
+
+    document: CaptureDocument
+    source: str
+    n_windows: int
+
+    def stored(self) -> bytes:
+        return self.document.model_dump_json().encode()
+
+
+def document_submission(body: bytes, limits: Limits) -> Submission:
+    """A JSON capture document, parsed and checked."""
+    try:
+        document = CaptureDocument.model_validate_json(body)
+    except ValidationError as error:
+        raise InputError(describe_validation_error(error)) from None
+    return _checked(document, "json", limits)
+
+
+def upload_submission(form: FormData, limits: Limits) -> Submission:
+    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object) and ``window``."""
+    for name in form.keys():
+        if name not in UPLOAD_FIELDS:
+            raise InputError(f"{name}: unknown form field; the fields are {', '.join(UPLOAD_FIELDS)}")
+    upload = form.get("file")
+    if not isinstance(upload, UploadFile):
+        raise InputError("file: upload a labeled .c3d or .trc file in the form field 'file'")
+    filename = Path(upload.filename or "")
+    if filename.suffix.lower() not in UPLOAD_SUFFIXES:
+        raise InputError(f"file: {filename.name or 'the upload'} is not a .c3d or .trc file")
+    options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
+    recording = _read_upload(upload, filename)
+    absent = np.flatnonzero(recording.missing()[0])
+    if len(absent):
+        raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame")
+    try:
+        document = CaptureDocument.of(capture_from_recording(recording), options)
+    except ValidationError as error:
+        raise InputError(describe_validation_error(error)) from None
+    return _checked(document, filename.name, limits)
+
+
+def _checked(document: CaptureDocument, source: str, limits: Limits) -> Submission:
+    check_limits(document, limits)
+    check_formulation(document.formulation)
+    # The library checks its options (formulation, window, association) itself; on the
+    # first two frames that costs nothing in either input mode.
+    head = {"points": document.points[:2]} if document.points is not None else {
+        "detections": {camera: frames[:2] for camera, frames in document.detections.items()}}
+    CaptureLabeling(document.model_copy(update=head).capture(), document.options())
+    return Submission(document, source, len(window_spans(document.n_frames, document.window)))
+
+
+def check_formulation(formulation: str | dict) -> None:
+    """The formulation exists and every parameter has its default's type (a bool is a bool).
+
+    The formulations check numbers' ranges themselves; flags and names are checked here
+    so that ``decompose = "no"`` is refused rather than read as true.
+    """
+    table = {"name": formulation} if isinstance(formulation, str) else formulation
+    formulation_from_table(table, "formulation")
+    defaults = {p.name: p.default for d in describe() if d.name == table["name"] for p in d.parameters}
+    for name, value in table.items():
+        default = defaults.get(name)
+        if isinstance(default, (bool, str)) and type(value) is not type(default):
+            raise InputError(f"formulation.{name}: expected a {type(default).__name__}, got {value!r}")
+
+
+def _formulation_field(value: str | UploadFile | None) -> str | dict:
+    if value is None:
+        return "lp-l1"
+    if not isinstance(value, str):
+        raise InputError("formulation: give a name or a JSON object, not a file")
+    if not value.lstrip().startswith("{"):
+        return value
+    try:
+        table = json.loads(value)
+    except json.JSONDecodeError as error:
+        raise InputError(f"formulation: not a JSON object ({error})") from None
+    if not isinstance(table, dict):
+        raise InputError("formulation: not a JSON object")
+    return table
+
+
+def _window_field(value: str | UploadFile | None) -> int:
+    if value is None:
+        return LabelingOptions().window
+    if not isinstance(value, str) or not value.strip().lstrip("-").isdigit():
+        raise InputError(f"window: expected a whole number of frames, got {value!r}")
+    return int(value)
+
+
+def _read_upload(upload: UploadFile, filename: Path) -> Recording:
+    """The upload read by the file readers, which take a path: a temp file with its suffix."""
+    with tempfile.TemporaryDirectory(prefix="markerflow-upload-") as folder:
+        path = Path(folder) / f"upload{filename.suffix.lower()}"
+        upload.file.seek(0)
+        path.write_bytes(upload.file.read())
+        try:
+            return read_labeled(path)
+        except InputError as error:  # name the upload, not the temp file
+            raise InputError(f"file: {str(error).replace(str(path), filename.name)}") from None

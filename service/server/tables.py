@@ -1,0 +1,64 @@
+"""The store's tables, and the SQLite connection settings (the one SQLite-specific place)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+
+from sqlalchemy import ForeignKey, LargeBinary, String, Text, create_engine, event
+from sqlalchemy.engine import Engine
+from sqlalchemy.orm import DeclarativeBase, Mapped, deferred, mapped_column
+
+
+class Base(DeclarativeBase):
+    pass
+
+
+class JobRow(Base):
+    __tablename__ = "jobs"
+    seq: Mapped[int] = mapped_column(primary_key=True, autoincrement=True)  # newest-first order
+    id: Mapped[str] = mapped_column(String(32), unique=True)
+    owner: Mapped[str] = mapped_column(String(200), index=True)
+    state: Mapped[str] = mapped_column(String(16), index=True)
+    source: Mapped[str] = mapped_column(String(300))
+    created_at: Mapped[datetime]
+    updated_at: Mapped[datetime]
+    windows_total: Mapped[int]
+    windows_done: Mapped[int] = mapped_column(default=0)
+    error: Mapped[str | None] = mapped_column(Text)
+    input: Mapped[bytes] = deferred(mapped_column(LargeBinary))  # the validated capture document JSON
+    result: Mapped[bytes | None] = deferred(mapped_column(LargeBinary))  # LabeledTrajectories npz
+
+
+class WindowRow(Base):
+    __tablename__ = "windows"
+    job_id: Mapped[str] = mapped_column(ForeignKey("jobs.id"), primary_key=True)
+    index: Mapped[int] = mapped_column(primary_key=True)  # a window is stored at most once
+    outcome: Mapped[bytes] = deferred(mapped_column(LargeBinary))
+    stats: Mapped[str] = mapped_column(Text)  # WindowStats.to_dict() as JSON (gap may be Infinity)
+    solve_seconds: Mapped[float]
+    worker: Mapped[str] = mapped_column(String(200))  # host:pid that computed it
+    finished_at: Mapped[datetime]
+
+
+def _sqlite_pragmas(connection, _record) -> None:
+    """WAL lets readers (status, events) run beside the writing job; FULL syncs every commit.
+
+    ``synchronous=FULL`` rather than NORMAL: in WAL mode NORMAL survives a killed process
+    but may lose the last commits on power loss, and a 202 promises the job is stored.
+    One fsync per window is small beside a window's solve. ``busy_timeout`` lets Dask
+    workers in other processes wait for the write lock instead of failing.
+    """
+    cursor = connection.cursor()
+    cursor.execute("PRAGMA journal_mode=WAL")
+    cursor.execute("PRAGMA synchronous=FULL")
+    cursor.execute("PRAGMA busy_timeout=30000")
+    cursor.close()
+
+
+def engine_for(url: str) -> Engine:
+    """An engine with the tables created; SQLite gets its pragmas on every connection."""
+    engine = create_engine(url)
+    if engine.dialect.name == "sqlite":
+        event.listen(engine, "connect", _sqlite_pragmas)
+    Base.metadata.create_all(engine)
+    return engine

@@ -1,0 +1,212 @@
+"""The service over real HTTP: jobs from JSON and from an uploaded C3D, in both input modes,
+give exactly what the library gives; solve, events, listing, cancel, metrics."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import ezc3d
+import numpy as np
+import pytest
+
+from capture_fixtures import camera_capture
+from service.capture import Capture, LabelingOptions
+from service.capture_labeling import CaptureLabeling
+from service.formats import read_labeled, write_labeled
+from service.recording import Recording
+from service.recording_capture import capture_from_recording
+from service.scene import generate_scene
+from service.server.settings import Settings
+from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
+
+OPTIONS = LabelingOptions(window=10)
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    db = tmp_path_factory.mktemp("service") / "jobs.db"
+    with serving(Settings(db=f"sqlite:///{db}", max_parallel_jobs=2)) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def capture() -> Capture:
+    return generated_capture(frames=60, seed=3)
+
+
+def _submit(client, body: str) -> dict:
+    answer = client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
+    assert answer.status_code == 202, answer.text
+    assert answer.headers["location"] == f"/v1/jobs/{answer.json()['id']}"
+    return answer.json()
+
+
+def _library_files(traj, folder):
+    write_labeled(folder / "library.csv", traj)
+    write_labeled(folder / "library.c3d", traj)
+    return (folder / "library.csv").read_bytes(), read_labeled(folder / "library.c3d")
+
+
+def _assert_same_result(client, job_id: str, expected, folder) -> None:
+    """JSON bitwise, CSV byte for byte, C3D as read back: all equal to the library's output."""
+    answer = client.get(f"/v1/jobs/{job_id}/result", params={"format": "json"})
+    assert answer.status_code == 200 and answer.headers["content-type"] == "application/json"
+    result = answer.json()
+    assert result["markers"] == expected.names
+    assert np.array_equal(nan_array(result["positions"]), expected.positions, equal_nan=True)
+    assert np.array_equal(np.array(result["occluded"]), expected.occluded)
+    assert np.array_equal(nan_array(result["filled"]), expected.filled, equal_nan=True)
+    csv_bytes, c3d_recording = _library_files(expected, folder)
+    answer = client.get(f"/v1/jobs/{job_id}/result", params={"format": "csv"})
+    assert answer.headers["content-type"].startswith("text/csv")
+    assert answer.headers["content-disposition"] == f'attachment; filename="markerflow-{job_id}.csv"'
+    assert answer.content == csv_bytes
+    answer = client.get(f"/v1/jobs/{job_id}/result", params={"format": "c3d"})
+    assert answer.headers["content-disposition"].endswith('.c3d"')
+    (folder / "served.c3d").write_bytes(answer.content)
+    served = read_labeled(folder / "served.c3d")
+    assert served.names == c3d_recording.names == expected.names
+    assert np.array_equal(served.positions, c3d_recording.positions, equal_nan=True)
+    # Read back through ezc3d too: the labels and every visible sample, in mm.
+    raw = ezc3d.c3d(str(folder / "served.c3d"))
+    assert raw["parameters"]["POINT"]["LABELS"]["value"] == expected.names
+    seen = ~expected.occluded
+    assert np.allclose(raw["data"]["points"][:3].transpose(2, 1, 0)[seen], expected.positions[seen], atol=1e-3)
+
+
+def test_json_job_runs_to_done_and_matches_the_library(client, capture, tmp_path):
+    accepted = _submit(client, document_json(capture, OPTIONS))
+    assert accepted["state"] == "queued" and accepted["windows_total"] == 7
+    job = wait_for(client, accepted["id"])
+    assert job["state"] == "done", job
+    assert job["windows_done"] == job["windows_total"] == len(job["windows"]) == 7
+    assert [w["index"] for w in job["windows"]] == list(range(7))
+    expected, stats = CaptureLabeling(capture, OPTIONS).label()
+    assert [w["integral"] for w in job["windows"]] == [s.integral for s in stats]
+    _assert_same_result(client, accepted["id"], expected, tmp_path)
+
+
+def test_uploaded_c3d_is_relabeled_like_the_library(client, tmp_path):
+    truth = generate_scene(n_frames=40, seed=5)
+    occluded = np.zeros(truth.positions.shape[:2], dtype=bool)
+    occluded[10:14, 3] = True  # a gap in the file: those samples are dropped from the cloud
+    write_labeled(tmp_path / "take.c3d", _as_labeled(truth, occluded))
+    with (tmp_path / "take.c3d").open("rb") as upload:
+        answer = client.post("/v1/jobs", files={"file": ("take.c3d", upload)}, data={"window": "8", "formulation": "ilp"})
+    assert answer.status_code == 202, answer.text
+    assert answer.json()["source"] == "take.c3d"
+    job = wait_for(client, answer.json()["id"])
+    assert job["state"] == "done", job
+    options = LabelingOptions(formulation="ilp", window=8)
+    expected, _ = CaptureLabeling(capture_from_recording(read_labeled(tmp_path / "take.c3d")), options).label()
+    assert expected.occluded[10:14, 3].all()
+    _assert_same_result(client, job["id"], expected, tmp_path)
+
+
+def _as_labeled(truth: Recording, occluded: np.ndarray):
+    from service.recording import LabeledTrajectories
+
+    positions = np.where(occluded[..., None], np.nan, truth.positions)
+    return LabeledTrajectories(truth.names, positions, occluded, truth.rate)
+
+
+def test_camera_mode_job_runs_to_done(client, tmp_path):
+    full = camera_capture(frames=40, markers=6)
+    capture = Capture(full.names, full.first_frame, full.rate, cameras=full.cameras[:3],
+                      detections=[frame[:3] for frame in full.detections])
+    accepted = _submit(client, document_json(capture, OPTIONS))
+    job = wait_for(client, accepted["id"])
+    assert job["state"] == "done", job
+    expected, _ = CaptureLabeling(capture, OPTIONS).label()
+    _assert_same_result(client, accepted["id"], expected, tmp_path)
+
+
+def test_events_stream_every_window_then_the_final_state(client, capture):
+    accepted = _submit(client, document_json(capture, OPTIONS))
+    events = []
+    with client.stream("GET", f"/v1/jobs/{accepted['id']}/events") as stream:
+        assert stream.headers["content-type"].startswith("text/event-stream")
+        for block in stream.iter_text():
+            events.append(block)
+    text = "".join(events)
+    parsed = [(part.split("\n")[0].removeprefix("event: "), json.loads(part.split("\n")[1].removeprefix("data: ")))
+              for part in text.strip().split("\n\n")]
+    windows = [data for kind, data in parsed if kind == "window"]
+    assert [w["windows_done"] for w in windows] == list(range(1, 8))
+    assert all(w["windows_total"] == 7 and "integral" in w["window"] for w in windows)
+    assert parsed[-1][0] == "state" and parsed[-1][1]["state"] == "done"
+
+
+def test_solve_answers_one_window_with_its_certificate(client):
+    capture = generated_capture(frames=12, seed=4)
+    options = LabelingOptions(formulation="ilp", window=12)
+    answer = client.post("/v1/solve", content=document_json(capture, options), headers={"content-type": "application/json"})
+    assert answer.status_code == 200, answer.text
+    body = answer.json()
+    expected, stats = CaptureLabeling(capture, options).label()
+    assert np.array_equal(nan_array(body["positions"]), expected.positions, equal_nan=True)
+    certificate = body["certificate"]
+    assert certificate["integral"] == stats[0].integral and certificate["cost"] == stats[0].cost
+    assert certificate["lower_bound"] <= certificate["cost"] + 1e-9 and certificate["status"] == stats[0].status
+    longer = client.post("/v1/solve", content=document_json(capture, LabelingOptions(window=5)),
+                         headers={"content-type": "application/json"})
+    assert longer.status_code == 422
+    assert longer.json()["message"].startswith("frames: 12 frames is more than one window (window = 5)")
+
+
+def test_cancel_stops_a_running_job_between_windows(client):
+    capture = generated_capture(frames=200, seed=6)
+    slow = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=4)
+    accepted = _submit(client, document_json(capture, slow))
+    running = wait_for(client, accepted["id"], states=("running",))
+    assert running["state"] == "running"
+    cancelled = client.delete(f"/v1/jobs/{accepted['id']}")
+    assert cancelled.status_code == 200 and cancelled.json()["state"] == "cancelled"
+    time.sleep(0.5)  # a window in flight finishes and is stored; then the runner stops
+    settled = client.get(f"/v1/jobs/{accepted['id']}").json()
+    time.sleep(0.5)
+    later = client.get(f"/v1/jobs/{accepted['id']}").json()
+    assert later["state"] == "cancelled" and later["windows_done"] == settled["windows_done"] < later["windows_total"]
+    assert client.get(f"/v1/jobs/{accepted['id']}/result").status_code == 409
+    assert client.delete(f"/v1/jobs/{accepted['id']}").status_code == 200  # cancelling again is harmless
+
+
+def test_listing_is_paged_newest_first(client, capture):
+    ids = [_submit(client, document_json(capture, LabelingOptions(window=30)))["id"] for _ in range(3)]
+    page = client.get("/v1/jobs", params={"limit": 2, "offset": 0}).json()
+    assert [job["id"] for job in page["jobs"]] == ids[::-1][:2] and page["total"] >= 3
+    following = client.get("/v1/jobs", params={"limit": 2, "offset": 2}).json()
+    assert following["jobs"][0]["id"] == ids[0]
+
+
+def test_formulations_health_and_metrics(client, capture):
+    names = [f["name"] for f in client.get("/v1/formulations").json()]
+    assert "lp-l1" in names and "ilp" in names
+    ilp = next(f for f in client.get("/v1/formulations").json() if f["name"] == "ilp")
+    assert {"name": "time_limit", "default": 60.0} in [{k: p[k] for k in ("name", "default")} for p in ilp["parameters"]]
+    job = wait_for(client, _submit(client, document_json(capture, OPTIONS))["id"])
+    for listed in client.get("/v1/jobs", params={"limit": 500}).json()["jobs"]:
+        wait_for(client, listed["id"])
+    health = client.get("/healthz").json()
+    states = [j["state"] for j in client.get("/v1/jobs", params={"limit": 500}).json()["jobs"]]
+    assert health["status"] == "ok" and health["jobs"] == {s: states.count(s) for s in health["jobs"]}
+    metrics = client.get("/metrics").text
+    done = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith('markerflow_jobs{state="done"}')))
+    solved = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_windows_solved_total")))
+    count = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_window_solve_seconds_count")))
+    assert done == health["jobs"]["done"] and solved == count >= job["windows_total"]
+
+
+def test_openapi_documents_every_route_with_examples(client):
+    schema = client.get("/openapi.json").json()
+    for path, operations in schema["paths"].items():
+        for method, operation in operations.items():
+            success = operation["responses"].get("200") or operation["responses"]["202"]
+            assert success.get("content"), f"{method} {path} has no response content"
+    jobs = schema["paths"]["/v1/jobs"]["post"]["requestBody"]["content"]
+    assert set(jobs) == {"application/json", "multipart/form-data"}
+    example = next(iter(jobs["application/json"]["examples"].values()))["value"]
+    answer = client.post("/v1/solve", json=example)
+    assert answer.status_code == 200 and answer.json()["certificate"]["integral"]
+    assert "CaptureDocument" in schema["components"]["schemas"] and "CameraDocument" in schema["components"]["schemas"]

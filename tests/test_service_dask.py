@@ -1,0 +1,47 @@
+"""Jobs on a Dask cluster (a LocalCluster of worker processes) give what the in-process pool gives."""
+
+from __future__ import annotations
+
+import os
+import sqlite3
+
+import numpy as np
+import pytest
+from distributed import LocalCluster
+
+from service.capture import LabelingOptions
+from service.server.settings import Settings
+from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
+
+OPTIONS = LabelingOptions(formulation="ilp", window=10)
+
+
+def _run(settings: Settings, body: str) -> tuple[dict, dict]:
+    with serving(settings) as client:
+        answer = client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
+        assert answer.status_code == 202
+        job = wait_for(client, answer.json()["id"], timeout=120)
+        return job, client.get(f"/v1/jobs/{job['id']}/result").json()
+
+
+def test_a_job_on_a_dask_cluster_matches_the_in_process_run(tmp_path):
+    body = document_json(generated_capture(frames=60, seed=8), OPTIONS)
+    local_job, local = _run(Settings(db=f"sqlite:///{tmp_path / 'local.db'}"), body)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        dask_job, remote = _run(Settings(db=f"sqlite:///{tmp_path / 'dask.db'}", dask=cluster.scheduler_address), body)
+    assert local_job["state"] == dask_job["state"] == "done"
+    # Every window was computed in a Dask worker's process, not in this one.
+    with sqlite3.connect(tmp_path / "dask.db") as db:
+        workers = {w for (w,) in db.execute("SELECT worker FROM windows")}
+    assert workers and not any(w.endswith(f":{os.getpid()}") for w in workers)
+    assert remote["markers"] == local["markers"]
+    for key in ("positions", "filled"):
+        assert np.array_equal(nan_array(remote[key]), nan_array(local[key]), equal_nan=True)
+    assert remote["occluded"] == local["occluded"]
+    assert [w["cost"] for w in dask_job["windows"]] == [w["cost"] for w in local_job["windows"]]
+
+
+@pytest.mark.parametrize("db", ["sqlite:///relative.db"])
+def test_sqlite_paths_are_made_absolute_for_workers_elsewhere(db, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert Settings(db=db).db == f"sqlite:///{tmp_path / 'relative.db'}"

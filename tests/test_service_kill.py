@@ -1,0 +1,71 @@
+"""SIGKILL the server mid-job: on restart the job resumes after its last stored window,
+recomputes none of the stored ones, and ends bit for bit where an uninterrupted run does."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import time
+
+import httpx
+import numpy as np
+
+from service.capture import LabelingOptions
+from service.capture_labeling import CaptureLabeling
+from service_fixtures import ServerProcess, document_json, generated_capture, nan_array, wait_for
+
+# The ILP without its LP shortcut: ~40 ms a window, so the kill lands mid-job.
+OPTIONS = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=4)
+
+
+def _stored(db_path, job_id: str) -> tuple[tuple, list[tuple]]:
+    with sqlite3.connect(db_path) as db:
+        job = db.execute("SELECT state, windows_done, windows_total FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        windows = db.execute('SELECT "index", worker, outcome FROM windows WHERE job_id = ? ORDER BY "index"',
+                             (job_id,)).fetchall()
+    return job, windows
+
+
+def test_a_killed_job_resumes_from_its_last_stored_window(tmp_path):
+    db_path = tmp_path / "jobs.db"
+    capture = generated_capture(frames=200, seed=7)
+    first = ServerProcess(f"sqlite:///{db_path}", tmp_path / "first.log")
+    try:
+        with httpx.Client(base_url=first.url, timeout=30) as client:
+            answer = client.post("/v1/jobs", content=document_json(capture, OPTIONS),
+                                 headers={"content-type": "application/json"})
+            assert answer.status_code == 202
+            job_id = answer.json()["id"]
+            deadline = time.monotonic() + 60
+            while client.get(f"/v1/jobs/{job_id}").json()["windows_done"] < 3:
+                assert time.monotonic() < deadline
+                time.sleep(0.02)
+        os.kill(first.process.pid, signal.SIGKILL)
+        first.process.wait(10)
+    finally:
+        first.stop()
+
+    (state, done, total), before = _stored(db_path, job_id)
+    assert state == "running" and 3 <= done < total, "the kill must land mid-job"
+    assert [row[0] for row in before] == list(range(done))
+    assert {row[1].rsplit(":", 1)[1] for row in before} == {str(first.process.pid)}
+
+    second = ServerProcess(f"sqlite:///{db_path}", tmp_path / "second.log")
+    try:
+        with httpx.Client(base_url=second.url, timeout=30) as client:
+            assert wait_for(client, job_id, timeout=120)["state"] == "done"
+            result = client.get(f"/v1/jobs/{job_id}/result").json()
+    finally:
+        second.stop()
+
+    (state, finished, total), after = _stored(db_path, job_id)
+    assert state == "done" and finished == total and [row[0] for row in after] == list(range(total))
+    # The windows stored before the kill are the very same rows: kept, not recomputed.
+    assert after[:done] == before
+    assert {row[1].rsplit(":", 1)[1] for row in after[done:]} == {str(second.process.pid)}
+
+    expected, _ = CaptureLabeling(capture, OPTIONS).label()
+    assert np.array_equal(nan_array(result["positions"]), expected.positions, equal_nan=True)
+    assert np.array_equal(np.array(result["occluded"]), expected.occluded)
+    assert np.array_equal(nan_array(result["filled"]), expected.filled, equal_nan=True)
