@@ -17,6 +17,7 @@ import scipy.sparse as sp
 
 from formulations.formulation import Formulation
 from formulations.objective import path_cost
+from formulations.errors import FormulationError
 from formulations.rounding import round_greedy
 from formulations.solution import WindowSolution
 from formulations.window import SOURCE, WindowProblem
@@ -32,6 +33,15 @@ class LpL1Cvxpy(Formulation):
 
     name: ClassVar[str] = "lp-l1-cvxpy"
     solver: str = "HIGHS"
+
+    def __post_init__(self) -> None:
+        # A typo must fail when the formulation is chosen, not inside the first window.
+        installed = cp.installed_solvers()
+        if self.solver not in installed:
+            raise FormulationError(
+                f"{self.name}: parameter 'solver' must be an installed cvxpy solver ({', '.join(installed)}), "
+                f"got {self.solver!r}"
+            )
 
     def solve(self, problem: WindowProblem) -> WindowSolution:
         start = time.perf_counter()

@@ -32,6 +32,7 @@ def test_name_with_parameters_builds_the_instance():
     ("lp-l1", {"pricing_successors": -1}, "pricing_successors"),
     ("lp-l1", {"integrality_tolerance": 0}, "integrality_tolerance"),
     ("lp-l1", {"time_limit": -5.0}, "time_limit"),
+    ("lp-l1-cvxpy", {"solver": "HIGSH"}, "solver"),
 ])
 def test_bad_choices_name_what_is_wrong(name, parameters, named):
     with pytest.raises(FormulationError, match=named):
