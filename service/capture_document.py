@@ -30,7 +30,9 @@ from formulations.cameras import Camera
 from service.capture import ASSOCIATIONS, Capture, LabelingOptions
 from service.errors import InputError
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
+# 1e9 (1000 km in mm) bounds every number: sums of squares of larger finite values overflow
+# to inf inside the geometry, and no capture is that big.
+Finite = Annotated[float, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
 Point3 = tuple[Finite, Finite, Finite]
 Pixel = tuple[Finite, Finite]
 MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
