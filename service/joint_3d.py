@@ -3,6 +3,8 @@
 Each frame's detections are matched across cameras (``formulations.cross_camera``); the
 resulting 3D points become an unlabeled cloud whose resources are the (camera, detection)
 pairs each point uses, so two candidates sharing a detection conflict in the window LP.
+Frames are matched in blocks (``match_frames``): one block shares its numpy and OpenCV calls,
+and a block no longer than a window adds no latency the window LP does not already have.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from formulations.cameras import Camera
-from formulations.cross_camera import CrossCameraPoints, match_across_cameras
+from formulations.cross_camera import CrossCameraPoints, match_frames
 from service.recording import UnlabeledCloud
 
 
@@ -39,16 +41,21 @@ class LazyFrames(Sequence):
 
 def cross_camera_cloud(
     cameras: list[Camera], detections: list[list[np.ndarray]], rate: float,
-    epipolar_px: float = 3.0, max_reprojection_px: float = 2.0,
+    epipolar_px: float = 3.0, max_reprojection_px: float = 2.0, block_frames: int = 20,
 ) -> tuple[UnlabeledCloud, Sequence[CrossCameraPoints]]:
     """The cross-camera points of every frame as a cloud with detection resources.
 
-    Frames are matched on demand: a long job labels (and reports) its first window without
-    matching every frame first, and a resumed job matches only the frames it still needs.
+    Frames are matched on demand, ``block_frames`` at a time: a long job labels (and reports)
+    its first window without matching every frame first, and a resumed job matches only the
+    blocks it still needs.
     """
+    blocks: dict[int, list[CrossCameraPoints]] = {}
 
     def match(f: int) -> CrossCameraPoints:
-        return match_across_cameras(cameras, detections[f], epipolar_px, max_reprojection_px)
+        start = f - f % block_frames
+        if start not in blocks:
+            blocks[start] = match_frames(cameras, detections[start : start + block_frames], epipolar_px, max_reprojection_px)
+        return blocks[start][f - start]
 
     def resources(f: int):
         offsets = np.cumsum([0] + [len(d) for d in detections[f]])
