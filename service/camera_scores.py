@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from formulations.cross_camera import CrossCameraPoints
 from service.recording import LabeledTrajectories
+
+if TYPE_CHECKING:  # scoring per-camera labels needs no cross-camera matching
+    from formulations.cross_camera import CrossCameraPoints
 
 
 @dataclass(frozen=True)
@@ -17,47 +20,60 @@ class CameraScores:
 
     Attributes:
         label_accuracy: Over marker-frames seen by two or more cameras (frame 0 excluded):
-            the marker took a point all of whose detections are that marker's.
-        rmse_mm: 3D error of the correctly labeled points.
+            the marker used one detection or more, all of them that marker's.
+        rmse_mm: 3D error of the correctly labeled, triangulated markers (two views or more).
         filled_rmse_mm: 3D error of the predicted positions filled in where a marker was
             occluded (seen by fewer than two cameras, or not labeled).
         marker_frames: Marker-frames counted.
+        single_view_rmse_mm: 3D error of the correctly labeled markers located from one
+            view (per-camera only: the point of its ray nearest the prediction); NaN when
+            there are none, as always with joint-3d, whose points have two views or more.
     """
 
     label_accuracy: float
     rmse_mm: float
     filled_rmse_mm: float
     marker_frames: int
+    single_view_rmse_mm: float = float("nan")
 
 
 def camera_scores(
-    marker_detection: np.ndarray, truth: np.ndarray, result: LabeledTrajectories, matched: Sequence[CrossCameraPoints]
+    marker_detection: np.ndarray, truth: np.ndarray, result: LabeledTrajectories, views: np.ndarray
 ) -> CameraScores:
-    """Score labels whose ``point_index`` indexes each frame's cross-camera points.
+    """Score a labeling by the detections each marker used, whatever the association.
 
     Args:
         marker_detection: ``(F, C, N)`` detection index each marker produced, -1 unseen.
         truth: ``(F, N, 3)`` true positions (mm).
         result: The labeling.
-        matched: The cross-camera points of every frame.
+        views: ``(F, N, C)`` detection each labeled marker used in each camera, -1 none
+            (``joint_3d_views`` for joint-3d; the labeler's own views for per-camera).
     """
     seen_twice = (marker_detection >= 0).sum(axis=1) >= 2  # (F, N)
     seen_twice[0] = False
-    correct = np.zeros_like(seen_twice)
-    for f, points in enumerate(matched):
-        took = np.flatnonzero(result.point_index[f] >= 0)
-        views = points.views[result.point_index[f, took]]  # (k, C)
-        expected = marker_detection[f][:, took].T  # (k, C)
-        agree = ((views < 0) | (views == expected)).all(axis=1) & (views >= 0).any(axis=1)
-        correct[f, took] = agree
+    expected = marker_detection.transpose(0, 2, 1)  # (F, N, C)
+    used = views >= 0
+    correct = ((~used) | (views == expected)).all(axis=2) & used.any(axis=2)
     counted = correct & seen_twice
-    error = np.linalg.norm(result.positions - truth, axis=2)[counted]
+    error = np.linalg.norm(result.positions - truth, axis=2)
+    n_views = used.sum(axis=2)
     filled_error = np.linalg.norm(result.filled - truth, axis=2)
     filled_error = filled_error[result.occluded & np.isfinite(filled_error)]
     return CameraScores(
         label_accuracy=float(counted.sum() / max(seen_twice.sum(), 1)),
-        rmse_mm=_rms(error), filled_rmse_mm=_rms(filled_error), marker_frames=int(seen_twice.sum()),
+        rmse_mm=_rms(error[counted & (n_views >= 2)]), filled_rmse_mm=_rms(filled_error),
+        marker_frames=int(seen_twice.sum()), single_view_rmse_mm=_rms(error[counted & (n_views == 1)]),
     )
+
+
+def joint_3d_views(result: LabeledTrajectories, matched: Sequence[CrossCameraPoints]) -> np.ndarray:
+    """``(F, N, C)`` detections behind the cross-camera point each marker took, -1 none."""
+    n_cameras = matched[0].views.shape[1]
+    views = np.full(result.point_index.shape + (n_cameras,), -1)
+    for f, points in enumerate(matched):
+        took = np.flatnonzero(result.point_index[f] >= 0)
+        views[f, took] = points.views[result.point_index[f, took]]
+    return views
 
 
 def _rms(values: np.ndarray) -> float:

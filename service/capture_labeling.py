@@ -8,8 +8,9 @@ This is the one entry point the CLI, the HTTP jobs and the Dask workers share:
         outcomes.append(outcome)  # persist it here to survive a crash
     result = labeling.result(outcomes)
 
-3D points are labeled by the window LP directly; camera detections are first matched
-across cameras (``joint-3d``) into 3D points whose resources are their detections.
+3D points are labeled by the window LP directly. Camera detections are either matched
+across cameras first (``joint-3d``) into 3D points whose resources are their detections,
+or tracked by the window LP in each camera's image and then triangulated (``per-camera``).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from service.cloud_labeler import CloudLabeler
 from service.errors import InputError
 from service.formulation_spec import formulation_from_table
 from service.joint_3d import cross_camera_cloud
+from service.per_camera import PerCameraLabeler
 from service.recording import LabeledTrajectories, UnlabeledCloud
 from service.window_outcome import WindowOutcome
 from service.window_stats import WindowStats
@@ -43,8 +45,12 @@ class CaptureLabeling:
         table = {"name": options.formulation} if isinstance(options.formulation, str) else options.formulation
         formulation = formulation_from_table(table, "formulation")
         self.capture = capture
-        self.labeler = CloudLabeler(formulation=formulation, window=options.window)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
+        self.per_camera = None
+        if capture.mode == "cameras" and options.association == "per-camera":
+            self.per_camera = PerCameraLabeler(formulation=formulation, window=options.window)
+            return
+        self.labeler = CloudLabeler(formulation=formulation, window=options.window)
         self.cloud = self._cloud(capture, options.association)
 
     @staticmethod
@@ -52,16 +58,20 @@ class CaptureLabeling:
         if capture.mode == "points":
             return UnlabeledCloud(points=capture.points, rate=capture.rate)
         if association != "joint-3d":
-            raise InputError(f"association {association!r} is not available; use joint-3d")
+            raise InputError(f"association {association!r} is not available; use joint-3d or per-camera")
         return cross_camera_cloud(capture.cameras, capture.detections, capture.rate)[0]
 
     def windows(self, after: WindowOutcome | None = None) -> Iterator[WindowOutcome]:
         """Each window's outcome as it finishes; ``after`` resumes after a finished window."""
         capture = self.capture
+        if self.per_camera is not None:
+            return self.per_camera.windows(capture, after=after)
         return self.labeler.windows(self.cloud, capture.names, capture.first_frame, after=after)
 
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes."""
+        if self.per_camera is not None:
+            return self.per_camera.assemble(self.capture, outcomes)
         return self.labeler.assemble(self.cloud, self.capture.names, self.capture.first_frame, outcomes)
 
     def label(self, progress: Callable[[int, int], None] | None = None) -> tuple[LabeledTrajectories, list[WindowStats]]:

@@ -1,8 +1,9 @@
 """A camera-mode scenario: real motion through a real calibration, labeled and scored.
 
 The trajectories are placed in the calibrated volume, projected into every camera
-(``service.simulate_cameras``), matched across cameras and labeled by the window LP
-(``joint-3d``), then scored against the detections behind every labeled point.
+(``service.simulate_cameras``), labeled with the scenario's association (``joint-3d``:
+cross-camera points labeled by the window LP; ``per-camera``: the window LP in each
+camera's image, then triangulation), and scored by the detections each marker used.
 """
 
 from __future__ import annotations
@@ -11,13 +12,19 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
+import numpy as np
+
+from formulations.cameras import Camera
 from service.calibration import load_calibration
-from service.camera_scores import CameraScores, camera_scores
+from service.camera_scores import CameraScores, camera_scores, joint_3d_views
+from service.capture import Capture
+from service.chaining import window_spans
 from service.cloud_labeler import CloudLabeler
 from service.joint_3d import cross_camera_cloud
-from service.recording import Recording
+from service.per_camera import PerCameraLabeler
+from service.recording import LabeledTrajectories, Recording
 from service.scenario import Scenario
-from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
 from service.window_stats import WindowStats, certificate_figures, finite_or_none
 
 
@@ -42,6 +49,7 @@ class CameraEvaluation:
             "markers": self.markers, "formulation": self.formulation,
             "rmse_mm": finite_or_none(self.scores.rmse_mm),
             "filled_rmse_mm": finite_or_none(self.scores.filled_rmse_mm),
+            "single_view_rmse_mm": finite_or_none(self.scores.single_view_rmse_mm),
         }
 
 
@@ -49,7 +57,10 @@ def evaluate_cameras(
     truth: Recording, scenario: Scenario, labeler: CloudLabeler,
     progress: Callable[[int, int], None] | None = None,
 ) -> CameraEvaluation:
-    """Simulate ``scenario`` (mode "cameras") on ``truth``, label with joint-3d, score."""
+    """Simulate ``scenario`` (mode "cameras") on ``truth``, label with its association, score.
+
+    ``labeler`` gives the formulation and window of either association.
+    """
     cameras = load_calibration(scenario.calibration, units="mm")
     rig = CameraRig.from_cameras(cameras)
     stop = scenario.start_frame + scenario.frames if scenario.frames else truth.n_frames
@@ -61,9 +72,31 @@ def evaluate_cameras(
         clutter_per_camera=scenario.clutter_per_camera, seed=scenario.seed,
     )
     start = time.perf_counter()
-    cloud, matched = cross_camera_cloud(cameras, capture.detections, truth.rate)
-    result, windows = labeler.label(cloud, capture.first_frame.names, capture.first_frame.positions[0], progress)
+    if scenario.association == "per-camera":
+        result, windows, views = _per_camera(cameras, capture, labeler, progress)
+    else:
+        cloud, matched = cross_camera_cloud(cameras, capture.detections, truth.rate)
+        result, windows = labeler.label(cloud, capture.first_frame.names, capture.first_frame.positions[0], progress)
+        views = joint_3d_views(result, matched)
     seconds = time.perf_counter() - start
-    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, matched)
+    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, views)
     name = labeler.formulation if isinstance(labeler.formulation, str) else labeler.formulation.name
     return CameraEvaluation(scores, windows, len(positions), truth.n_markers, seconds, name)
+
+
+def _per_camera(
+    cameras: list[Camera], simulated: CameraCapture, labeler: CloudLabeler,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[LabeledTrajectories, list[WindowStats], np.ndarray]:
+    """Label the simulated detections camera by camera: trajectories, window stats, views."""
+    first = simulated.first_frame
+    capture = Capture(
+        list(first.names), first.positions[0], first.rate, cameras=cameras, detections=simulated.detections,
+    )
+    per_camera = PerCameraLabeler(formulation=labeler.formulation, window=labeler.window)
+    n_windows, outcomes = len(window_spans(capture.n_frames, labeler.window)), []
+    for outcome in per_camera.windows(capture):
+        outcomes.append(outcome)
+        if progress:
+            progress(outcome.index + 1, n_windows)
+    return per_camera.assemble(capture, outcomes), [o.stats for o in outcomes], per_camera.views(capture, outcomes)

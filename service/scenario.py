@@ -41,7 +41,9 @@ class Scenario:
         occlusion_rate: Camera mode: long-run fraction of (camera, marker) samples hidden.
         occlusion_burst_frames: Camera mode: mean length of a hidden run, frames.
         clutter_per_camera: Camera mode: Poisson mean of spurious detections per camera.
-        association: Camera mode: ``"joint-3d"`` (``"per-camera"`` is not built yet).
+        association: Camera mode: ``"joint-3d"`` (cross-camera 3D points labeled by the
+            window LP) or ``"per-camera"`` (the window LP in each camera's image, then
+            triangulation).
         up_axis: Camera mode: the recording's vertical axis (0, 1 or 2) for placing it.
     """
 
@@ -133,8 +135,6 @@ class Scenario:
     def _check_cameras(self) -> None:
         self._require("calibration", self.calibration.strip() != "", "the path of a calibration file")
         self._require("association", self.association in ASSOCIATIONS, f"one of {', '.join(ASSOCIATIONS)}")
-        if self.association == "per-camera":
-            raise InputError("scenario key 'association': per-camera association is not built yet; use joint-3d")
         for key in ("pixel_noise", "merge_radius_px", "clutter_per_camera"):
             self._require(key, getattr(self, key) >= 0, ">= 0")
         self._require("occlusion_rate", 0.0 <= self.occlusion_rate < 1.0, "in [0, 1)")

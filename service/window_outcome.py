@@ -17,6 +17,8 @@ import numpy as np
 from formulations.marker_state import MarkerState
 from service.window_stats import WindowStats
 
+_OPTIONAL = ("views", "positions")  # stored only when present
+
 
 @dataclass(frozen=True)
 class WindowOutcome:
@@ -29,6 +31,11 @@ class WindowOutcome:
         filled: ``(M, N, 3)`` predicted position where occluded, NaN elsewhere.
         stats: Certificate and timings.
         state: Marker state at the window's last frame: the next window's template.
+        views: ``per-camera`` association only: ``(M, N, C)`` detection each marker took
+            in each camera (after the cross-camera check), -1 for none. ``point_index``
+            is then ``(M, 0)``: the markers took detections, not points.
+        positions: ``per-camera`` only: ``(M, N, 3)`` located positions, NaN where no
+            camera saw the marker.
     """
 
     index: int
@@ -36,9 +43,12 @@ class WindowOutcome:
     filled: np.ndarray
     stats: WindowStats
     state: MarkerState
+    views: np.ndarray | None = None
+    positions: np.ndarray | None = None
 
     def to_bytes(self) -> bytes:
         arrays = {f"state.{f.name}": getattr(self.state, f.name) for f in fields(MarkerState)}
+        arrays.update({name: getattr(self, name) for name in _OPTIONAL if getattr(self, name) is not None})
         header = json.dumps({"index": self.index, "stats": self.stats.to_dict()})
         buffer = io.BytesIO()
         np.savez_compressed(
@@ -54,4 +64,5 @@ class WindowOutcome:
             return cls(
                 index=int(header["index"]), point_index=stored["point_index"], filled=stored["filled"],
                 stats=WindowStats(**header["stats"]), state=state,
+                **{name: stored[name] for name in _OPTIONAL if name in stored.files},
             )

@@ -2,14 +2,15 @@
 
 CMU 85_02 placed in the Pose2Sim 4-camera rig: 0.5 px noise, 3 px blob merging, 10 %
 per-camera occlusion in 15-frame bursts, 2 clutter points per camera. The figures are
-the level reached so far (issue 3 asks for 99.5 %); they may not get worse.
+the level reached so far (issue 3 asks for 99.5 %; these 300 frames give 99.98 %, the
+whole recording 99.83 %); they may not get worse.
 """
 
 import numpy as np
 from conftest import DATA
 
 from service.calibration import load_pose2sim_toml
-from service.camera_scores import camera_scores
+from service.camera_scores import camera_scores, joint_3d_views
 from service.cloud_labeler import CloudLabeler
 from service.formats import read_labeled
 from service.joint_3d import cross_camera_cloud
@@ -30,9 +31,9 @@ def test_joint_3d_labels_cmu_85_02_through_the_pose2sim_rig():
     # Points share detections: the cloud's resources are what the conflict rows use.
     assert all(r.shape == (len(p), sum(len(d) for d in det)) for r, p, det in zip(cloud.resources, cloud.points, capture.detections))
     result, windows = CloudLabeler().label(cloud, capture.first_frame.names, capture.first_frame.positions[0])
-    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, matched)
+    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, joint_3d_views(result, matched))
     assert scores.marker_frames > 0.9 * (FRAMES - 1) * len(truth.names)
-    assert scores.label_accuracy >= 0.99
+    assert scores.label_accuracy >= 0.999
     assert scores.rmse_mm <= 3.0
     # Occluded markers carry their predicted position, flagged by `occluded`.
     assert np.isfinite(result.filled[result.occluded]).all() and np.isnan(result.filled[~result.occluded]).all()

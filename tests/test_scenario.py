@@ -90,8 +90,9 @@ def test_bad_value_names_the_key(bad: dict) -> None:
 def test_camera_mode_needs_a_calibration_and_valid_camera_keys() -> None:
     with pytest.raises(InputError, match="'calibration'"):
         Scenario.from_dict({"mode": "cameras"})
-    with pytest.raises(InputError, match="per-camera association is not built yet"):
-        Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-camera"})
+    assert Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-camera"}).association == "per-camera"
+    with pytest.raises(InputError, match="'association'"):
+        Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-marker"})
     with pytest.raises(InputError, match="'occlusion_rate'"):
         Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "occlusion_rate": 1.5})
 

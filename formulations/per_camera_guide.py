@@ -1,0 +1,136 @@
+"""A frame-by-frame track through 2D detections that centres the per-camera gates of a window.
+
+Each frame: predict every marker in 3D (``MarkerState.predict``), project the predictions
+into every camera, assign each camera's detections to the markers by
+``linear_sum_assignment`` on image-plane distance with a constant miss cost, locate the
+markers from those views (``per_camera_locate``: triangulation, dropping the views that
+disagree; ``per_camera_reacquire``: a second view for markers left with one), and advance the state with the markers seen by two or more cameras. As
+``formulations.guide`` does for clouds, this decides only *where to look*; the window LP
+decides *what to take*.
+
+Image-plane distances are in millimetres at the marker's depth. With (x, y) = (X_c / Z_c,
+Y_c / Z_c) the normalised (undistorted) coordinates of camera c and z the depth of the
+marker's position, a normalised offset du is z du mm of sideways motion: the gates and
+costs of the 3D labeler carry over, and a camera twice as far away does not halve them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial.distance import cdist
+
+from formulations.cameras import Camera
+from formulations.marker_state import MarkerState
+from formulations.per_camera_gating import PerCameraGating
+from formulations.per_camera_reacquire import locate_with_reacquisition
+
+
+@dataclass(frozen=True)
+class PerCameraGuide:
+    """Per window frame 1..M, what the guide knew before the frame.
+
+    Attributes:
+        predicted: ``(M, N, 3)`` prediction into frame m.
+        previous: ``(M, N, 3)`` position at frame m-1 (the prediction where unseen).
+        radius: ``(M, N)`` gate radius, mm.
+        unseen: ``(M, N)`` frames unseen before m (0: seen by 2+ cameras in frame m-1).
+        motion_known: ``(M, N)`` False while a marker's velocity is unknown (just after the
+            labeled first frame): its expected displacement is then left out.
+    """
+
+    predicted: np.ndarray
+    previous: np.ndarray
+    radius: np.ndarray
+    unseen: np.ndarray
+    motion_known: np.ndarray
+
+
+def image_plane(camera: Camera, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised coordinates ``(N, 2)`` of world points and their depth ``(N,)``.
+
+    (x, y) = (X_c / Z_c, Y_c / Z_c) with X_c = R X + t; NaN behind the camera (Z_c <= 0),
+    where a point has no image.
+    """
+    local = points @ camera.R.T + camera.t
+    depth = local[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        normalised = np.where(depth[:, None] > 0, local[:, :2] / depth[:, None], np.nan)
+    return normalised, depth
+
+
+def image_distances(camera: Camera, points: np.ndarray, normalised: np.ndarray) -> np.ndarray:
+    """``(N, D)`` distance in mm at each point's depth from its image to each detection.
+
+    Args:
+        camera: The camera.
+        points: ``(N, 3)`` world points.
+        normalised: ``(D, 2)`` undistorted normalised detections (``Camera.undistort``).
+
+    Returns:
+        z_n ||x_n - x_d||; inf for points behind the camera.
+    """
+    image, depth = image_plane(camera, points)
+    distance = cdist(image, normalised) * depth[:, None] if len(normalised) else np.zeros((len(points), 0))
+    return np.where(np.isfinite(distance), distance, np.inf)
+
+
+def assign_in_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+    """Optimal one-to-one assignment, each marker only inside its gate, a miss costing ``miss_cost``.
+
+    Solves min sum distance over markers x (detections + one private miss column each) with
+    ``linear_sum_assignment``; gated-out pairs get a prohibitive cost. This is
+    ``guide.assign_nearest`` on a given distance matrix: image-plane distances are scaled
+    by each marker's own depth, so they are not the Euclidean distances it computes.
+
+    Args:
+        distance: ``(N, D)`` marker-detection distances.
+        radius: ``(N,)`` gate radius of each marker.
+        miss_cost: Cost of leaving a marker unassigned.
+
+    Returns:
+        ``(N,)`` detection index per marker, -1 for a miss.
+    """
+    n, d = distance.shape
+    blocked = 1e9
+    cost = np.where(distance <= radius[:, None], distance, blocked)
+    miss = np.full((n, n), blocked)
+    np.fill_diagonal(miss, miss_cost)
+    rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
+    result = np.full(n, -1)
+    hit = cols < d
+    result[rows[hit]] = cols[hit]
+    return result
+
+
+def per_camera_guide(
+    state: MarkerState, cameras: list[Camera], pixels: list[list[np.ndarray]],
+    normalised: list[list[np.ndarray]], gating: PerCameraGating = PerCameraGating(),
+) -> PerCameraGuide:
+    """Run the frame-by-frame tracker over a window's detections from ``state``.
+
+    Args:
+        state: The markers at the template frame.
+        cameras: The C cameras.
+        pixels: ``pixels[m][c]`` ``(D, 2)`` detections of window frame m+1 in camera c.
+        normalised: The same detections undistorted to normalised coordinates.
+        gating: Gate radius (mm at the marker's depth; its base radius is the miss cost)
+            and the limits of the cross-camera check.
+    """
+    m, n = len(pixels), len(state.position)
+    predicted, previous = np.empty((m, n, 3)), np.empty((m, n, 3))
+    radius, unseen, known = np.empty((m, n)), np.empty((m, n), dtype=int), np.empty((m, n), dtype=bool)
+    for f in range(m):
+        predicted[f], previous[f], unseen[f] = state.predict(), state.position, state.unseen
+        radius[f], known[f] = gating.gate.radius(state), ~(state.visible & ~state.velocity_known)
+        views = np.stack([
+            assign_in_gates(image_distances(camera, predicted[f], normalised[f][c]), radius[f], gating.gate.radius_mm)
+            for c, camera in enumerate(cameras)
+        ], axis=1)
+        located, _ = locate_with_reacquisition(
+            cameras, pixels[f], views, state, predicted[f], gating.max_reprojection_px, gating.max_shape_mm
+        )
+        state = state.advance(located.point, located.n_views >= 2)
+    return PerCameraGuide(predicted=predicted, previous=previous, radius=radius, unseen=unseen, motion_known=known)

@@ -1,0 +1,202 @@
+"""per-camera association: each marker tracked in each camera's image, then triangulated.
+
+Small cases against brute force and exact geometry, then CMU 85_02 end to end through the
+real Pose2Sim rig (0.5 px noise, 3 px merging, 10 % occlusion in 15-frame bursts, 2 clutter
+points per camera), and a resumed run against an uninterrupted one.
+"""
+
+import numpy as np
+import pytest
+from conftest import DATA
+from windows import assert_feasible, brute_force
+
+from formulations.cameras import Camera
+from formulations.ilp import Ilp
+from formulations.lp_l1 import LpL1
+from formulations.marker_state import MarkerState
+from formulations.network import build_window
+from formulations.per_camera_candidates import per_camera_candidates
+from formulations.per_camera_gating import PerCameraGating
+from formulations.per_camera_guide import per_camera_guide
+from formulations.per_camera_locate import locate_markers
+from formulations.per_camera_reacquire import locate_with_reacquisition
+from formulations.triangulation import reprojection_errors, triangulate_many
+from service.calibration import load_pose2sim_toml
+from service.camera_scores import camera_scores
+from service.capture import Capture, LabelingOptions
+from service.capture_labeling import CaptureLabeling
+from service.cloud_labeler import MARKER_COSTS
+from service.formats import read_labeled
+from service.recording import LabeledTrajectories, Recording
+from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.window_outcome import WindowOutcome
+
+K = [[1000.0, 0, 960], [0, 1000.0, 540], [0, 0, 1]]
+
+
+def ring(n_cameras: int = 4) -> list[Camera]:
+    """Cameras 3 m from the origin, looking at it, spread around the vertical axis."""
+    return [
+        Camera.from_rvec(K, np.zeros(5), [0.0, 2 * np.pi * c / n_cameras, 0.0], [0.0, 0.0, 3000.0], (1920, 1080), f"c{c}")
+        for c in range(n_cameras)
+    ]
+
+
+def test_per_camera_window_lp_is_the_brute_force_optimum_for_crossing_markers():
+    camera = ring(1)
+    # Two markers cross in the image (x towards each other, 8 mm apart in y), plus clutter.
+    steps = np.arange(5)[:, None]
+    a = np.column_stack([-30 + 15 * steps[:, 0], np.zeros(5), np.zeros(5)])
+    b = np.column_stack([30 - 15 * steps[:, 0], np.full(5, 8.0), np.zeros(5)])
+    state = MarkerState.from_first_frame(np.stack([a[0], b[0]])).advance(np.stack([a[1], b[1]]), np.ones(2, bool))
+    rng = np.random.default_rng(3)
+    pixels = []
+    for f in range(2, 5):
+        found = np.concatenate([camera[0].project(np.stack([a[f], b[f]])), [[960 + rng.uniform(-15, 15), 540.0]]])
+        pixels.append([found[rng.permutation(3)]])
+    normalised = [[camera[0].undistort(frame[0])] for frame in pixels]
+    gating = PerCameraGating()
+    guide = per_camera_guide(state, camera, pixels, normalised, gating)
+    window = per_camera_candidates(state, camera, guide, normalised, gating)
+    problem, node_candidate = build_window(window.candidates, MARKER_COSTS)
+    assert problem.conflict_groups.shape[0] >= 3  # both markers gate every detection of every frame
+
+    optimum, best = brute_force(problem)
+    for formulation in (LpL1(), Ilp()):
+        solution = formulation.solve(problem)
+        assert_feasible(problem, solution.path)
+        assert solution.cost == pytest.approx(optimum, abs=1e-6)
+    views = window.views(node_candidate, best)  # (M, N, C)
+    truth = [[np.argmin(np.linalg.norm(frame[0] - camera[0].project(p[f + 2][None]), axis=1)) for p in (a, b)] for f, frame in enumerate(pixels)]
+    assert views.shape == (3, 2, 1)
+    np.testing.assert_array_equal(views[:, :, 0], truth)  # through the crossing, each keeps its own
+
+
+def test_a_wrong_camera_assignment_is_dropped_and_the_rest_triangulated():
+    cameras = ring(4)
+    point = np.array([[40.0, -25.0, 60.0]])
+    pixels = np.stack([camera.project(point) for camera in cameras], axis=1)  # (1, 4, 2)
+    wrong = pixels.copy()
+    wrong[0, 2] += [7.0, -5.0]  # camera 2 tracked the neighbouring blob
+    # Without the check the wrong view spoils the point and reprojects badly.
+    spoiled = triangulate_many(cameras, wrong)[0]
+    assert np.linalg.norm(spoiled - point) > 5.0
+    assert np.nanmax(reprojection_errors(cameras, spoiled, wrong)) > 2.0
+
+    located = locate_markers(cameras, wrong, point + 30.0, max_error_px=2.0)
+    np.testing.assert_array_equal(located.kept, [[True, True, False, True]])
+    np.testing.assert_allclose(located.point, point, atol=1e-6)
+
+
+def test_two_disagreeing_views_keep_the_one_the_prediction_supports():
+    cameras = ring(4)
+    point = np.array([[0.0, 50.0, -20.0]])
+    pixels = np.full((1, 4, 2), np.nan)
+    pixels[0, [0, 1]] = [camera.project(point)[0] for camera in cameras[:2]]
+    pixels[0, 1] += [0.0, 30.0]  # off the epipolar line: the rays do not meet
+    located = locate_markers(cameras, pixels, point + [3.0, 0.0, 0.0], max_error_px=2.0)
+    np.testing.assert_array_equal(located.kept, [[True, False, False, False]])
+    # One view: the point of camera 0's ray nearest the prediction, so only along-ray error remains.
+    assert np.linalg.norm(located.point - point) < 3.0 + 1e-6
+    assert reprojection_errors(cameras[:1], located.point, pixels[:, :1])[0, 0] < 1e-6
+
+
+def test_no_view_leaves_the_prediction():
+    cameras = ring(4)
+    prediction = np.array([[1.0, 2.0, 3.0]])
+    located = locate_markers(cameras, np.full((1, 4, 2), np.nan), prediction)
+    assert located.n_views[0] == 0
+    np.testing.assert_array_equal(located.point, prediction)
+
+
+def _body_state(cameras: list[Camera]) -> tuple[MarkerState, np.ndarray]:
+    """Five markers of a rigid body, seen by every camera for ten frames (distances learned)."""
+    body = np.array([[0.0, 0, 0], [80, 0, 0], [0, 90, 0], [0, 0, 70], [60, 60, 40]])
+    state = MarkerState.from_first_frame(body, n_neighbours=4)
+    for f in range(1, 11):
+        state = state.advance(body + [2.0 * f, 0, 0], np.ones(len(body), bool))
+    return state, body + [22.0, 0, 0]
+
+
+def test_a_single_view_marker_gets_its_second_view_from_the_epipolar_band():
+    cameras = ring(4)
+    state, frame = _body_state(cameras)
+    detections = [camera.project(frame) for camera in cameras]
+    views = np.tile(np.arange(5)[:, None], (1, 4))
+    views[0] = [0, -1, -1, -1]  # marker 0 was tracked by camera 0 only
+    # Marker 0's detections (index 0) lie free in cameras 1-3, and camera 1 also has a
+    # clutter blob on marker 0's epipolar line, 150 mm deeper along camera 0's ray.
+    origin, direction = cameras[0].ray(detections[0][:1])
+    decoy = cameras[1].project(origin + (np.linalg.norm(frame[0] - origin) + 150.0) * direction)
+    detections[1] = np.concatenate([detections[1], decoy])
+    prediction = frame + [0.0, 0.0, 120.0]  # a drifted prediction does not matter: the body does
+    located, kept = locate_with_reacquisition(cameras, detections, views, state, prediction, 2.0, 20.0)
+    assert (kept[0] >= 0).sum() == 2 and kept[0, 0] == 0 and kept[0][kept[0] >= 0][1] == 0  # not the decoy (5)
+    np.testing.assert_array_equal(kept[1:], views[1:])
+    np.testing.assert_allclose(located.point[0], frame[0], atol=1e-6)
+    # Without marker 0's true detections the decoy alone is refused: it breaks the body's distances.
+    alone = [found if c == 0 else found[1:] for c, found in enumerate(detections)]
+    shifted = np.where(np.arange(4) > 0, np.where(views > 0, views - 1, views), views)
+    _, kept = locate_with_reacquisition(cameras, alone, shifted, state, prediction, 2.0, 20.0)
+    np.testing.assert_array_equal(kept[0], [0, -1, -1, -1])
+
+
+def test_scores_count_a_marker_correct_only_with_its_own_detections():
+    marker_detection = np.array([[[0, 1], [0, 1]], [[1, 0], [0, -1]]])  # (F=2, C=2, N=2)
+    views = np.array([[[0, 0], [1, 1]], [[1, 0], [0, -1]]])  # (F, N, C)
+    views_wrong = views.copy()
+    views_wrong[1, 0, 1] = 1  # marker 0 took camera 1's detection 1: nobody's (clutter)
+    views_none = views.copy()
+    views_none[1, 0] = -1
+    truth = np.zeros((2, 2, 3))
+    result = LabeledTrajectories(["a", "b"], truth.copy(), np.zeros((2, 2), bool), 100.0, filled=np.full((2, 2, 3), np.nan))
+    assert camera_scores(marker_detection, truth, result, views).label_accuracy == 1.0
+    assert camera_scores(marker_detection, truth, result, views_wrong).label_accuracy == 0.0
+    assert camera_scores(marker_detection, truth, result, views_none).label_accuracy == 0.0
+    assert camera_scores(marker_detection, truth, result, views).marker_frames == 1  # frame 0 and marker b excluded
+
+
+def _cmu_capture(frames: int) -> tuple[Capture, object]:
+    cameras = load_pose2sim_toml(DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml", units="mm")
+    rig = CameraRig.from_cameras(cameras)
+    truth = read_labeled(DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d")
+    placed = Recording(truth.names, place_in_volume(truth.positions[:frames], rig), truth.rate)
+    simulated = simulate_cameras(placed, rig, pixel_noise=0.5, merge_radius_px=3.0, occlusion_rate=0.1,
+                                 occlusion_burst_frames=15, clutter_per_camera=2, seed=0)
+    capture = Capture(list(truth.names), placed.positions[0], truth.rate, cameras=cameras, detections=simulated.detections)
+    return capture, simulated
+
+
+def test_per_camera_labels_cmu_85_02_through_the_pose2sim_rig():
+    capture, simulated = _cmu_capture(300)
+    labeling = CaptureLabeling(capture, LabelingOptions(association="per-camera"))
+    outcomes = list(labeling.windows())
+    result = labeling.result(outcomes)
+    scores = camera_scores(simulated.marker_detection, simulated.truth.positions, result,
+                           labeling.per_camera.views(capture, outcomes))
+    assert scores.marker_frames > 0.9 * 299 * len(capture.names)
+    assert scores.label_accuracy >= 0.999
+    assert scores.rmse_mm <= 3.0
+    # Occluded markers carry their predicted position, flagged by `occluded`.
+    assert np.isfinite(result.filled[result.occluded]).all() and np.isnan(result.filled[~result.occluded]).all()
+    assert np.isnan(result.positions[result.occluded]).all() and np.isfinite(result.positions[~result.occluded]).all()
+    assert scores.rmse_mm < scores.filled_rmse_mm < 100.0
+
+
+def test_resumed_per_camera_labeling_equals_the_uninterrupted_run():
+    capture, _ = _cmu_capture(60)
+    labeling = CaptureLabeling(capture, LabelingOptions(association="per-camera"))
+    outcomes = list(labeling.windows())
+    assert len(outcomes) == 4
+    stored = WindowOutcome.from_bytes(outcomes[1].to_bytes())
+    for name in ("point_index", "filled", "views", "positions"):
+        np.testing.assert_array_equal(getattr(stored, name), getattr(outcomes[1], name))
+    resumed = list(CaptureLabeling(capture, LabelingOptions(association="per-camera")).windows(after=stored))
+    assert [o.index for o in resumed] == [2, 3]
+    for a, b in zip(resumed, outcomes[2:]):
+        for name in ("filled", "views", "positions"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+        np.testing.assert_array_equal(a.state.position, b.state.position)
+    full = labeling.result(outcomes)
+    again = labeling.result(outcomes[:2] + resumed)
+    np.testing.assert_array_equal(full.positions, again.positions)
