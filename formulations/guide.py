@@ -84,22 +84,33 @@ def guide_track(
 def assign_nearest(predicted: np.ndarray, points: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
     """Optimal one-to-one assignment of points to predictions within each gate.
 
-    Solves min sum distance, a marker taking only points inside its gate, with a miss
-    of cost ``miss_cost`` allowed for every marker.
-
     Returns:
         ``(N,)`` point index per marker, -1 for a miss.
     """
-    n = len(predicted)
     if len(points) == 0:
-        return np.full(n, -1)
-    distance = cdist(predicted, points)
+        return np.full(len(predicted), -1)
+    return assign_within_gates(cdist(predicted, points), radius, miss_cost)
+
+
+def assign_within_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+    """min sum of distances over one-to-one assignments, a marker taking only what lies
+    inside its gate, with a miss of cost ``miss_cost`` allowed for every marker.
+
+    Args:
+        distance: ``(N, D)`` distance from each marker's prediction to each detection.
+        radius: ``(N,)`` gate radius of each marker.
+        miss_cost: Cost of leaving a marker unassigned.
+
+    Returns:
+        ``(N,)`` detection index per marker, -1 for a miss.
+    """
+    n, d = distance.shape
     blocked = 1e9
     cost = np.where(distance <= radius[:, None], distance, blocked)
     miss = np.full((n, n), blocked)
     np.fill_diagonal(miss, miss_cost)
     rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
     result = np.full(n, -1)
-    hit = cols < len(points)
+    hit = cols < d
     result[rows[hit]] = cols[hit]
     return result
