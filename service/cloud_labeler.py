@@ -93,7 +93,7 @@ class CloudLabeler:
                 uninterrupted run would.
         """
         formulation = self._formulation()
-        state = self._first_state(names, first_frame) if after is None else after.state
+        state = first_marker_state(names, first_frame) if after is None else after.state
         spans = window_spans(cloud.n_frames, self.window)
         for k in range(0 if after is None else after.index + 1, len(spans)):
             start, last = spans[k]
@@ -132,19 +132,25 @@ class CloudLabeler:
         except FormulationError as error:
             raise InputError(str(error)) from None
 
-    def _first_state(self, names: list[str], first_frame: np.ndarray) -> MarkerState:
-        first_frame = np.asarray(first_frame, dtype=float)
-        if first_frame.shape != (len(names), 3):
-            raise InputError(f"first frame must give (x, y, z) for each of the {len(names)} markers")
-        bad = np.flatnonzero(~np.isfinite(first_frame).all(axis=1))
-        if len(bad):
-            raise InputError(f"marker '{names[bad[0]]}' has no position in the first frame")
-        return MarkerState.from_first_frame(first_frame)
-
     def _match_first_frame(self, points: np.ndarray, positions: np.ndarray) -> np.ndarray:
         """The first frame's point of each labeled marker (the user labeled frame 0)."""
         radius = self.gating.gate.radius_mm
         return assign_nearest(positions, points, np.full(len(positions), radius), miss_cost=radius)
+
+
+def first_marker_state(names: list[str], first_frame: np.ndarray) -> MarkerState:
+    """The marker state of the user's labeled first frame.
+
+    Raises:
+        InputError: Wrong shape, or a marker without a position.
+    """
+    first_frame = np.asarray(first_frame, dtype=float)
+    if first_frame.shape != (len(names), 3):
+        raise InputError(f"first frame must give (x, y, z) for each of the {len(names)} markers")
+    bad = np.flatnonzero(~np.isfinite(first_frame).all(axis=1))
+    if len(bad):
+        raise InputError(f"marker '{names[bad[0]]}' has no position in the first frame")
+    return MarkerState.from_first_frame(first_frame)
 
 
 def _solve(formulation: Formulation, problem: WindowProblem, template: int) -> WindowSolution:

@@ -10,6 +10,7 @@ import pytest
 from capture_fixtures import camera_capture, points_capture
 from service.capture import LabelingOptions
 from service.capture_labeling import CaptureLabeling
+from service.cloud_labeler import first_marker_state
 from service.errors import InputError
 from service.window_outcome import WindowOutcome
 
@@ -44,7 +45,7 @@ def test_resuming_needs_the_stored_marker_state():
     capture = points_capture(frames=120)
     labeling = CaptureLabeling(capture, LabelingOptions(window=20))
     uninterrupted = list(labeling.windows())
-    first_state = labeling.labeler._first_state(capture.names, capture.first_frame)
+    first_state = first_marker_state(capture.names, capture.first_frame)
     stale = replace(uninterrupted[2], state=first_state)
     resumed = list(CaptureLabeling(capture, LabelingOptions(window=20)).windows(after=stale))
     assert any(not np.array_equal(a.point_index, b.point_index) for a, b in zip(resumed, uninterrupted[3:]))
