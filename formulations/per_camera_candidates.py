@@ -26,11 +26,12 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
 
-from formulations.cameras import Camera
 from formulations.candidates import WindowCandidates
 from formulations.marker_state import MarkerState
 from formulations.per_camera_gating import PerCameraGating
-from formulations.per_camera_guide import PerCameraGuide, image_plane
+from formulations.per_camera_guide import PerCameraGuide
+from formulations.per_camera_locate import FrameViews
+from formulations.per_camera_rig import Rig
 
 
 @dataclass(frozen=True)
@@ -62,41 +63,37 @@ class PerCameraWindow:
 
 
 def per_camera_candidates(
-    state: MarkerState, cameras: list[Camera], guide: PerCameraGuide, normalised: list[list[np.ndarray]],
+    state: MarkerState, rig: Rig, guide: PerCameraGuide, frames: list[FrameViews],
     gating: PerCameraGating = PerCameraGating(),
 ) -> PerCameraWindow:
     """Gate every camera's detections around the projected guide predictions.
 
     Args:
         state: The markers at the template frame.
-        cameras: The C cameras.
+        rig: The C cameras.
         guide: The window's guide track.
-        normalised: ``normalised[m][c]`` ``(D, 2)`` undistorted detections of window frame
-            m+1 in camera c.
+        frames: Detections of window frames 1..M.
         gating: Gates and template-term weights.
     """
-    n, c_count, m_count = len(state.position), len(cameras), len(normalised)
-    template = [image_plane(camera, state.position) for camera in cameras]
-    scale = np.stack([np.where(depth > 0, depth, np.nan) for _, depth in template])  # (C, N) z_nc
-    counts = np.array([[len(d) for d in frame] for frame in normalised]).ravel()
+    n, c_count, m_count = len(state.position), len(rig), len(frames)
+    template, depth = rig.image_plane(state.position)  # (C, N, 2), (C, N)
+    scale = np.where(depth > 0, depth, np.nan)  # z_nc
+    predicted = rig.image_plane(guide.predicted)[0]  # (C, M, N, 2)
+    occlusion = predicted * scale[:, None, :, None]
+    motion = (predicted - rig.image_plane(guide.previous)[0]) * scale[:, None, :, None]
+    motion[:, ~guide.motion_known] = np.nan
+    counts = np.array([[len(d) for d in frame.normalised] for frame in frames]).ravel()
     first_column = np.concatenate([[0], np.cumsum(counts)])[:-1].reshape(m_count, c_count)
-    occlusion = np.zeros((c_count, n, m_count, 2))
-    motion = np.zeros((c_count, n, m_count, 2))
+    sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen  # (M, N)
     parts = []
-    for m in range(m_count):
-        sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[m]
-        for c, camera in enumerate(cameras):
-            image = image_plane(camera, guide.predicted[m])[0]
-            occlusion[c, :, m] = image * scale[c, :, None]
-            motion[c, :, m] = (image - image_plane(camera, guide.previous[m])[0]) * scale[c, :, None]
-            motion[c, ~guide.motion_known[m], m] = np.nan
-            found = normalised[m][c]
+    for m, frame in enumerate(frames):
+        for c, found in enumerate(frame.normalised):
             if len(found) == 0:
                 continue
-            distance = cdist(image, found) * scale[c, :, None]
+            distance = cdist(predicted[c, m], found) * scale[c, :, None]
             marker, detection = np.nonzero(distance <= guide.radius[m][:, None])
             cost = gating.prediction_weight * np.minimum(
-                distance[marker, detection] / sigma[marker], gating.prediction_cap_sigmas
+                distance[marker, detection] / sigma[m, marker], gating.prediction_cap_sigmas
             )
             parts.append((
                 c * n + marker, np.full(len(marker), m + 1), np.full(len(marker), c), detection,
@@ -104,12 +101,12 @@ def per_camera_candidates(
             ))
     obj, frame, camera_of, detection, location, cost, column = _stack(parts)
     candidates = WindowCandidates(
-        template_location=np.nan_to_num(np.concatenate([image * scale[c, :, None] for c, (image, _) in enumerate(template)])),
+        template_location=np.nan_to_num((template * scale[..., None]).reshape(c_count * n, 2)),
         template_occluded=np.tile(~state.visible, c_count), n_frames=m_count,
         object=obj, frame=frame, location=location, template_cost=cost,
         resources=sp.csr_matrix((np.ones(len(column)), (np.arange(len(column)), column)), shape=(len(column), counts.sum())),
-        occlusion_location=np.nan_to_num(occlusion.reshape(c_count * n, m_count, 2)),
-        motion=motion.reshape(c_count * n, m_count, 2),
+        occlusion_location=np.nan_to_num(occlusion.transpose(0, 2, 1, 3).reshape(c_count * n, m_count, 2)),
+        motion=motion.transpose(0, 2, 1, 3).reshape(c_count * n, m_count, 2),
     )
     return PerCameraWindow(candidates=candidates, camera=camera_of, detection=detection, n_cameras=c_count)
 

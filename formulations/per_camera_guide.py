@@ -22,10 +22,12 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
-from formulations.cameras import Camera
 from formulations.marker_state import MarkerState
+from formulations.per_camera_advance import advance_state
 from formulations.per_camera_gating import PerCameraGating
+from formulations.per_camera_locate import FrameViews
 from formulations.per_camera_reacquire import locate_with_reacquisition
+from formulations.per_camera_rig import Rig
 
 
 @dataclass(frozen=True)
@@ -35,7 +37,7 @@ class PerCameraGuide:
     Attributes:
         predicted: ``(M, N, 3)`` prediction into frame m.
         previous: ``(M, N, 3)`` position at frame m-1 (the prediction where unseen).
-        radius: ``(M, N)`` gate radius, mm.
+        radius: ``(M, N)`` gate radius of the window's candidates (``window_gate``), mm.
         unseen: ``(M, N)`` frames unseen before m (0: seen by 2+ cameras in frame m-1).
         motion_known: ``(M, N)`` False while a marker's velocity is unknown (just after the
             labeled first frame): its expected displacement is then left out.
@@ -48,32 +50,18 @@ class PerCameraGuide:
     motion_known: np.ndarray
 
 
-def image_plane(camera: Camera, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Normalised coordinates ``(N, 2)`` of world points and their depth ``(N,)``.
-
-    (x, y) = (X_c / Z_c, Y_c / Z_c) with X_c = R X + t; NaN behind the camera (Z_c <= 0),
-    where a point has no image.
-    """
-    local = points @ camera.R.T + camera.t
-    depth = local[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        normalised = np.where(depth[:, None] > 0, local[:, :2] / depth[:, None], np.nan)
-    return normalised, depth
-
-
-def image_distances(camera: Camera, points: np.ndarray, normalised: np.ndarray) -> np.ndarray:
+def image_distances(image: np.ndarray, depth: np.ndarray, normalised: np.ndarray) -> np.ndarray:
     """``(N, D)`` distance in mm at each point's depth from its image to each detection.
 
     Args:
-        camera: The camera.
-        points: ``(N, 3)`` world points.
+        image: ``(N, 2)`` normalised image of the points in one camera (``Rig.image_plane``).
+        depth: ``(N,)`` their depth.
         normalised: ``(D, 2)`` undistorted normalised detections (``Camera.undistort``).
 
     Returns:
         z_n ||x_n - x_d||; inf for points behind the camera.
     """
-    image, depth = image_plane(camera, points)
-    distance = cdist(image, normalised) * depth[:, None] if len(normalised) else np.zeros((len(points), 0))
+    distance = cdist(image, normalised) * depth[:, None] if len(normalised) else np.zeros((len(image), 0))
     return np.where(np.isfinite(distance), distance, np.inf)
 
 
@@ -106,31 +94,29 @@ def assign_in_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float) 
 
 
 def per_camera_guide(
-    state: MarkerState, cameras: list[Camera], pixels: list[list[np.ndarray]],
-    normalised: list[list[np.ndarray]], gating: PerCameraGating = PerCameraGating(),
+    state: MarkerState, rig: Rig, frames: list[FrameViews], gating: PerCameraGating = PerCameraGating(),
 ) -> PerCameraGuide:
     """Run the frame-by-frame tracker over a window's detections from ``state``.
 
     Args:
         state: The markers at the template frame.
-        cameras: The C cameras.
-        pixels: ``pixels[m][c]`` ``(D, 2)`` detections of window frame m+1 in camera c.
-        normalised: The same detections undistorted to normalised coordinates.
+        rig: The C cameras.
+        frames: Detections of window frames 1..M.
         gating: Gate radius (mm at the marker's depth; its base radius is the miss cost)
             and the limits of the cross-camera check.
     """
-    m, n = len(pixels), len(state.position)
+    m, n = len(frames), len(state.position)
     predicted, previous = np.empty((m, n, 3)), np.empty((m, n, 3))
     radius, unseen, known = np.empty((m, n)), np.empty((m, n), dtype=int), np.empty((m, n), dtype=bool)
-    for f in range(m):
+    for f, frame in enumerate(frames):
         predicted[f], previous[f], unseen[f] = state.predict(), state.position, state.unseen
-        radius[f], known[f] = gating.gate.radius(state), ~(state.visible & ~state.velocity_known)
+        radius[f], known[f] = gating.window_gate.radius(state), ~(state.visible & ~state.velocity_known)
+        image, depth = rig.image_plane(predicted[f])
+        gate = gating.gate.radius(state)
         views = np.stack([
-            assign_in_gates(image_distances(camera, predicted[f], normalised[f][c]), radius[f], gating.gate.radius_mm)
-            for c, camera in enumerate(cameras)
+            assign_in_gates(image_distances(image[c], depth[c], found), gate, gating.gate.radius_mm)
+            for c, found in enumerate(frame.normalised)
         ], axis=1)
-        located, _ = locate_with_reacquisition(
-            cameras, pixels[f], views, state, predicted[f], gating.max_reprojection_px, gating.max_shape_mm
-        )
-        state = state.advance(located.point, located.n_views >= 2)
+        located, _ = locate_with_reacquisition(rig, frame, views, state, predicted[f], gating)
+        state = advance_state(state, located)
     return PerCameraGuide(predicted=predicted, previous=previous, radius=radius, unseen=unseen, motion_known=known)

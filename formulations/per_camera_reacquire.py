@@ -8,7 +8,7 @@ The one view it keeps is still good evidence, and so is the body: the marker kee
 distances to the neighbours on its segment. For marker n with its single view u_na in
 camera a, every detection u_d of another camera b that no marker located by two or more
 cameras kept this frame is tried:
-the pair is triangulated (``triangulate_many``) and accepted when
+the pair is triangulated (``Rig.triangulate``) and accepted when
 
     max(||project_a(X) - u_na||, ||project_b(X) - u_d||) <= tau,  X in front of both,
     s_n(X) = sum_j a_j | ||X - X_j|| - dbar_nj | / sum_j a_j <= s_max,
@@ -29,42 +29,66 @@ from collections.abc import Callable
 
 import numpy as np
 
-from formulations.cameras import Camera
 from formulations.marker_state import MarkerState
-from formulations.per_camera_locate import LocatedMarkers, locate_markers, view_pixels
-from formulations.triangulation import reprojection_errors, triangulate_many
+from formulations.per_camera_gating import PerCameraGating
+from formulations.per_camera_locate import FrameViews, LocatedMarkers, locate_markers
+from formulations.per_camera_rig import Rig
 
 
 def locate_with_reacquisition(
-    cameras: list[Camera], detections: list[np.ndarray], views: np.ndarray, state: MarkerState,
-    prediction: np.ndarray, max_error_px: float, max_shape_mm: float,
+    rig: Rig, frame: FrameViews, views: np.ndarray, state: MarkerState, prediction: np.ndarray,
+    gating: PerCameraGating,
 ) -> tuple[LocatedMarkers, np.ndarray]:
     """Locate the markers from their views, then give single-view markers a second view.
 
+    A two-view point the body rejects (s_n(X) > ``max_pair_shape_mm``) loses the view
+    farther from the prediction's image first: two rays meet somewhere whatever they
+    carry, and a wrong pair steals a lost marker's detection for good.
+
     Args:
-        cameras: The C cameras.
-        detections: ``(D_c, 2)`` pixels per camera, this frame.
+        rig: The C cameras.
+        frame: This frame's detections.
         views: ``(N, C)`` detection per marker and camera, -1 for none.
         state: The markers before this frame (neighbours and their distance statistics).
         prediction: ``(N, 3)`` predicted positions (``state.predict()``).
-        max_error_px: tau, the largest reprojection error of a kept view.
-        max_shape_mm: s_max, the largest shape deviation of a second view's point.
+        gating: tau (``max_reprojection_px``), the largest reprojection error of a kept
+            view; s_max (``max_shape_mm``) and ``max_pair_shape_mm``.
 
     Returns:
         The located markers, and ``(N, C)`` the views they kept (-1 elsewhere).
     """
-    located = locate_markers(cameras, view_pixels(detections, views), prediction, max_error_px)
+    tau = gating.max_reprojection_px
+    located = locate_markers(rig, *frame.of(views), prediction, tau)
     kept = np.where(located.kept, views, -1)
-    pair = second_views(cameras, detections, kept, _shape(state, located), max_error_px, max_shape_mm)
+    shape = _shape(state, located)
+    pair = second_views(rig, frame, _without_misshapen_pairs(rig, frame, kept, located, shape, prediction, gating),
+                        shape, tau, gating.max_shape_mm)
     if (pair == kept).all():
         return located, kept
-    located = locate_markers(cameras, view_pixels(detections, pair), prediction, max_error_px)
+    located = locate_markers(rig, *frame.of(pair), prediction, tau)
     return located, np.where(located.kept, pair, -1)
 
 
+def _without_misshapen_pairs(
+    rig: Rig, frame: FrameViews, kept: np.ndarray, located: LocatedMarkers,
+    shape: Callable[[np.ndarray, np.ndarray], np.ndarray], prediction: np.ndarray, gating: PerCameraGating,
+) -> np.ndarray:
+    """``kept`` with one view dropped from the two-view points the body rejects."""
+    two = np.flatnonzero(located.n_views == 2)
+    deviation = shape(two, located.point[two])
+    bad = two[np.isfinite(deviation) & (deviation > gating.max_pair_shape_mm)]
+    if len(bad) == 0:
+        return kept
+    pixels = frame.of(kept[bad])[0]
+    off_prediction = np.linalg.norm(rig.project(prediction[bad]) - pixels, axis=2)
+    result = kept.copy()
+    result[bad, np.nanargmax(off_prediction, axis=1)] = -1
+    return result
+
+
 def second_views(
-    cameras: list[Camera], detections: list[np.ndarray], kept: np.ndarray,
-    shape: Callable[[np.ndarray, np.ndarray], np.ndarray], max_error_px: float, max_shape_mm: float,
+    rig: Rig, frame: FrameViews, kept: np.ndarray, shape: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    max_error_px: float, max_shape_mm: float,
 ) -> np.ndarray:
     """``kept`` with a second view added where the module doc's search finds one.
 
@@ -78,7 +102,7 @@ def second_views(
     count = (kept >= 0).sum(axis=1)
     single = np.flatnonzero(count == 1)
     marker, camera, detection = [], [], []
-    for b, found in enumerate(detections):
+    for b, found in enumerate(frame.pixels):
         free = np.setdiff1d(np.arange(len(found)), kept[count >= 2, b])
         others = single[kept[single, b] < 0]
         marker.append(np.repeat(others, len(free)))
@@ -87,12 +111,13 @@ def second_views(
     marker, camera, detection = (np.concatenate(a) for a in (marker, camera, detection))
     if len(marker) == 0:
         return kept
-    pixels = view_pixels(detections, kept[marker])
-    pixels[np.arange(len(marker)), camera] = np.concatenate(detections)[_offsets(detections)[camera] + detection]
-    points = triangulate_many(cameras, pixels)[0]
-    error = np.nanmax(reprojection_errors(cameras, points, pixels), axis=1)
-    depth = np.stack([points @ cam.R[2] + cam.t[2] for cam in cameras], axis=1)
-    in_front = (depth > 0)[np.isfinite(pixels).all(axis=2)].reshape(-1, 2).all(axis=1)
+    pixels, normalised = frame.of(kept[marker])
+    rows, offset = np.arange(len(marker)), _offsets(frame.pixels)[camera] + detection
+    pixels[rows, camera] = np.concatenate(frame.pixels)[offset]
+    normalised[rows, camera] = np.concatenate(frame.normalised)[offset]
+    points = rig.triangulate(normalised)
+    error = np.nanmax(rig.errors(points, pixels), axis=1)
+    in_front = (rig.depth(points) > 0)[np.isfinite(pixels).all(axis=2)].reshape(-1, 2).all(axis=1)
     accepted = np.flatnonzero((error <= max_error_px) & in_front)
     deviation = shape(marker[accepted], points[accepted])
     accepted, deviation = accepted[deviation <= max_shape_mm], deviation[deviation <= max_shape_mm]

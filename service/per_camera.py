@@ -24,16 +24,18 @@ from typing import Iterator
 
 import numpy as np
 
-from formulations.cameras import Camera
 from formulations.costs import ArcCostWeights
 from formulations.errors import FormulationError
 from formulations.formulation import Formulation
 from formulations.marker_state import MarkerState
 from formulations.network import build_window
+from formulations.per_camera_advance import advance_state
 from formulations.per_camera_candidates import per_camera_candidates
 from formulations.per_camera_gating import PerCameraGating
 from formulations.per_camera_guide import per_camera_guide
+from formulations.per_camera_locate import FrameViews
 from formulations.per_camera_reacquire import locate_with_reacquisition
+from formulations.per_camera_rig import Rig
 from formulations.registry import get_formulation
 from formulations.solution import WindowSolution
 from formulations.window import WindowProblem
@@ -72,24 +74,23 @@ class PerCameraLabeler:
                 the next window from its marker state, as an uninterrupted run would.
         """
         formulation = self._formulation()
-        cameras, detections = capture.cameras, capture.detections
+        rig, detections = Rig.of(capture.cameras), capture.detections
         state = _first_state(capture.names, capture.first_frame) if after is None else after.state
         spans = window_spans(capture.n_frames, self.window)
         for k in range(0 if after is None else after.index + 1, len(spans)):
             start, last = spans[k]
             began = time.perf_counter()
-            pixels = detections[start + 1 : last + 1]
-            normalised = [[camera.undistort(found) for camera, found in zip(cameras, frame)] for frame in pixels]
-            guide = per_camera_guide(state, cameras, pixels, normalised, self.gating)
-            gated = per_camera_candidates(state, cameras, guide, normalised, self.gating)
+            frames = _undistorted(rig, detections[start + 1 : last + 1])
+            guide = per_camera_guide(state, rig, frames, self.gating)
+            gated = per_camera_candidates(state, rig, guide, frames, self.gating)
             problem, node_candidate = build_window(gated.candidates, self.weights)
             prepared = time.perf_counter() - began
             solution = _solve(formulation, problem, start)
             views = gated.views(node_candidate, solution.path)
-            state, views, positions, filled = _advance(state, cameras, pixels, views, self.gating)
+            state, views, positions, filled = _advance(state, rig, frames, views, self.gating)
             stats = WindowStats.of(start, last, solution, prepared, time.perf_counter() - began)
             yield WindowOutcome(
-                index=k, point_index=np.zeros((len(pixels), 0), dtype=int), filled=filled, stats=stats,
+                index=k, point_index=np.zeros((len(frames), 0), dtype=int), filled=filled, stats=stats,
                 state=state, views=views, positions=positions,
             )
 
@@ -138,9 +139,22 @@ def _solve(formulation: Formulation, problem: WindowProblem, template: int) -> W
         raise InputError(f"window from frame {template}: {error}") from None
 
 
+def _undistorted(rig: Rig, pixels: list[list[np.ndarray]]) -> list[FrameViews]:
+    """The window's detections with their normalised coordinates, one undistortion per camera."""
+    pixels = [[np.asarray(found, dtype=float).reshape(-1, 2) for found in frame] for frame in pixels]
+    counts = np.array([[len(found) for found in frame] for frame in pixels], dtype=int).reshape(len(pixels), len(rig))
+    normalised = [
+        np.split(camera.undistort(np.concatenate([frame[c] for frame in pixels]).reshape(-1, 2)), np.cumsum(counts[:-1, c]))
+        for c, camera in enumerate(rig.cameras)
+    ]
+    return [
+        FrameViews(pixels=list(frame), normalised=[normalised[c][m] for c in range(len(rig))])
+        for m, frame in enumerate(pixels)
+    ]
+
+
 def _advance(
-    state: MarkerState, cameras: list[Camera], pixels: list[list[np.ndarray]], views: np.ndarray,
-    gating: PerCameraGating,
+    state: MarkerState, rig: Rig, frames: list[FrameViews], views: np.ndarray, gating: PerCameraGating,
 ) -> tuple[MarkerState, np.ndarray, np.ndarray, np.ndarray]:
     """Locate the markers frame by frame from the chosen views and carry the state along.
 
@@ -155,11 +169,9 @@ def _advance(
     """
     kept = np.full_like(views, -1)
     positions, filled = np.full(views.shape[:2] + (3,), np.nan), np.full(views.shape[:2] + (3,), np.nan)
-    for m, frame in enumerate(pixels):
-        located, kept[m] = locate_with_reacquisition(
-            cameras, frame, views[m], state, state.predict(), gating.max_reprojection_px, gating.max_shape_mm
-        )
+    for m, frame in enumerate(frames):
+        located, kept[m] = locate_with_reacquisition(rig, frame, views[m], state, state.predict(), gating)
         seen = located.n_views > 0
         positions[m, seen], filled[m, ~seen] = located.point[seen], located.point[~seen]
-        state = state.advance(located.point, located.n_views >= 2)
+        state = advance_state(state, located)
     return state, kept, positions, filled

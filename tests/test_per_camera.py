@@ -18,9 +18,11 @@ from formulations.network import build_window
 from formulations.per_camera_candidates import per_camera_candidates
 from formulations.per_camera_gating import PerCameraGating
 from formulations.per_camera_guide import per_camera_guide
-from formulations.per_camera_locate import locate_markers
+from formulations.per_camera_advance import advance_state
+from formulations.per_camera_locate import FrameViews, LocatedMarkers, locate_markers
 from formulations.per_camera_reacquire import locate_with_reacquisition
-from formulations.triangulation import reprojection_errors, triangulate_many
+from formulations.per_camera_rig import Rig
+from formulations.triangulation import ray_compromise, reprojection_errors, triangulate_many
 from service.calibration import load_pose2sim_toml
 from service.camera_scores import camera_scores
 from service.capture import Capture, LabelingOptions
@@ -54,10 +56,11 @@ def test_per_camera_window_lp_is_the_brute_force_optimum_for_crossing_markers():
     for f in range(2, 5):
         found = np.concatenate([camera[0].project(np.stack([a[f], b[f]])), [[960 + rng.uniform(-15, 15), 540.0]]])
         pixels.append([found[rng.permutation(3)]])
-    normalised = [[camera[0].undistort(frame[0])] for frame in pixels]
+    rig = Rig.of(camera)
+    frames = [FrameViews(pixels=frame, normalised=[camera[0].undistort(frame[0])]) for frame in pixels]
     gating = PerCameraGating()
-    guide = per_camera_guide(state, camera, pixels, normalised, gating)
-    window = per_camera_candidates(state, camera, guide, normalised, gating)
+    guide = per_camera_guide(state, rig, frames, gating)
+    window = per_camera_candidates(state, rig, guide, frames, gating)
     problem, node_candidate = build_window(window.candidates, MARKER_COSTS)
     assert problem.conflict_groups.shape[0] >= 3  # both markers gate every detection of every frame
 
@@ -83,7 +86,8 @@ def test_a_wrong_camera_assignment_is_dropped_and_the_rest_triangulated():
     assert np.linalg.norm(spoiled - point) > 5.0
     assert np.nanmax(reprojection_errors(cameras, spoiled, wrong)) > 2.0
 
-    located = locate_markers(cameras, wrong, point + 30.0, max_error_px=2.0)
+    rig = Rig.of(cameras)
+    located = locate_markers(rig, wrong, rig.undistort(wrong), point + 30.0, max_error_px=2.0)
     np.testing.assert_array_equal(located.kept, [[True, True, False, True]])
     np.testing.assert_allclose(located.point, point, atol=1e-6)
 
@@ -94,7 +98,8 @@ def test_two_disagreeing_views_keep_the_one_the_prediction_supports():
     pixels = np.full((1, 4, 2), np.nan)
     pixels[0, [0, 1]] = [camera.project(point)[0] for camera in cameras[:2]]
     pixels[0, 1] += [0.0, 30.0]  # off the epipolar line: the rays do not meet
-    located = locate_markers(cameras, pixels, point + [3.0, 0.0, 0.0], max_error_px=2.0)
+    rig = Rig.of(cameras)
+    located = locate_markers(rig, pixels, rig.undistort(pixels), point + [3.0, 0.0, 0.0], max_error_px=2.0)
     np.testing.assert_array_equal(located.kept, [[True, False, False, False]])
     # One view: the point of camera 0's ray nearest the prediction, so only along-ray error remains.
     assert np.linalg.norm(located.point - point) < 3.0 + 1e-6
@@ -104,7 +109,8 @@ def test_two_disagreeing_views_keep_the_one_the_prediction_supports():
 def test_no_view_leaves_the_prediction():
     cameras = ring(4)
     prediction = np.array([[1.0, 2.0, 3.0]])
-    located = locate_markers(cameras, np.full((1, 4, 2), np.nan), prediction)
+    nothing = np.full((1, 4, 2), np.nan)
+    located = locate_markers(Rig.of(cameras), nothing, nothing, prediction)
     assert located.n_views[0] == 0
     np.testing.assert_array_equal(located.point, prediction)
 
@@ -116,6 +122,10 @@ def _body_state(cameras: list[Camera]) -> tuple[MarkerState, np.ndarray]:
     for f in range(1, 11):
         state = state.advance(body + [2.0 * f, 0, 0], np.ones(len(body), bool))
     return state, body + [22.0, 0, 0]
+
+
+def _frame(cameras: list[Camera], detections: list[np.ndarray]) -> FrameViews:
+    return FrameViews(pixels=detections, normalised=[camera.undistort(found) for camera, found in zip(cameras, detections)])
 
 
 def test_a_single_view_marker_gets_its_second_view_from_the_epipolar_band():
@@ -130,14 +140,15 @@ def test_a_single_view_marker_gets_its_second_view_from_the_epipolar_band():
     decoy = cameras[1].project(origin + (np.linalg.norm(frame[0] - origin) + 150.0) * direction)
     detections[1] = np.concatenate([detections[1], decoy])
     prediction = frame + [0.0, 0.0, 120.0]  # a drifted prediction does not matter: the body does
-    located, kept = locate_with_reacquisition(cameras, detections, views, state, prediction, 2.0, 20.0)
+    rig, gating = Rig.of(cameras), PerCameraGating(max_reprojection_px=2.0, max_shape_mm=20.0)
+    located, kept = locate_with_reacquisition(rig, _frame(cameras, detections), views, state, prediction, gating)
     assert (kept[0] >= 0).sum() == 2 and kept[0, 0] == 0 and kept[0][kept[0] >= 0][1] == 0  # not the decoy (5)
     np.testing.assert_array_equal(kept[1:], views[1:])
     np.testing.assert_allclose(located.point[0], frame[0], atol=1e-6)
     # Without marker 0's true detections the decoy alone is refused: it breaks the body's distances.
     alone = [found if c == 0 else found[1:] for c, found in enumerate(detections)]
     shifted = np.where(np.arange(4) > 0, np.where(views > 0, views - 1, views), views)
-    _, kept = locate_with_reacquisition(cameras, alone, shifted, state, prediction, 2.0, 20.0)
+    _, kept = locate_with_reacquisition(rig, _frame(cameras, alone), shifted, state, prediction, gating)
     np.testing.assert_array_equal(kept[0], [0, -1, -1, -1])
 
 
@@ -200,3 +211,89 @@ def test_resumed_per_camera_labeling_equals_the_uninterrupted_run():
     full = labeling.result(outcomes)
     again = labeling.result(outcomes[:2] + resumed)
     np.testing.assert_array_equal(full.positions, again.positions)
+
+
+def test_rig_geometry_matches_the_generic_triangulation_and_ray():
+    cameras = ring(4)
+    rng = np.random.default_rng(5)
+    points = rng.uniform(-300, 300, (30, 3))
+    pixels = np.stack([camera.project(points) for camera in cameras], axis=1) + rng.normal(0, 0.5, (30, 4, 2))
+    pixels[rng.random((30, 4)) < 0.3] = np.nan
+    pixels[:, :2] = np.where(np.isnan(pixels[:, :2]), pixels[:, 2:], pixels[:, :2])  # two views or more
+    pixels = pixels[np.isfinite(pixels).all(axis=2).sum(axis=1) >= 2]
+    rig = Rig.of(cameras)
+    np.testing.assert_allclose(rig.triangulate(rig.undistort(pixels)), triangulate_many(cameras, pixels)[0], atol=1e-9)
+    seen = np.isfinite(pixels[:, 0]).all(axis=1)
+    prediction = points[: seen.sum()] + 40.0
+    np.testing.assert_allclose(
+        rig.on_ray(0, rig.undistort(pixels)[seen, 0], prediction), ray_compromise(cameras[0], pixels[seen, 0], prediction), atol=1e-9
+    )
+
+
+def test_locate_markers_equals_the_brute_force_over_every_subset():
+    cameras, rig = ring(4), Rig.of(ring(4))
+    rng = np.random.default_rng(11)
+    points = rng.uniform(-300, 300, (60, 3))
+    pixels = np.stack([camera.project(points) for camera in cameras], axis=1) + rng.normal(0, 0.4, (60, 4, 2))
+    wrong = rng.random((60, 4)) < 0.25
+    pixels[wrong] += rng.normal(0, 6, (wrong.sum(), 2))  # views of a neighbouring blob
+    pixels[rng.random((60, 4)) < 0.2] = np.nan
+    prediction = points + rng.normal(0, 20, points.shape)
+    located = locate_markers(rig, pixels, rig.undistort(pixels), prediction, max_error_px=2.0)
+    for n in range(len(points)):
+        best = None  # largest consistent subset, then nearest the prediction
+        for mask in range(1, 16):
+            subset = [c for c in range(4) if mask >> c & 1 and np.isfinite(pixels[n, c]).all()]
+            if len(subset) < 2 or len(subset) != bin(mask).count("1"):
+                continue
+            used = np.full((1, 4, 2), np.nan)
+            used[0, subset] = pixels[n, subset]
+            point = triangulate_many(cameras, used)[0]
+            if np.nanmax(reprojection_errors(cameras, point, used)) <= 2.0:
+                key = (-len(subset), np.linalg.norm(point[0] - prediction[n]))
+                best = min(best, (key, subset, point[0]), key=lambda b: b[0]) if best else (key, subset, point[0])
+        if best is not None:
+            assert sorted(np.flatnonzero(located.kept[n])) == best[1]
+            np.testing.assert_allclose(located.point[n], best[2], atol=1e-6)
+        else:
+            assert located.n_views[n] <= 1
+
+
+def test_a_two_view_point_the_body_rejects_is_split_and_the_marker_reacquired():
+    cameras = ring(4)
+    state, frame = _body_state(cameras)
+    detections = [camera.project(frame) for camera in cameras]
+    # Camera 1 gave marker 0 a clutter blob on its epipolar line, 300 mm deeper along
+    # camera 0's ray: the pair reprojects exactly, but sits 300 mm off the body.
+    origin, direction = cameras[0].ray(detections[0][:1])
+    decoy = cameras[1].project(origin + (np.linalg.norm(frame[0] - origin) + 300.0) * direction)
+    detections[1] = np.concatenate([detections[1], decoy])
+    views = np.tile(np.arange(5)[:, None], (1, 4))
+    views[0] = [0, 5, -1, -1]
+    rig = Rig.of(cameras)
+    strict = PerCameraGating(max_pair_shape_mm=60.0)
+    located, kept = locate_with_reacquisition(rig, _frame(cameras, detections), views, state, frame, strict)
+    assert kept[0, 1] == -1 and kept[0, 0] == 0 and (kept[0] >= 0).sum() == 2  # the decoy gone, a true pair found
+    np.testing.assert_allclose(located.point[0], frame[0], atol=1e-6)
+    lenient = PerCameraGating(max_pair_shape_mm=np.inf)
+    _, kept = locate_with_reacquisition(rig, _frame(cameras, detections), views, state, frame, lenient)
+    np.testing.assert_array_equal(kept[0], [0, 5, -1, -1])  # without the body check the decoy pair stands
+
+
+def test_a_single_view_marker_is_re_anchored_on_its_ray_but_not_seen():
+    cameras = ring(4)
+    state, frame = _body_state(cameras)
+    point = frame + [0.0, 0.0, 30.0]
+    kept = np.ones((5, 4), bool)
+    kept[2] = [False, True, False, False]
+    after = advance_state(state, LocatedMarkers(point=point, kept=kept))
+    plain = state.advance(point, kept.sum(axis=1) >= 2)
+    assert after.unseen[2] == 1 and not after.visible[2]
+    np.testing.assert_array_equal(after.velocity, plain.velocity)
+    np.testing.assert_array_equal(after.position[2], point[2])
+    np.testing.assert_array_equal(after.anchor[2], point[2])
+    np.testing.assert_array_equal(after.anchor_neighbours[2], point[state.neighbours[2]])
+    np.testing.assert_array_equal(np.delete(after.position, 2, axis=0), np.delete(plain.position, 2, axis=0))
+    # Next frame it follows its neighbours' motion from the ray point, not from its old anchor.
+    moved = after.advance(point + [5.0, 0, 0], kept.sum(axis=1) >= 2)
+    np.testing.assert_allclose(moved.predict()[2], point[2] + [10.0, 0, 0], atol=1e-6)
