@@ -19,9 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from formulations.guide import assign_within_gates
 from formulations.marker_state import MarkerState
 from formulations.per_camera_advance import advance_state
 from formulations.per_camera_gating import PerCameraGating
@@ -65,34 +65,6 @@ def image_distances(image: np.ndarray, depth: np.ndarray, normalised: np.ndarray
     return np.where(np.isfinite(distance), distance, np.inf)
 
 
-def assign_in_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
-    """Optimal one-to-one assignment, each marker only inside its gate, a miss costing ``miss_cost``.
-
-    Solves min sum distance over markers x (detections + one private miss column each) with
-    ``linear_sum_assignment``; gated-out pairs get a prohibitive cost. This is
-    ``guide.assign_nearest`` on a given distance matrix: image-plane distances are scaled
-    by each marker's own depth, so they are not the Euclidean distances it computes.
-
-    Args:
-        distance: ``(N, D)`` marker-detection distances.
-        radius: ``(N,)`` gate radius of each marker.
-        miss_cost: Cost of leaving a marker unassigned.
-
-    Returns:
-        ``(N,)`` detection index per marker, -1 for a miss.
-    """
-    n, d = distance.shape
-    blocked = 1e9
-    cost = np.where(distance <= radius[:, None], distance, blocked)
-    miss = np.full((n, n), blocked)
-    np.fill_diagonal(miss, miss_cost)
-    rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
-    result = np.full(n, -1)
-    hit = cols < d
-    result[rows[hit]] = cols[hit]
-    return result
-
-
 def per_camera_guide(
     state: MarkerState, rig: Rig, frames: list[FrameViews], gating: PerCameraGating = PerCameraGating(),
 ) -> PerCameraGuide:
@@ -114,7 +86,7 @@ def per_camera_guide(
         image, depth = rig.image_plane(predicted[f])
         gate = gating.gate.radius(state)
         views = np.stack([
-            assign_in_gates(image_distances(image[c], depth[c], found), gate, gating.gate.radius_mm)
+            assign_within_gates(image_distances(image[c], depth[c], found), gate, gating.gate.radius_mm)
             for c, found in enumerate(frame.normalised)
         ], axis=1)
         located, _ = locate_with_reacquisition(rig, frame, views, state, predicted[f], gating)

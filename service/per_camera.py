@@ -41,7 +41,7 @@ from formulations.solution import WindowSolution
 from formulations.window import WindowProblem
 from service.capture import Capture
 from service.chaining import window_spans
-from service.cloud_labeler import MARKER_COSTS
+from service.cloud_labeler import MARKER_COSTS, first_marker_state
 from service.errors import InputError
 from service.recording import LabeledTrajectories
 from service.window_outcome import WindowOutcome
@@ -75,7 +75,7 @@ class PerCameraLabeler:
         """
         formulation = self._formulation()
         rig, detections = Rig.of(capture.cameras), capture.detections
-        state = _first_state(capture.names, capture.first_frame) if after is None else after.state
+        state = first_marker_state(capture.names, capture.first_frame) if after is None else after.state
         spans = window_spans(capture.n_frames, self.window)
         for k in range(0 if after is None else after.index + 1, len(spans)):
             start, last = spans[k]
@@ -119,16 +119,6 @@ class PerCameraLabeler:
             return get_formulation(self.formulation)
         except FormulationError as error:
             raise InputError(str(error)) from None
-
-
-def _first_state(names: list[str], first_frame: np.ndarray) -> MarkerState:
-    first_frame = np.asarray(first_frame, dtype=float)
-    if first_frame.shape != (len(names), 3):
-        raise InputError(f"first frame must give (x, y, z) for each of the {len(names)} markers")
-    bad = np.flatnonzero(~np.isfinite(first_frame).all(axis=1))
-    if len(bad):
-        raise InputError(f"marker '{names[bad[0]]}' has no position in the first frame")
-    return MarkerState.from_first_frame(first_frame)
 
 
 def _solve(formulation: Formulation, problem: WindowProblem, template: int) -> WindowSolution:
