@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from service.recording import LabeledTrajectories
+from service.scores import run_onsets
 
 if TYPE_CHECKING:  # scoring per-camera labels needs no cross-camera matching
     from formulations.cross_camera import CrossCameraPoints
@@ -25,6 +26,9 @@ class CameraScores:
         filled_rmse_mm: 3D error of the predicted positions filled in where a marker was
             occluded (seen by fewer than two cameras, or not labeled).
         marker_frames: Marker-frames counted.
+        swaps: Runs of consecutive frames in which a marker used only detections of one
+            other marker (none of its own), counted once per run and per marker, as in
+            cloud mode (a two-marker exchange counts 2).
         single_view_rmse_mm: 3D error of the correctly labeled markers located from one
             view (per-camera only: the point of its ray nearest the prediction); NaN when
             there are none, as always with joint-3d, whose points have two views or more.
@@ -34,6 +38,7 @@ class CameraScores:
     rmse_mm: float
     filled_rmse_mm: float
     marker_frames: int
+    swaps: int
     single_view_rmse_mm: float = float("nan")
 
 
@@ -62,8 +67,22 @@ def camera_scores(
     return CameraScores(
         label_accuracy=float(counted.sum() / max(seen_twice.sum(), 1)),
         rmse_mm=_rms(error[counted & (n_views >= 2)]), filled_rmse_mm=_rms(filled_error),
-        marker_frames=int(seen_twice.sum()), single_view_rmse_mm=_rms(error[counted & (n_views == 1)]),
+        marker_frames=int(seen_twice.sum()), swaps=_swaps(expected, views), single_view_rmse_mm=_rms(error[counted & (n_views == 1)]),
     )
+
+
+def _swaps(expected: np.ndarray, views: np.ndarray) -> int:
+    """Swap runs (see ``CameraScores.swaps``) from ``(F, N, C)`` true and used detections.
+
+    ``holds[f, n, m]``: every view marker n used in frame f is marker m's detection there.
+    """
+    used = views >= 0
+    holds = ((views[:, :, None, :] == expected[:, None, :, :]) | ~used[:, :, None, :]).all(axis=3)
+    holds &= used.any(axis=2)[:, :, None]
+    any_own = ((views == expected) & used).any(axis=2)  # a merged blob can be its own and another's
+    other = holds.any(axis=2) & ~any_own
+    other[0] = False  # frame 0 is the user's
+    return run_onsets(other)
 
 
 def joint_3d_views(result: LabeledTrajectories, matched: Sequence[CrossCameraPoints]) -> np.ndarray:

@@ -40,9 +40,9 @@ class CameraEvaluation:
     formulation: str
 
     def summary(self) -> dict[str, float | int | str | None]:
-        """The ``markerflow eval --json`` figures; swaps and ghosts are cloud-mode only (None)."""
+        """The ``markerflow eval --json`` figures; ghosts are cloud-mode only (None)."""
         return {
-            "label_accuracy": self.scores.label_accuracy, "swaps": None,
+            "label_accuracy": self.scores.label_accuracy, "swaps": self.scores.swaps,
             "ghost_precision": None, "ghost_recall": None,
             **certificate_figures(self.windows),
             "seconds_per_frame": self.seconds / max(self.frames - 1, 1), "frames": self.frames,

@@ -64,7 +64,7 @@ def label_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> Labe
     held[rows, cols] = marker[flat_taken]
     return LabelScores(
         label_accuracy=_ratio(correct.sum(), visible.sum()),
-        swaps=_run_onsets((held >= 0) & (held != np.arange(taken.shape[1]))),
+        swaps=run_onsets((held >= 0) & (held != np.arange(taken.shape[1]))),
         **_ghost_scores(marker, scored[frame], flat_taken),
         marker_frames=int(visible.sum()),
         correct=int(correct.sum()),
@@ -125,7 +125,7 @@ def _ghost_scores(
     }
 
 
-def _run_onsets(wrong: np.ndarray) -> int:
+def run_onsets(wrong: np.ndarray) -> int:
     """Number of runs of True along axis 0, summed over columns."""
     before = np.vstack([np.zeros((1, wrong.shape[1]), dtype=bool), wrong[:-1]])
     return int(np.sum(wrong & ~before))
