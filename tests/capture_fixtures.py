@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from conftest import DATA
+from formulations.cameras import Camera
 from service.calibration import load_pose2sim_toml
 from service.capture import Capture
 from service.formats import read_labeled
 from service.recording import Recording
-from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
 from service.recording_capture import capture_from_recording
 
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
@@ -19,12 +20,23 @@ def points_capture(frames: int) -> Capture:
     return capture_from_recording(Recording(truth.names, truth.positions[:frames], truth.rate), shuffle=True)
 
 
-def camera_capture(frames: int, markers: int = 41, seed: int = 0) -> Capture:
+def simulated_cmu(frames: int, markers: int = 41, seed: int = 0) -> tuple[list[Camera], CameraCapture]:
+    """CMU 85_02 through the real Pose2Sim rig with the issue's scenario (0.5 px noise, 3 px
+    merging, 10 % occlusion in 15-frame bursts, 2 clutter points per camera)."""
     cameras = load_pose2sim_toml(POSE2SIM, units="mm")
     truth = read_labeled(CMU)
     rig = CameraRig.from_cameras(cameras)
     placed = Recording(truth.names[:markers], place_in_volume(truth.positions[:frames, :markers], rig), truth.rate)
     simulated = simulate_cameras(placed, rig, pixel_noise=0.5, merge_radius_px=3.0, occlusion_rate=0.1,
                                  occlusion_burst_frames=15, clutter_per_camera=2, seed=seed)
-    return Capture(placed.names, simulated.first_frame.positions[0], truth.rate, cameras=cameras,
-                   detections=simulated.detections)
+    return cameras, simulated
+
+
+def camera_capture(frames: int, markers: int = 41, seed: int = 0) -> Capture:
+    return capture_of(*simulated_cmu(frames, markers, seed))
+
+
+def capture_of(cameras: list[Camera], simulated: CameraCapture) -> Capture:
+    """What a user hands markerflow of a simulated camera capture: detections and frame 0."""
+    first = simulated.first_frame
+    return Capture(first.names, first.positions[0], first.rate, cameras=cameras, detections=simulated.detections)

@@ -7,7 +7,7 @@ points per camera), and a resumed run against an uninterrupted one.
 
 import numpy as np
 import pytest
-from conftest import DATA
+from capture_fixtures import camera_capture, capture_of, simulated_cmu
 from windows import assert_feasible, brute_force
 
 from formulations.cameras import Camera
@@ -23,14 +23,12 @@ from formulations.per_camera_locate import FrameViews, LocatedMarkers, locate_ma
 from formulations.per_camera_reacquire import locate_with_reacquisition
 from formulations.per_camera_rig import Rig
 from formulations.triangulation import ray_compromise, reprojection_errors, triangulate_many
-from service.calibration import load_pose2sim_toml
 from service.camera_scores import camera_scores
-from service.capture import Capture, LabelingOptions
+from service.capture import LabelingOptions
 from service.capture_labeling import CaptureLabeling
 from service.cloud_labeler import MARKER_COSTS
-from service.formats import read_labeled
-from service.recording import LabeledTrajectories, Recording
-from service.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.per_camera import PerCameraLabeler
+from service.recording import LabeledTrajectories
 from service.window_outcome import WindowOutcome
 
 K = [[1000.0, 0, 960], [0, 1000.0, 540], [0, 0, 1]]
@@ -167,24 +165,14 @@ def test_scores_count_a_marker_correct_only_with_its_own_detections():
     assert camera_scores(marker_detection, truth, result, views).marker_frames == 1  # frame 0 and marker b excluded
 
 
-def _cmu_capture(frames: int) -> tuple[Capture, object]:
-    cameras = load_pose2sim_toml(DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml", units="mm")
-    rig = CameraRig.from_cameras(cameras)
-    truth = read_labeled(DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d")
-    placed = Recording(truth.names, place_in_volume(truth.positions[:frames], rig), truth.rate)
-    simulated = simulate_cameras(placed, rig, pixel_noise=0.5, merge_radius_px=3.0, occlusion_rate=0.1,
-                                 occlusion_burst_frames=15, clutter_per_camera=2, seed=0)
-    capture = Capture(list(truth.names), placed.positions[0], truth.rate, cameras=cameras, detections=simulated.detections)
-    return capture, simulated
-
-
 def test_per_camera_labels_cmu_85_02_through_the_pose2sim_rig():
-    capture, simulated = _cmu_capture(300)
+    cameras, simulated = simulated_cmu(300)
+    capture = capture_of(cameras, simulated)
     labeling = CaptureLabeling(capture, LabelingOptions(association="per-camera"))
     outcomes = list(labeling.windows())
     result = labeling.result(outcomes)
     scores = camera_scores(simulated.marker_detection, simulated.truth.positions, result,
-                           labeling.per_camera.views(capture, outcomes))
+                           PerCameraLabeler().views(capture, outcomes))
     assert scores.marker_frames > 0.9 * 299 * len(capture.names)
     assert scores.label_accuracy >= 0.999
     assert scores.rmse_mm <= 3.0
@@ -195,7 +183,7 @@ def test_per_camera_labels_cmu_85_02_through_the_pose2sim_rig():
 
 
 def test_resumed_per_camera_labeling_equals_the_uninterrupted_run():
-    capture, _ = _cmu_capture(60)
+    capture = camera_capture(60)
     labeling = CaptureLabeling(capture, LabelingOptions(association="per-camera"))
     outcomes = list(labeling.windows())
     assert len(outcomes) == 4
