@@ -16,6 +16,7 @@ or tracked by the window LP in each camera's image and then triangulated (``per-
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from functools import partial
 
 from service.capture import Capture, LabelingOptions
 from service.chaining import window_spans
@@ -44,35 +45,24 @@ class CaptureLabeling:
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
         table = {"name": options.formulation} if isinstance(options.formulation, str) else options.formulation
         formulation = formulation_from_table(table, "formulation")
-        self.capture = capture
         self.n_windows = len(window_spans(capture.n_frames, options.window))
-        self.per_camera = None
         if capture.mode == "cameras" and options.association == "per-camera":
-            self.per_camera = PerCameraLabeler(formulation=formulation, window=options.window)
+            labeler = PerCameraLabeler(formulation=formulation, window=options.window)
+            self._windows = partial(labeler.windows, capture)
+            self._assemble = partial(labeler.assemble, capture)
             return
-        self.labeler = CloudLabeler(formulation=formulation, window=options.window)
-        self.cloud = self._cloud(capture, options.association)
-
-    @staticmethod
-    def _cloud(capture: Capture, association: str) -> UnlabeledCloud:
-        if capture.mode == "points":
-            return UnlabeledCloud(points=capture.points, rate=capture.rate)
-        if association != "joint-3d":
-            raise InputError(f"association {association!r} is not available; use joint-3d or per-camera")
-        return cross_camera_cloud(capture.cameras, capture.detections, capture.rate)[0]
+        labeler = CloudLabeler(formulation=formulation, window=options.window)
+        given = (_cloud(capture, options.association), capture.names, capture.first_frame)
+        self._windows = partial(labeler.windows, *given)
+        self._assemble = partial(labeler.assemble, *given)
 
     def windows(self, after: WindowOutcome | None = None) -> Iterator[WindowOutcome]:
         """Each window's outcome as it finishes; ``after`` resumes after a finished window."""
-        capture = self.capture
-        if self.per_camera is not None:
-            return self.per_camera.windows(capture, after=after)
-        return self.labeler.windows(self.cloud, capture.names, capture.first_frame, after=after)
+        return self._windows(after=after)
 
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes."""
-        if self.per_camera is not None:
-            return self.per_camera.assemble(self.capture, outcomes)
-        return self.labeler.assemble(self.cloud, self.capture.names, self.capture.first_frame, outcomes)
+        return self._assemble(outcomes)
 
     def label(self, progress: Callable[[int, int], None] | None = None) -> tuple[LabeledTrajectories, list[WindowStats]]:
         """Label every window in one go."""
@@ -82,3 +72,12 @@ class CaptureLabeling:
             if progress:
                 progress(len(outcomes), self.n_windows)
         return self.result(outcomes), [o.stats for o in outcomes]
+
+
+def _cloud(capture: Capture, association: str) -> UnlabeledCloud:
+    """The points the window LP labels: the capture's own, or the cross-camera points."""
+    if capture.mode == "points":
+        return UnlabeledCloud(points=capture.points, rate=capture.rate)
+    if association != "joint-3d":
+        raise InputError(f"association {association!r} is not available; use joint-3d or per-camera")
+    return cross_camera_cloud(capture.cameras, capture.detections, capture.rate)[0]
