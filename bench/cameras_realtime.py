@@ -6,7 +6,7 @@ CMU 85_02 placed in the real Pose2Sim 4-camera rig through the issue's scenario
 
 ``joint-3d``: matching (epipolar gating, triangulation, growth and merging of the cross-camera
 points, plus their detection resources), labeling (window LP on those points), and the total.
-The matcher works on blocks of frames (``service.joint_3d``); one frame at a time is printed
+The matcher works on blocks of frames (``service.labeling.joint_3d``); one frame at a time is printed
 beside it, measured in the same run. ``per-camera``: the total (its own stages interleave).
 Goal: <= 4 ms per frame in total.
 
@@ -25,13 +25,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from service.calibration import load_calibration  # noqa: E402
-from service.cloud_labeler import CloudLabeler  # noqa: E402
-from service.formats import read_labeled  # noqa: E402
-from service.joint_3d import cross_camera_cloud  # noqa: E402
-from service.recording import Recording  # noqa: E402
-from service.scenario import Scenario  # noqa: E402
-from service.simulate_cameras import (  # noqa: E402
+from service.io.calibration import load_calibration  # noqa: E402
+from service.labeling.cloud import CloudLabeler  # noqa: E402
+from service.io.formats import read_labeled  # noqa: E402
+from service.labeling.joint_3d import cross_camera_cloud  # noqa: E402
+from service.io.recording import Recording  # noqa: E402
+from service.evaluation.scenario import Scenario  # noqa: E402
+from service.evaluation.simulate_cameras import (  # noqa: E402
     CameraCapture,
     CameraRig,
     place_in_volume,
@@ -72,8 +72,8 @@ def joint_3d(cameras: list, capture: CameraCapture, block_frames: int) -> dict[s
 
 def per_camera(cameras: list, capture: CameraCapture) -> dict[str, float]:
     try:
-        from service.capture import Capture
-        from service.per_camera import PerCameraLabeler
+        from service.capture.capture import Capture
+        from service.labeling.per_camera import PerCameraLabeler
     except ImportError as error:
         raise SystemExit(f"--association per-camera is not available in this tree ({error})") from None
     first = capture.first_frame

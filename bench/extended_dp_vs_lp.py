@@ -27,12 +27,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from formulations.dp_extended import DpExtended  # noqa: E402
+from formulations.methods.dp_extended import DpExtended  # noqa: E402
 from formulations.errors import FormulationError  # noqa: E402
-from formulations.ilp import Ilp  # noqa: E402
-from formulations.lp_l1 import LpL1  # noqa: E402
-from formulations.network import build_window  # noqa: E402
-from service.jiang_instance import jiang_instance  # noqa: E402
+from formulations.methods.ilp import Ilp  # noqa: E402
+from formulations.methods.lp_l1 import LpL1  # noqa: E402
+from formulations.window.build import build_window  # noqa: E402
+from service.evaluation.jiang_instance import jiang_instance  # noqa: E402
 
 N_OBJECTS, N_FRAMES = 3, 20
 

@@ -20,10 +20,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from formulations.lp_l1 import LpL1  # noqa: E402
-from formulations.lp_l1_cvxpy import LpL1Cvxpy  # noqa: E402
-from formulations.network import build_window  # noqa: E402
-from service.jiang_instance import jiang_instance  # noqa: E402
+from formulations.methods.lp_l1 import LpL1  # noqa: E402
+from formulations.methods.lp_l1_cvxpy import LpL1Cvxpy  # noqa: E402
+from formulations.window.build import build_window  # noqa: E402
+from service.evaluation.jiang_instance import jiang_instance  # noqa: E402
 
 
 def timed(fn):

@@ -26,11 +26,11 @@ from pathlib import Path
 import httpx
 import numpy as np
 
-from service.capture import Capture, LabelingOptions
-from service.capture_document import CaptureDocument
-from service.scenario import Scenario
-from service.scene import generate_scene
-from service.simulate_cloud import simulate_cloud
+from service.capture.capture import Capture, LabelingOptions
+from service.capture.document import CaptureDocument
+from service.evaluation.scenario import Scenario
+from service.evaluation.scene import generate_scene
+from service.evaluation.simulate_cloud import simulate_cloud
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 from conftest import DATA
-from formulations.cameras import Camera
-from service.calibration import load_pose2sim_toml
-from service.capture import Capture
-from service.formats import read_labeled
-from service.recording import Recording
-from service.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
-from service.recording_capture import capture_from_recording
+from formulations.cameras.camera import Camera
+from service.io.calibration import load_pose2sim_toml
+from service.capture.capture import Capture
+from service.io.formats import read_labeled
+from service.io.recording import Recording
+from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
+from service.capture.from_recording import capture_from_recording
 
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 POSE2SIM = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"

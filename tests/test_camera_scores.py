@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from service.camera_scores import camera_scores
-from service.recording import LabeledTrajectories
+from service.evaluation.camera_scores import camera_scores
+from service.io.recording import LabeledTrajectories
 
 F, N, C = 5, 3, 2
 

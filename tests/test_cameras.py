@@ -8,15 +8,15 @@ import cv2
 import numpy as np
 import pytest
 
-from formulations.cameras import Camera
-from formulations.triangulation import (
+from formulations.cameras.camera import Camera
+from formulations.cameras.triangulation import (
     locate,
     ray_compromise,
     reprojection_errors,
     triangulate,
     triangulate_many,
 )
-from service.calibration import (
+from service.io.calibration import (
     load_calibration,
     load_caliscope_toml,
     load_markerflow_json,

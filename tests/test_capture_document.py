@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from capture_fixtures import camera_capture, points_capture
-from service.capture import LabelingOptions
-from service.capture_document import CaptureDocument, read_capture_document
+from service.capture.capture import LabelingOptions
+from service.capture.document import CaptureDocument, read_capture_document
 from service.errors import InputError
 
 

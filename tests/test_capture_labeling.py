@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from capture_fixtures import camera_capture, points_capture
-from service.capture import LabelingOptions
-from service.capture_labeling import CaptureLabeling
-from service.cloud_labeler import first_marker_state
+from service.capture.capture import LabelingOptions
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.cloud import first_marker_state
 from service.errors import InputError
-from service.window_outcome import WindowOutcome
+from service.labeling.outcome import WindowOutcome
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:

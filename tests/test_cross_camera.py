@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from formulations.cross_camera import (
+from formulations.cameras.cross_camera.matching import (
     CrossCameraPoints,
     epipolar_distances,
     match_across_cameras,
     match_frames,
 )
-from formulations.cross_camera_triangulation import BlockDetections
-from formulations.triangulation import reprojection_errors, triangulate_many
-from service.calibration import load_caliscope_toml
+from formulations.cameras.cross_camera.block import BlockDetections
+from formulations.cameras.triangulation import reprojection_errors, triangulate_many
+from service.io.calibration import load_caliscope_toml
 
 RECORDING = Path(__file__).resolve().parents[2] / "shared" / "data" / "multicam2d_caliscope_charuco" / "4_cam_recording"
 

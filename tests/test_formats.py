@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from service.errors import InputError
-from service.formats import read_labeled, write_labeled
-from service.formats.c3d import read_c3d, write_c3d
-from service.formats.csv import read_csv_labeled, write_csv
-from service.formats.trc import read_trc
-from service.recording import LabeledTrajectories
+from service.io.formats import read_labeled, write_labeled
+from service.io.formats.c3d import read_c3d, write_c3d
+from service.io.formats.csv import read_csv_labeled, write_csv
+from service.io.formats.trc import read_trc
+from service.io.recording import LabeledTrajectories
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"

@@ -7,8 +7,8 @@ Windows and their recorded figures are fixture files written by
 import numpy as np
 import pytest
 
-from formulations.lp_l1 import LpL1
-from service.integrality import load_corpus, solve_corpus
+from formulations.methods.lp_l1 import LpL1
+from service.evaluation.integrality import load_corpus, solve_corpus
 from integrality_corpus import FOLDER
 
 RECORDED = load_corpus(FOLDER)

@@ -9,9 +9,9 @@ whole recording 99.83 %); they may not get worse.
 import numpy as np
 from capture_fixtures import simulated_cmu
 
-from service.camera_scores import camera_scores, joint_3d_views
-from service.cloud_labeler import CloudLabeler
-from service.joint_3d import cross_camera_cloud
+from service.evaluation.camera_scores import camera_scores, joint_3d_views
+from service.labeling.cloud import CloudLabeler
+from service.labeling.joint_3d import cross_camera_cloud
 
 FRAMES = 300
 

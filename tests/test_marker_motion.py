@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from formulations.guide import assign_nearest
-from formulations.marker_state import MarkerState
-from formulations.rigid import rigid_transform
+from formulations.markers.guide import assign_nearest
+from formulations.markers.state import MarkerState
+from formulations.markers.rigid import rigid_transform
 
 
 def test_rigid_transform_recovers_rotation_and_translation():

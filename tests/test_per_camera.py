@@ -10,26 +10,26 @@ import pytest
 from capture_fixtures import camera_capture, capture_of, simulated_cmu
 from windows import assert_feasible, brute_force
 
-from formulations.cameras import Camera
-from formulations.ilp import Ilp
-from formulations.lp_l1 import LpL1
-from formulations.marker_state import MarkerState
-from formulations.network import build_window
-from formulations.per_camera_candidates import per_camera_candidates
-from formulations.per_camera_gating import PerCameraGating
-from formulations.per_camera_guide import per_camera_guide
-from formulations.per_camera_advance import advance_state
-from formulations.per_camera_locate import FrameViews, LocatedMarkers, locate_markers
-from formulations.per_camera_reacquire import locate_with_reacquisition
-from formulations.per_camera_rig import Rig
-from formulations.triangulation import ray_compromise, reprojection_errors, triangulate_many
-from service.camera_scores import camera_scores
-from service.capture import LabelingOptions
-from service.capture_labeling import CaptureLabeling
-from service.cloud_labeler import MARKER_COSTS
-from service.per_camera import PerCameraLabeler
-from service.recording import LabeledTrajectories
-from service.window_outcome import WindowOutcome
+from formulations.cameras.camera import Camera
+from formulations.methods.ilp import Ilp
+from formulations.methods.lp_l1 import LpL1
+from formulations.markers.state import MarkerState
+from formulations.window.build import build_window
+from formulations.cameras.per_camera.candidates import per_camera_candidates
+from formulations.cameras.per_camera.gating import PerCameraGating
+from formulations.cameras.per_camera.guide import per_camera_guide
+from formulations.cameras.per_camera.advance import advance_state
+from formulations.cameras.per_camera.locate import FrameViews, LocatedMarkers, locate_markers
+from formulations.cameras.per_camera.reacquire import locate_with_reacquisition
+from formulations.cameras.rig import Rig
+from formulations.cameras.triangulation import ray_compromise, reprojection_errors, triangulate_many
+from service.evaluation.camera_scores import camera_scores
+from service.capture.capture import LabelingOptions
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.cloud import MARKER_COSTS
+from service.labeling.per_camera import PerCameraLabeler
+from service.io.recording import LabeledTrajectories
+from service.labeling.outcome import WindowOutcome
 
 K = [[1000.0, 0, 960], [0, 1000.0, 540], [0, 0, 1]]
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from service.plot import plot_trajectories
-from service.recording import LabeledTrajectories, Recording
-from service.scene import generate_scene
+from service.evaluation.plot import plot_trajectories
+from service.io.recording import LabeledTrajectories, Recording
+from service.evaluation.scene import generate_scene
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -7,11 +7,11 @@ import pytest
 import scipy.sparse as sp
 
 from formulations.errors import FormulationError
-from formulations.lp_l1 import LpL1
-from formulations.nn_hungarian import NnHungarian
-from formulations.objective import conflicts, path_cost
-from formulations.qp_l2 import QpL2, _layout_operator
-from formulations.window import OBSERVATION, OCCLUSION, SINK, SOURCE, WindowProblem
+from formulations.methods.lp_l1 import LpL1
+from formulations.methods.nn_hungarian import NnHungarian
+from formulations.window.objective import conflicts, path_cost
+from formulations.methods.qp_l2 import QpL2, _layout_operator
+from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE, WindowProblem
 from windows import brute_force, random_window
 
 

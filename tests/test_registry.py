@@ -5,11 +5,11 @@ import dataclasses
 import pytest
 
 from formulations.errors import FormulationError
-from formulations.lp_l1 import LpL1
-from formulations.registry import describe, get_formulation, names
+from formulations.methods.lp_l1 import LpL1
+from formulations.methods.registry import describe, get_formulation, names
 from service.errors import InputError
-from service.formulation_spec import formulation_from_spec
-from service.scenario import Scenario
+from service.capture.formulation_spec import formulation_from_spec
+from service.evaluation.scenario import Scenario
 
 
 def test_every_formulation_lists_its_parameters_with_docs_and_defaults():

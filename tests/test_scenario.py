@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from service.errors import InputError
-from service.recording import Recording
-from service.scenario import Scenario
-from service.simulate_cloud import simulate_cloud
+from service.io.recording import Recording
+from service.evaluation.scenario import Scenario
+from service.evaluation.simulate_cloud import simulate_cloud
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios"

@@ -5,7 +5,7 @@ import pytest
 from scipy.spatial.distance import pdist
 
 from service.errors import InputError
-from service.scene import generate_scene
+from service.evaluation.scene import generate_scene
 
 SEEDS = (0, 1, 2)
 

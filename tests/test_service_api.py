@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from capture_fixtures import camera_capture
-from service.capture import Capture, LabelingOptions
-from service.capture_labeling import CaptureLabeling
-from service.formats import read_labeled, write_labeled
-from service.recording import Recording
-from service.recording_capture import capture_from_recording
-from service.scene import generate_scene
+from service.capture.capture import Capture, LabelingOptions
+from service.labeling.capture_labeling import CaptureLabeling
+from service.io.formats import read_labeled, write_labeled
+from service.io.recording import Recording
+from service.capture.from_recording import capture_from_recording
+from service.evaluation.scene import generate_scene
 from service.server.settings import Settings
 from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 
@@ -105,7 +105,7 @@ def test_uploaded_c3d_is_relabeled_like_the_library(client, tmp_path):
 
 
 def _as_labeled(truth: Recording, occluded: np.ndarray):
-    from service.recording import LabeledTrajectories
+    from service.io.recording import LabeledTrajectories
 
     positions = np.where(occluded[..., None], np.nan, truth.positions)
     return LabeledTrajectories(truth.names, positions, occluded, truth.rate)

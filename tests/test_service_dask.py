@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from distributed import LocalCluster
 
-from service.capture import LabelingOptions
+from service.capture.capture import LabelingOptions
 from service.server.settings import Settings
 from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 

@@ -11,8 +11,8 @@ import time
 import httpx
 import numpy as np
 
-from service.capture import LabelingOptions
-from service.capture_labeling import CaptureLabeling
+from service.capture.capture import LabelingOptions
+from service.labeling.capture_labeling import CaptureLabeling
 from service_fixtures import ServerProcess, document_json, generated_capture, nan_array, wait_for
 
 # The ILP without its LP shortcut: ~40 ms a window, so the kill lands mid-job.

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from capture_fixtures import camera_capture
-from service.capture import Capture
+from service.capture.capture import Capture
 from service.errors import InputError
 from service.server.app import create_app
 from service.server.settings import Limits, Settings

@@ -8,9 +8,9 @@ import ezc3d
 import numpy as np
 
 from capture_fixtures import camera_capture, points_capture
-from service.capture import LabelingOptions
-from service.capture_document import CaptureDocument
-from service.capture_labeling import CaptureLabeling
+from service.capture.capture import LabelingOptions
+from service.capture.document import CaptureDocument
+from service.labeling.capture_labeling import CaptureLabeling
 from test_cli import run_cli
 
 

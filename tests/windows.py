@@ -7,11 +7,11 @@ import itertools
 import numpy as np
 import scipy.sparse as sp
 
-from formulations.candidates import WindowCandidates
-from formulations.costs import ArcCostWeights
-from formulations.network import build_window
-from formulations.objective import conflicts, path_arcs
-from formulations.window import WindowProblem
+from formulations.window.candidates import WindowCandidates
+from formulations.window.costs import ArcCostWeights
+from formulations.window.build import build_window
+from formulations.window.objective import conflicts, path_arcs
+from formulations.window.problem import WindowProblem
 
 
 def random_window(

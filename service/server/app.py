@@ -17,7 +17,7 @@ from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
 
-from service.capture_document import CaptureDocument
+from service.capture.document import CaptureDocument
 from service.errors import InputError
 from service.server import routes_info, routes_jobs, routes_solve
 from service.server.executor import DaskExecutor, Executor, ThreadExecutor

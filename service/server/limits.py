@@ -6,7 +6,7 @@ import json
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service.capture_document import CaptureDocument
+from service.capture.document import CaptureDocument
 from service.errors import InputError
 from service.server.settings import Limits
 

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from service.formats import write_labeled
-from service.recording import LabeledTrajectories
+from service.io.formats import write_labeled
+from service.io.recording import LabeledTrajectories
 
 MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3d": "application/octet-stream"}
 

@@ -6,7 +6,7 @@ from fastapi import APIRouter, Request, Response
 from prometheus_client import CONTENT_TYPE_LATEST, generate_latest
 from starlette.concurrency import run_in_threadpool
 
-from formulations.registry import describe
+from formulations.methods.registry import describe
 from service.server.schemas import FormulationInfo, Health, ParameterInfo
 
 router = APIRouter(tags=["service"])

@@ -12,8 +12,8 @@ import os
 import socket
 from collections.abc import Callable
 
-from service.capture_document import CaptureDocument
-from service.capture_labeling import CaptureLabeling
+from service.capture.document import CaptureDocument
+from service.labeling.capture_labeling import CaptureLabeling
 from service.errors import InputError
 from service.server.results import trajectories_to_bytes
 from service.server.store import WindowTaken, store_for

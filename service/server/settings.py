@@ -18,7 +18,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict, TomlConfigSettin
 from sqlalchemy.engine import make_url
 from sqlalchemy.exc import ArgumentError
 
-from service.capture_document import describe_validation_error
+from service.capture.document import describe_validation_error
 from service.errors import InputError
 
 LOCAL_OWNER = "local"

@@ -19,7 +19,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
 
 from service.server.tables import JobRow, WindowRow, engine_for
-from service.window_outcome import WindowOutcome
+from service.labeling.outcome import WindowOutcome
 
 ACTIVE = ("queued", "running")
 STATES = ("queued", "running", "done", "failed", "cancelled")

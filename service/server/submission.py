@@ -18,16 +18,16 @@ import numpy as np
 from pydantic import ValidationError
 from starlette.datastructures import FormData, UploadFile
 
-from formulations.registry import describe
-from service.capture import LabelingOptions
-from service.capture_document import CaptureDocument, describe_validation_error
-from service.capture_labeling import CaptureLabeling
-from service.chaining import window_spans
+from formulations.methods.registry import describe
+from service.capture.capture import LabelingOptions
+from service.capture.document import CaptureDocument, describe_validation_error
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.spans import window_spans
 from service.errors import InputError
-from service.formats import read_labeled
-from service.formulation_spec import formulation_from_table
-from service.recording import Recording
-from service.recording_capture import capture_from_recording
+from service.io.formats import read_labeled
+from service.capture.formulation_spec import formulation_from_table
+from service.io.recording import Recording
+from service.capture.from_recording import capture_from_recording
 from service.server.limits import check_limits
 from service.server.settings import Limits
 

@@ -1,0 +1,116 @@
+"""A frame-by-frame nearest-neighbour track that centres the gates of a window.
+
+Each frame: predict every marker (``MarkerState.predict``), assign points to markers
+by ``linear_sum_assignment`` on distance with a constant miss cost, and advance the
+state. The miss cost does not grow with the gate: after an occlusion the prediction
+from neighbouring markers is better than a far point, and a wrong pick here would
+move the gates of every later frame. This is the "standard tracking technique" of Ringer & Lasenby; here
+it only decides *where to look*. The window LP decides *what to take*.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial.distance import cdist
+
+from formulations.markers.state import MarkerState
+
+
+@dataclass(frozen=True)
+class Gate:
+    """Gate radius around a marker's prediction.
+
+    Attributes:
+        radius_mm: Radius for a marker seen in the previous frame.
+        growth_mm: Added per frame the marker has been unseen.
+        max_radius_mm: Upper limit while unseen.
+        unknown_velocity_radius_mm: Radius while a marker's velocity is unknown (just
+            after the labeled first frame): it must cover one frame of fast motion.
+    """
+
+    radius_mm: float = 60.0
+    growth_mm: float = 20.0
+    max_radius_mm: float = 400.0
+    unknown_velocity_radius_mm: float = 100.0
+
+    def radius(self, state: MarkerState) -> np.ndarray:
+        grown = np.minimum(self.radius_mm + self.growth_mm * state.unseen, max(self.max_radius_mm, self.radius_mm))
+        return np.where(state.velocity_known, grown, np.maximum(grown, self.unknown_velocity_radius_mm))
+
+
+@dataclass(frozen=True)
+class GuideTrack:
+    """Per frame 1..M: prediction, gate radius and velocity before the frame, tracking state."""
+
+    predicted: np.ndarray  # (M, N, 3)
+    radius: np.ndarray  # (M, N)
+    velocity: np.ndarray  # (M, N, 3) displacement per frame expected into frame m; NaN if unknown
+    tracked: np.ndarray  # (M, N) seen in the frames before m, long enough to trust its prediction
+    unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
+
+
+def guide_track(
+    state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate(), trust_after: int = 3
+) -> GuideTrack:
+    """Run the nearest-neighbour tracker over ``frames`` from ``state``.
+
+    A marker counts as tracked once seen ``trust_after`` frames in a row: a marker just
+    re-acquired may have been re-acquired wrongly, and others should not lean on it.
+    """
+    m, n = len(frames), len(state.position)
+    predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
+    radius, tracked = np.empty((m, n)), np.empty((m, n), bool)
+    unseen = np.empty((m, n), dtype=int)
+    for f, points in enumerate(frames):
+        predicted[f], tracked[f], unseen[f] = state.predict(), state.streak >= trust_after, state.unseen
+        # Predicted displacement: a marker's own velocity while seen, its neighbours'
+        # motion while occluded; unknown only right after the labeled first frame.
+        unknown = state.visible & ~state.velocity_known
+        velocity[f] = np.where(unknown[:, None], np.nan, predicted[f] - state.position)
+        radius[f] = gate.radius(state)
+        assigned = assign_nearest(predicted[f], points, radius[f], miss_cost=gate.radius_mm)
+        seen = assigned >= 0
+        taken = np.zeros((n, 3))
+        taken[seen] = points[assigned[seen]]
+        state = state.advance(taken, seen)
+    return GuideTrack(
+        predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen,
+    )
+
+
+def assign_nearest(predicted: np.ndarray, points: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+    """Optimal one-to-one assignment of points to predictions within each gate.
+
+    Returns:
+        ``(N,)`` point index per marker, -1 for a miss.
+    """
+    if len(points) == 0:
+        return np.full(len(predicted), -1)
+    return assign_within_gates(cdist(predicted, points), radius, miss_cost)
+
+
+def assign_within_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+    """min sum of distances over one-to-one assignments, a marker taking only what lies
+    inside its gate, with a miss of cost ``miss_cost`` allowed for every marker.
+
+    Args:
+        distance: ``(N, D)`` distance from each marker's prediction to each detection.
+        radius: ``(N,)`` gate radius of each marker.
+        miss_cost: Cost of leaving a marker unassigned.
+
+    Returns:
+        ``(N,)`` detection index per marker, -1 for a miss.
+    """
+    n, d = distance.shape
+    blocked = 1e9
+    cost = np.where(distance <= radius[:, None], distance, blocked)
+    miss = np.full((n, n), blocked)
+    np.fill_diagonal(miss, miss_cost)
+    rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
+    result = np.full(n, -1)
+    hit = cols < d
+    result[rows[hit]] = cols[hit]
+    return result

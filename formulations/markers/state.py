@@ -1,0 +1,121 @@
+"""What one window hands the next about each marker (Jiang Sec. II-E: the template)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from formulations.markers.rigid import rigid_transform
+
+
+@dataclass(frozen=True)
+class MarkerState:
+    """Per-marker state at a template frame.
+
+    Attributes:
+        position: ``(N, 3)`` last labeled position, or the prediction while unseen.
+        velocity: ``(N, 3)`` displacement per frame.
+        velocity_known: ``(N,)`` False until a marker has been seen in two consecutive
+            frames (the labeled first frame alone says nothing about motion).
+        unseen: ``(N,)`` frames since the marker was last labeled (0 = seen now).
+        streak: ``(N,)`` consecutive frames the marker has been seen up to now.
+        neighbours: ``(N, K)`` the K markers nearest each marker in the first frame.
+        anchor: ``(N, 3)`` where each marker was last seen, and ``anchor_neighbours``
+            ``(N, K, 3)`` where its neighbours were at that frame (``anchor_valid``
+            ``(N, K)``: the neighbour was seen then). While a marker is occluded, the rigid
+            motion of its neighbours since that frame carries it along.
+        distance_mean, distance_var: ``(N, K)`` running mean and variance of each
+            marker-neighbour distance (mm, mm^2). Neighbours on the same rigid segment keep
+            their distance and are trusted most: Ringer & Lasenby's (2004) grouping by the
+            variance of inter-marker distances, kept online.
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    velocity_known: np.ndarray
+    unseen: np.ndarray
+    streak: np.ndarray
+    neighbours: np.ndarray
+    anchor: np.ndarray
+    anchor_neighbours: np.ndarray
+    anchor_valid: np.ndarray
+    distance_mean: np.ndarray
+    distance_var: np.ndarray
+
+    @classmethod
+    def from_first_frame(cls, position: np.ndarray, n_neighbours: int = 16) -> MarkerState:
+        """State from a labeled first frame (all markers visible, velocity unknown)."""
+        position = np.asarray(position, dtype=float)
+        n = len(position)
+        k = min(n_neighbours, n - 1)
+        _, idx = cKDTree(position).query(position, k=k + 1)
+        neighbours = np.asarray(idx, dtype=int).reshape(n, k + 1)[:, 1:]
+        return cls(
+            position=position, velocity=np.zeros_like(position), velocity_known=np.zeros(n, bool),
+            unseen=np.zeros(n, int), streak=np.ones(n, int), neighbours=neighbours, anchor=position.copy(),
+            anchor_neighbours=position[neighbours], anchor_valid=np.ones(neighbours.shape, bool),
+            distance_mean=np.linalg.norm(position[:, None] - position[neighbours], axis=2),
+            distance_var=np.full(neighbours.shape, 100.0),
+        )
+
+    @property
+    def visible(self) -> np.ndarray:
+        return self.unseen == 0
+
+    def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
+        """The state one frame later.
+
+        Args:
+            observed: ``(N, 3)`` positions taken this frame (ignored where not ``seen``).
+            seen: ``(N,)`` bool, markers labeled this frame.
+            damping: Velocity factor per unseen frame: occluded markers slow down rather
+                than fly off on a stale velocity.
+            rate: Weight of the newest frame in the running distance statistics.
+        """
+        predicted, followed = self._predict()
+        position = np.where(seen[:, None], observed, predicted)
+        was_seen = self.visible & seen
+        # Seen twice: measured. Otherwise the displacement the neighbours imply (a stale
+        # velocity from before a gap is wrong for a fast limb), else damped.
+        implied = np.where(followed[:, None], predicted - self.position, self.velocity * damping)
+        velocity = np.where(was_seen[:, None], observed - self.position, implied)
+        both = seen[:, None] & seen[self.neighbours]
+        deviation = np.linalg.norm(position[:, None] - position[self.neighbours], axis=2) - self.distance_mean
+        return replace(
+            self, position=position, velocity=velocity, velocity_known=self.velocity_known | was_seen,
+            unseen=np.where(seen, 0, self.unseen + 1), streak=np.where(seen, self.streak + 1, 0),
+            anchor=np.where(seen[:, None], position, self.anchor),
+            anchor_neighbours=np.where(seen[:, None, None], position[self.neighbours], self.anchor_neighbours),
+            anchor_valid=np.where(seen[:, None], seen[self.neighbours], self.anchor_valid),
+            distance_mean=np.where(both, self.distance_mean + rate * deviation, self.distance_mean),
+            distance_var=np.where(both, (1 - rate) * (self.distance_var + rate * deviation**2), self.distance_var),
+        )
+
+    def predict(self) -> np.ndarray:
+        """``(N, 3)`` predicted position one frame ahead (see ``_predict``)."""
+        return self._predict()[0]
+
+    def _predict(self) -> tuple[np.ndarray, np.ndarray]:
+        """Predicted positions, and which markers followed their neighbours.
+
+        Constant velocity for markers seen now. An unseen marker follows the neighbours
+        seen both at its anchor frame and now: their weighted rigid motion (weights
+        1 / (var + 1), so neighbours on the same segment dominate) applied to its anchor;
+        a translation when fewer than three such neighbours remain; damped constant
+        velocity when none does.
+        """
+        ahead = self.position + self.velocity
+        usable = self.anchor_valid & self.visible[self.neighbours]
+        weight = usable / (self.distance_var + 1.0)
+        followed = ~self.visible & usable.any(axis=1)
+        follow = np.flatnonzero(followed)
+        if len(follow) == 0:
+            return ahead, followed
+        w, source, target = weight[follow], self.anchor_neighbours[follow], ahead[self.neighbours[follow]]
+        rotation, c_s, c_t = rigid_transform(source, target, w)
+        rotation[usable[follow].sum(axis=1) < 3] = np.eye(3)
+        predicted = ahead.copy()
+        predicted[follow] = np.einsum("sij,sj->si", rotation, self.anchor[follow] - c_s) + c_t
+        return predicted, followed

@@ -1,0 +1,41 @@
+"""Jiang's greedy rounding of a fractional solution (Sec. II-D, last paragraphs).
+
+In each frame, repeatedly take the node with the largest y among those not yet visited,
+set it to 1, and mark as visited the other nodes of its object in that frame and every
+node sharing a conflict group with it. Occlusion nodes conflict with nothing, so every
+object ends with exactly one node per frame and no conflict group is used twice: the
+result is always feasible.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from formulations.window.problem import OCCLUSION, WindowProblem
+
+
+def round_greedy(problem: WindowProblem, y: np.ndarray) -> np.ndarray:
+    """Round node values ``y`` (inflow of each node) to integral paths.
+
+    Args:
+        problem: The window.
+        y: ``(V,)`` node values in [0, 1].
+
+    Returns:
+        ``(N, M)`` chosen node per object and frame.
+    """
+    groups = problem.conflict_groups
+    rivals = (groups.T @ groups).tocsr() if groups.shape[0] else sp.csr_matrix((problem.n_nodes,) * 2)
+    path = np.full((problem.n_objects, problem.n_frames), -1)
+    inner = np.flatnonzero((problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames))
+    # Largest y first; on ties prefer the occlusion node (it blocks nobody).
+    order = inner[np.lexsort((problem.node_kind[inner] != OCCLUSION, -np.round(y[inner], 9), problem.node_frame[inner]))]
+    visited = np.zeros(problem.n_nodes, dtype=bool)
+    for v in order:
+        n, m = problem.node_object[v], problem.node_frame[v] - 1
+        if visited[v] or path[n, m] >= 0:
+            continue
+        path[n, m] = v
+        visited[rivals.indices[rivals.indptr[v]:rivals.indptr[v + 1]]] = True
+    return path

@@ -1,0 +1,69 @@
+"""A capture to label, in either input mode, and how to label it.
+
+A capture is what a lab hands markerflow: marker names, the labeled first frame (names +
+3D positions, as in Ringer & Lasenby 2004: the first frame has no prediction, so the user
+or a template fit labels it), and per frame either unlabeled 3D points or, with calibrated
+cameras, 2D detections per camera. Frame 0 of the points/detections is the labeled frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from formulations.cameras.camera import Camera
+from service.errors import InputError
+
+ASSOCIATIONS = ("joint-3d", "per-camera")
+
+
+@dataclass(frozen=True)
+class LabelingOptions:
+    """How to label a capture.
+
+    Attributes:
+        formulation: A formulation name, or a ``[formulation]`` table (``{"name": ..., **parameters}``).
+        window: Frames per window, template included.
+        association: Camera mode only: ``"joint-3d"`` (cross-camera 3D points labeled by the
+            window LP) or ``"per-camera"`` (2D window LP per camera, then triangulation).
+    """
+
+    formulation: str | dict = "lp-l1"
+    window: int = 20
+    association: str = "joint-3d"
+
+
+@dataclass
+class Capture:
+    """Unlabeled frames and the labeled first frame (millimetres, pixels).
+
+    Attributes:
+        names: Marker names.
+        first_frame: ``(N, 3)`` labeled positions of frame 0, mm.
+        rate: Frames per second.
+        points: 3D mode: per frame a ``(P, 3)`` array of unlabeled points, mm.
+        cameras: Camera mode: the calibrated cameras (world unit mm).
+        detections: Camera mode: ``detections[f][c]`` is a ``(D, 2)`` array of pixels.
+    """
+
+    names: list[str]
+    first_frame: np.ndarray
+    rate: float
+    points: list[np.ndarray] | None = None
+    cameras: list[Camera] | None = None
+    detections: list[list[np.ndarray]] | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if (self.points is None) == (self.detections is None):
+            raise InputError("a capture has either 3D points or camera detections, not both or neither")
+        if self.detections is not None and not self.cameras:
+            raise InputError("camera detections need the cameras' calibration")
+
+    @property
+    def mode(self) -> str:
+        return "points" if self.points is not None else "cameras"
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.points if self.points is not None else self.detections)

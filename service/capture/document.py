@@ -1,0 +1,199 @@
+"""The capture JSON document: what ``markerflow track`` reads and ``POST /v1/jobs`` takes.
+
+    {
+      "units": "mm",                       # of 3D points, first_frame and camera t: "mm" or "m"
+      "rate": 120,
+      "markers": ["LFHD", "RFHD", ...],
+      "first_frame": [[x, y, z], ...],     # labeled frame 0, one row per marker
+      "points": [[[x, y, z], ...], ...],   # 3D mode: unlabeled points per frame, or
+      "cameras": [{"name": "cam1", "K": [[fx, 0, cx], [0, fy, cy], [0, 0, 1]],
+                   "distortion": [k1, k2, p1, p2], "R": [[...], [...], [...]] or "rvec": [...],
+                   "t": [tx, ty, tz], "image_size": [width, height]}, ...],
+      "detections": {"cam1": [[[u, v], ...], ...], ...},   # camera mode: per camera, per frame
+      "formulation": "lp-l1" or {"name": "ilp", "time_limit": 10},
+      "window": 20,
+      "association": "joint-3d"
+    }
+
+Frame 0 of ``points``/``detections`` is the labeled frame. Every check names the field
+path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 with it.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from formulations.cameras.camera import Camera
+from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
+from service.errors import InputError
+
+# 1e9 (1000 km in mm) bounds every number: sums of squares of larger finite values overflow
+# to inf inside the geometry, and no capture is that big.
+Finite = Annotated[float, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
+Point3 = tuple[Finite, Finite, Finite]
+Pixel = tuple[Finite, Finite]
+MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
+
+
+class CameraDocument(BaseModel):
+    """One calibrated camera in OpenCV conventions (see ``formulations.cameras.camera``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = Field(min_length=1)
+    K: tuple[Point3, Point3, Point3]
+    distortion: list[Finite] = Field(default_factory=lambda: [0.0] * 5)
+    R: tuple[Point3, Point3, Point3] | None = None
+    rvec: Point3 | None = None
+    t: Point3
+    image_size: tuple[Annotated[int, Field(gt=0)], Annotated[int, Field(gt=0)]]
+
+    @model_validator(mode="after")
+    def _camera(self) -> CameraDocument:
+        if (self.R is None) == (self.rvec is None):
+            raise ValueError("give the world -> camera rotation as exactly one of R or rvec")
+        self.camera(1.0)  # K, R and distortion checks, with the camera's own message
+        return self
+
+    def camera(self, mm_per_unit: float) -> Camera:
+        if self.R is not None:
+            camera = Camera(self.K, self.distortion, self.R, self.t, self.image_size, self.name)
+        else:
+            camera = Camera.from_rvec(self.K, self.distortion, self.rvec, self.t, self.image_size, self.name)
+        return camera.scaled(mm_per_unit)
+
+
+class CaptureDocument(BaseModel):
+    """A capture with the options to label it (module docstring: the JSON layout)."""
+
+    model_config = ConfigDict(extra="forbid")
+    units: Literal["mm", "m"] = "mm"
+    rate: float = Field(gt=0, allow_inf_nan=False)
+    markers: list[str] = Field(min_length=1)
+    first_frame: list[Point3]
+    points: list[list[Point3]] | None = None
+    cameras: list[CameraDocument] | None = None
+    detections: dict[str, list[list[Pixel]]] | None = None
+    formulation: str | dict = "lp-l1"
+    window: int = Field(default=20, ge=2)
+    association: Literal[ASSOCIATIONS] = "joint-3d"  # type: ignore[valid-type]
+
+    @field_validator("markers")
+    @classmethod
+    def _unique(cls, markers: list[str]) -> list[str]:
+        seen = set()
+        for name in markers:
+            if name in seen:
+                raise ValueError(f"marker name {name!r} appears twice")
+            seen.add(name)
+        return markers
+
+    @model_validator(mode="after")
+    def _consistent(self) -> CaptureDocument:
+        if len(self.first_frame) != len(self.markers):
+            raise ValueError(f"first_frame has {len(self.first_frame)} rows for {len(self.markers)} markers")
+        if (self.points is None) == (self.detections is None):
+            raise ValueError("give exactly one of points (3D mode) or detections (camera mode)")
+        if self.detections is not None:
+            self._check_detections()
+        if self.n_frames < 2:
+            raise ValueError("a capture needs at least 2 frames (the labeled frame and one more)")
+        return self
+
+    def _check_detections(self) -> None:
+        if not self.cameras:
+            raise ValueError("detections need cameras")
+        cameras = {camera.name: camera for camera in self.cameras}
+        if len(cameras) != len(self.cameras):
+            raise ValueError("camera names must be unique")
+        counts = {name: len(frames) for name, frames in self.detections.items()}
+        for name in counts:
+            if name not in cameras:
+                raise ValueError(f"detections.{name}: camera {name!r} is not in cameras ({', '.join(cameras)})")
+        if len(set(counts.values())) > 1:
+            listed = ", ".join(f"{name}: {count}" for name, count in counts.items())
+            raise ValueError(f"detections: cameras have different frame counts ({listed})")
+        for name, frames in self.detections.items():
+            _check_in_image(name, frames, cameras[name].image_size)
+
+    @property
+    def n_frames(self) -> int:
+        if self.points is not None:
+            return len(self.points)
+        return max((len(frames) for frames in self.detections.values()), default=0)
+
+    def capture(self) -> Capture:
+        """The capture in millimetres; cameras without detections see nothing."""
+        scale = MM_PER_UNIT[self.units]
+        first_frame = np.asarray(self.first_frame, dtype=float).reshape(-1, 3) * scale
+        if self.points is not None:
+            points = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
+            return Capture(list(self.markers), first_frame, self.rate, points=points)
+        cameras = [camera.camera(scale) for camera in self.cameras]
+        empty = [[] for _ in range(self.n_frames)]
+        per_camera = [self.detections.get(camera.name, empty) for camera in self.cameras]
+        detections = [
+            [np.asarray(per_camera[c][f], dtype=float).reshape(-1, 2) for c in range(len(cameras))]
+            for f in range(self.n_frames)
+        ]
+        return Capture(list(self.markers), first_frame, self.rate, cameras=cameras, detections=detections)
+
+    @classmethod
+    def of(cls, capture: Capture, options: LabelingOptions = LabelingOptions()) -> CaptureDocument:
+        """The document of a capture (mm), e.g. to write an example or submit a job."""
+        fields = {"rate": capture.rate, "markers": capture.names, "first_frame": capture.first_frame.tolist(),
+                  "formulation": options.formulation, "window": options.window, "association": options.association}
+        if capture.points is not None:
+            return cls(points=[frame.tolist() for frame in capture.points], **fields)
+        cameras = [
+            {"name": c.name, "K": c.K.tolist(), "distortion": c.distortion.tolist(), "R": c.R.tolist(),
+             "t": c.t.tolist(), "image_size": list(c.image_size)}
+            for c in capture.cameras
+        ]
+        detections = {c.name: [frame[i].tolist() for frame in capture.detections] for i, c in enumerate(capture.cameras)}
+        return cls(cameras=cameras, detections=detections, **fields)
+
+    def options(self) -> LabelingOptions:
+        return LabelingOptions(formulation=self.formulation, window=self.window, association=self.association)
+
+
+def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[int, int]) -> None:
+    """Every detection lies on the sensor ([-0.5, size - 0.5] per axis, as ``Camera.in_image``)."""
+    counts = [len(frame) for frame in frames]
+    if not sum(counts):
+        return
+    pixels = np.concatenate([np.asarray(frame, dtype=float).reshape(-1, 2) for frame in frames])
+    upper = np.asarray(image_size, dtype=float) - 0.5
+    outside = np.flatnonzero(((pixels < -0.5) | (pixels > upper)).any(axis=1))
+    if len(outside):
+        first = int(outside[0])
+        f = int(np.searchsorted(np.cumsum(counts), first, side="right"))
+        d = first - (sum(counts[:f]))
+        u, v = pixels[first]
+        raise ValueError(
+            f"detections.{camera}.{f}.{d}: ({u:g}, {v:g}) is outside the {image_size[0]}x{image_size[1]} image"
+        )
+
+
+def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:
+    """Parse and check a capture document.
+
+    Raises:
+        InputError: One line: ``source``, the field path, and what is wrong.
+    """
+    try:
+        return CaptureDocument.model_validate_json(text)
+    except ValidationError as error:
+        raise InputError(f"{source}: {describe_validation_error(error)}") from None
+
+
+def describe_validation_error(error: ValidationError) -> str:
+    """The first problem as ``field.path: message`` (and how many more there are)."""
+    problems = error.errors(include_url=False)
+    first = problems[0]
+    path = ".".join(str(part) for part in first["loc"])
+    message = first["msg"].removeprefix("Value error, ")
+    more = f" (and {len(problems) - 1} more problems)" if len(problems) > 1 else ""
+    return f"{path}: {message}{more}" if path else f"{message}{more}"

@@ -1,0 +1,57 @@
+"""A formulation from what a user writes: a name, or a ``[formulation]`` TOML table.
+
+    [formulation]
+    name = "ilp"
+    time_limit = 10.0
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from formulations.errors import FormulationError
+from formulations.methods.formulation import Formulation
+from formulations.methods.registry import get_formulation
+from service.errors import InputError
+
+
+def formulation_from_table(table: dict[str, Any], where: str) -> Formulation:
+    """The formulation a ``[formulation]`` table names, with its parameters.
+
+    Raises:
+        InputError: No name, unknown name or parameter, or a value out of range.
+    """
+    parameters = dict(table)
+    name = parameters.pop("name", None)
+    if not isinstance(name, str):
+        raise InputError(f"{where}: [formulation] needs name = \"...\" (e.g. \"lp-l1\")")
+    try:
+        return get_formulation(name, **parameters)
+    except (FormulationError, TypeError) as error:
+        raise InputError(f"{where}: {error}") from None
+
+
+def formulation_from_spec(spec: str) -> Formulation:
+    """``spec`` is a formulation name, or the path of a TOML file with a ``[formulation]`` table."""
+    if not spec.endswith(".toml"):
+        return formulation_from_table({"name": spec}, "--formulation")
+    return formulation_from_table(formulation_table(Path(spec)), spec)
+
+
+def formulation_table(path: Path) -> dict[str, Any]:
+    """The ``[formulation]`` table of a TOML preset.
+
+    Raises:
+        InputError: Unreadable file, bad TOML, or no ``[formulation]`` table.
+    """
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{path}: not valid TOML ({error})") from None
+    if not isinstance(data.get("formulation"), dict):
+        raise InputError(f"{path}: no [formulation] table")
+    return data["formulation"]

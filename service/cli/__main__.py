@@ -1,0 +1,5 @@
+"""``python -m service.cli``: the same command line as ``markerflow``."""
+
+from service.cli.app import app
+
+app()

@@ -1,0 +1,99 @@
+"""Scores of a camera-mode labeling against the simulator's truth."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from service.io.recording import LabeledTrajectories
+from service.evaluation.scores import run_onsets
+
+if TYPE_CHECKING:  # scoring per-camera labels needs no cross-camera matching
+    from formulations.cameras.cross_camera.matching import CrossCameraPoints
+
+
+@dataclass(frozen=True)
+class CameraScores:
+    """Scores of a camera-mode labeling against the simulator's truth.
+
+    Attributes:
+        label_accuracy: Over marker-frames seen by two or more cameras (frame 0 excluded):
+            the marker used one detection or more, all of them that marker's.
+        rmse_mm: 3D error of the correctly labeled, triangulated markers (two views or more).
+        filled_rmse_mm: 3D error of the predicted positions filled in where a marker was
+            occluded (seen by fewer than two cameras, or not labeled).
+        marker_frames: Marker-frames counted.
+        swaps: Runs of consecutive frames in which a marker used only detections of one
+            other marker (none of its own), counted once per run and per marker, as in
+            cloud mode (a two-marker exchange counts 2).
+        single_view_rmse_mm: 3D error of the correctly labeled markers located from one
+            view (per-camera only: the point of its ray nearest the prediction); NaN when
+            there are none, as always with joint-3d, whose points have two views or more.
+    """
+
+    label_accuracy: float
+    rmse_mm: float
+    filled_rmse_mm: float
+    marker_frames: int
+    swaps: int
+    single_view_rmse_mm: float = float("nan")
+
+
+def camera_scores(
+    marker_detection: np.ndarray, truth: np.ndarray, result: LabeledTrajectories, views: np.ndarray
+) -> CameraScores:
+    """Score a labeling by the detections each marker used, whatever the association.
+
+    Args:
+        marker_detection: ``(F, C, N)`` detection index each marker produced, -1 unseen.
+        truth: ``(F, N, 3)`` true positions (mm).
+        result: The labeling.
+        views: ``(F, N, C)`` detection each labeled marker used in each camera, -1 none
+            (``joint_3d_views`` for joint-3d; the labeler's own views for per-camera).
+    """
+    seen_twice = (marker_detection >= 0).sum(axis=1) >= 2  # (F, N)
+    seen_twice[0] = False
+    expected = marker_detection.transpose(0, 2, 1)  # (F, N, C)
+    used = views >= 0
+    correct = ((~used) | (views == expected)).all(axis=2) & used.any(axis=2)
+    counted = correct & seen_twice
+    error = np.linalg.norm(result.positions - truth, axis=2)
+    n_views = used.sum(axis=2)
+    filled_error = np.linalg.norm(result.filled - truth, axis=2)
+    filled_error = filled_error[result.occluded & np.isfinite(filled_error)]
+    return CameraScores(
+        label_accuracy=float(counted.sum() / max(seen_twice.sum(), 1)),
+        rmse_mm=_rms(error[counted & (n_views >= 2)]), filled_rmse_mm=_rms(filled_error),
+        marker_frames=int(seen_twice.sum()), swaps=_swaps(expected, views), single_view_rmse_mm=_rms(error[counted & (n_views == 1)]),
+    )
+
+
+def _swaps(expected: np.ndarray, views: np.ndarray) -> int:
+    """Swap runs (see ``CameraScores.swaps``) from ``(F, N, C)`` true and used detections.
+
+    ``holds[f, n, m]``: every view marker n used in frame f is marker m's detection there.
+    """
+    used = views >= 0
+    holds = ((views[:, :, None, :] == expected[:, None, :, :]) | ~used[:, :, None, :]).all(axis=3)
+    holds &= used.any(axis=2)[:, :, None]
+    any_own = ((views == expected) & used).any(axis=2)  # a merged blob can be its own and another's
+    other = holds.any(axis=2) & ~any_own
+    other[0] = False  # frame 0 is the user's
+    return run_onsets(other)
+
+
+def joint_3d_views(result: LabeledTrajectories, matched: Sequence[CrossCameraPoints]) -> np.ndarray:
+    """``(F, N, C)`` detections behind the cross-camera point each marker took, -1 none."""
+    n_cameras = matched[0].views.shape[1]
+    views = np.full(result.point_index.shape + (n_cameras,), -1)
+    for f, points in enumerate(matched):
+        took = np.flatnonzero(result.point_index[f] >= 0)
+        views[f, took] = points.views[result.point_index[f, took]]
+    return views
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if len(values) else float("nan")

@@ -1,0 +1,30 @@
+"""A simulated capture: labeler input together with the truth it was made from."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from service.io.recording import Recording, UnlabeledCloud
+from service.evaluation.scenario import Scenario
+
+
+@dataclass
+class SimulatedCapture:
+    """What the simulator hands the labeler, plus the answers the scorer needs.
+
+    Attributes:
+        cloud: Unlabeled, shuffled points per frame: the labeler's input.
+        point_marker: Per frame, one entry per point of ``cloud.points[f]``: the index of
+            the true marker it measures, or -1 for a ghost.
+        truth: The clean (noise-free) trajectories of the simulated frames; NaN where the
+            source recording had no sample.
+        first_frame: Marker names and their measured positions in the first frame, one
+            frame long: the labeled frame the user supplies.
+        scenario: The settings that produced this capture.
+    """
+
+    cloud: UnlabeledCloud
+    point_marker: list[np.ndarray]
+    truth: Recording
+    first_frame: Recording
+    scenario: Scenario

@@ -1,0 +1,56 @@
+"""Read and write marker files, choosing the format by file suffix."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from service.errors import InputError
+from service.io.formats.c3d import read_c3d, write_c3d
+from service.io.formats.csv import write_csv
+from service.io.formats.trc import read_trc
+from service.io.recording import LabeledTrajectories, Recording
+
+_READERS = {".c3d": read_c3d, ".trc": read_trc}
+_WRITERS = {".c3d": write_c3d, ".csv": write_csv}
+
+
+def read_labeled(path: str | Path) -> Recording:
+    """Read labeled trajectories from a .c3d or .trc file (millimetres, NaN gaps).
+
+    Raises:
+        InputError: unsupported suffix, or a missing or malformed file.
+    """
+    return _by_suffix(_READERS, path, "read")(path)
+
+
+def write_labeled(path: str | Path, traj: LabeledTrajectories) -> None:
+    """Write markerflow's labels to a .c3d or .csv file.
+
+    Raises:
+        InputError: unsupported suffix, or a path that cannot be written.
+    """
+    _by_suffix(_WRITERS, path, "write")(path, traj)
+
+
+def check_output(path: str | Path) -> None:
+    """Fail early, before long work, if ``path`` cannot take labeled output.
+
+    Raises:
+        InputError: unsupported suffix, or a folder that does not exist.
+    """
+    _by_suffix(_WRITERS, path, "write")
+    folder = Path(path).parent
+    if not folder.is_dir():
+        raise InputError(f"{path}: cannot write there, folder {folder} does not exist")
+
+
+def _by_suffix(
+    table: dict[str, Callable[..., Any]], path: str | Path, verb: str
+) -> Callable[..., Any]:
+    suffix = Path(path).suffix.lower()
+    if suffix not in table:
+        what = suffix or "a file without suffix"
+        raise InputError(f"{path}: cannot {verb} {what}; use {', '.join(table)}")
+    return table[suffix]

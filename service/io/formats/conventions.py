@@ -1,0 +1,49 @@
+"""markerflow's sample conventions at the file boundary: millimetres, NaN for gaps."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from service.errors import InputError
+from service.io.recording import LabeledTrajectories
+
+MM_PER_UNIT = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
+
+
+def require_file(path: str | Path) -> Path:
+    """Return ``path`` as a Path, or raise InputError if it is not an existing file."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file")
+    if not path.is_file():
+        raise InputError(f"{path}: not a regular file")
+    return path
+
+
+def to_millimetres(values: np.ndarray, unit: str, path: Path) -> np.ndarray:
+    """Scale lengths given in ``unit`` (mm, cm or m; case and spaces ignored) to mm.
+
+    Raises:
+        InputError: the unit is not one of the above.
+    """
+    scale = MM_PER_UNIT.get(unit.strip().lower())
+    if scale is None:
+        raise InputError(f"{path}: unsupported length unit {unit!r} (expected mm, cm or m)")
+    return np.asarray(values, dtype=float) * scale
+
+
+def zero_gaps_to_nan(positions: np.ndarray) -> np.ndarray:
+    """Copy of ``(frames, markers, 3)`` positions with exact (0, 0, 0) samples set to NaN.
+
+    Some exporters (e.g. QTM, OpenSim examples) write a missing sample as the origin.
+    """
+    out = np.array(positions, dtype=float)
+    out[(out == 0).all(axis=2)] = np.nan
+    return out
+
+
+def hidden_samples(traj: LabeledTrajectories) -> np.ndarray:
+    """``(frames, markers)`` bool: samples to write as missing (occluded, or NaN position)."""
+    return np.asarray(traj.occluded, dtype=bool) | np.isnan(traj.positions).any(axis=2)

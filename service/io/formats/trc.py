@@ -1,0 +1,90 @@
+"""TRC files: the tab-separated marker tables of OpenSim and Pose2Sim.
+
+Parsed by hand: the one TRC reader on PyPI (trc-data-reader) is a small package we have
+not vetted and would rather not depend on, and the format is a plain tab-separated table.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from service.errors import InputError
+from service.io.formats.conventions import require_file, to_millimetres, zero_gaps_to_nan
+from service.io.recording import Recording
+
+_KEYS = ("DataRate", "NumFrames", "NumMarkers", "Units")
+_FIRST_DATA_LINE = 6  # after the magic line, the key/value lines, names, X1 Y1 Z1
+
+
+def read_trc(path: str | Path) -> Recording:
+    """Read a TRC file into millimetres; blank cells and (0, 0, 0) samples become NaN.
+
+    Raises:
+        InputError: missing or malformed file (header, names, a non-numeric cell, a
+            row count other than NumFrames), zero frames, or an unknown unit.
+    """
+    path = require_file(path)
+    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    if not lines or not lines[0].startswith("PathFileType"):
+        raise InputError(f"{path}: not a TRC file (no PathFileType header)")
+    if len(lines) < _FIRST_DATA_LINE - 1:
+        raise InputError(f"{path}: TRC file ends inside its header")
+    header = _header(lines, path)
+    n_markers = int(_number(header, "NumMarkers", path))
+    names = _names(lines[3], n_markers, path)
+    rows = [
+        _row(line, n_markers, f"{path}:{number}")
+        for number, line in enumerate(lines[_FIRST_DATA_LINE - 1 :], start=_FIRST_DATA_LINE)
+        if line.strip()
+    ]
+    declared = int(_number(header, "NumFrames", path))
+    if len(rows) != declared:
+        raise InputError(f"{path}: header says NumFrames {declared} but has {len(rows)} rows")
+    if not rows:
+        raise InputError(f"{path}: TRC file has zero frames")
+    positions = np.array(rows).reshape(len(rows), n_markers, 3)
+    positions = to_millimetres(positions, header["Units"], path)
+    return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path))
+
+
+def _header(lines: list[str], path: Path) -> dict[str, str]:
+    """Line 3 holds the values of the keys named on line 2."""
+    keys = [k.strip() for k in lines[1].split("\t")]
+    values = [v.strip() for v in lines[2].split("\t")]
+    header = dict(zip(keys, values, strict=False))
+    missing = [k for k in _KEYS if not header.get(k)]
+    if missing:
+        raise InputError(f"{path}: TRC header lacks {', '.join(missing)}")
+    if "X1" not in lines[4].split("\t"):
+        raise InputError(f"{path}: line 5 should hold the X1 Y1 Z1 column names")
+    return header
+
+
+def _number(header: dict[str, str], key: str, path: Path) -> float:
+    try:
+        value = float(header[key])
+    except ValueError:
+        raise InputError(f"{path}: TRC header {key} is {header[key]!r}, not a number") from None
+    if not value > 0 and key != "NumFrames":
+        raise InputError(f"{path}: TRC header {key} must be positive, got {header[key]}")
+    return value
+
+
+def _names(line: str, n_markers: int, path: Path) -> list[str]:
+    """One name per marker after Frame# and Time, then two blank cells (its Y and Z)."""
+    names = [name.strip() for name in line.split("\t")[2::3]][:n_markers]
+    if len(names) < n_markers or not all(names):
+        raise InputError(f"{path}: line 4 should name {n_markers} markers (NumMarkers)")
+    return names
+
+
+def _row(line: str, n_markers: int, where: str) -> list[float]:
+    """The X Y Z cells of one frame; exporters may drop trailing blank cells."""
+    cells = line.split("\t")[2 : 2 + 3 * n_markers]
+    cells += [""] * (3 * n_markers - len(cells))
+    try:
+        return [float(cell) if cell.strip() else np.nan for cell in cells]
+    except ValueError as exc:
+        raise InputError(f"{where}: {exc}") from None

@@ -1,0 +1,67 @@
+"""``joint-3d`` association: label triangulated cross-camera points with the window LP.
+
+Each frame's detections are matched across cameras (``formulations.cameras.cross_camera.matching``); the
+resulting 3D points become an unlabeled cloud whose resources are the (camera, detection)
+pairs each point uses, so two candidates sharing a detection conflict in the window LP.
+Frames are matched in blocks (``match_frames``): one block shares its numpy and OpenCV calls,
+and a block no longer than a window adds no latency the window LP does not already have.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from formulations.cameras.camera import Camera
+from formulations.cameras.cross_camera.matching import CrossCameraPoints, match_frames
+from service.io.recording import UnlabeledCloud
+
+
+class LazyFrames(Sequence):
+    """A per-frame sequence whose items are computed when first asked for, then kept."""
+
+    def __init__(self, n_frames: int, compute: Callable[[int], Any]) -> None:
+        self._n, self._compute, self._done = n_frames, compute, {}
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, f):  # type: ignore[override]
+        if isinstance(f, slice):
+            return [self[k] for k in range(*f.indices(self._n))]
+        if not -self._n <= f < self._n:
+            raise IndexError(f)
+        f %= self._n
+        if f not in self._done:
+            self._done[f] = self._compute(f)
+        return self._done[f]
+
+
+def cross_camera_cloud(
+    cameras: list[Camera], detections: list[list[np.ndarray]], rate: float,
+    epipolar_px: float = 3.0, max_reprojection_px: float = 2.0, block_frames: int = 20,
+) -> tuple[UnlabeledCloud, Sequence[CrossCameraPoints]]:
+    """The cross-camera points of every frame as a cloud with detection resources.
+
+    Frames are matched on demand, ``block_frames`` at a time: a long job labels (and reports)
+    its first window without matching every frame first, and a resumed job matches only the
+    blocks it still needs.
+    """
+    blocks: dict[int, list[CrossCameraPoints]] = {}
+
+    def match(f: int) -> CrossCameraPoints:
+        start = f - f % block_frames
+        if start not in blocks:
+            blocks[start] = match_frames(cameras, detections[start : start + block_frames], epipolar_px, max_reprojection_px)
+        return blocks[start][f - start]
+
+    def resources(f: int):
+        offsets = np.cumsum([0] + [len(d) for d in detections[f]])
+        return matched[f].resources(offsets[:-1], int(offsets[-1]))
+
+    n = len(detections)
+    matched = LazyFrames(n, match)
+    points = LazyFrames(n, lambda f: matched[f].points)
+    return UnlabeledCloud(points=points, rate=rate, resources=LazyFrames(n, resources)), matched
