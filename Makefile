@@ -15,6 +15,8 @@ demo: $(BIN)/.installed
 	$(BIN)/markerflow demo
 
 test: $(BIN)/.installed
+	$(BIN)/ruff check .
+	$(BIN)/mypy
 	$(BIN)/python -m pytest -q
 
 bench: $(BIN)/.installed

@@ -25,11 +25,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from service.io.calibration import load_calibration  # noqa: E402
-from service.labeling.cloud import CloudLabeler  # noqa: E402
-from service.io.formats import read_labeled  # noqa: E402
-from service.labeling.joint_3d import cross_camera_cloud  # noqa: E402
-from service.io.recording import Recording  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.simulate_cameras import (  # noqa: E402
     CameraCapture,
@@ -37,6 +32,11 @@ from service.evaluation.simulate_cameras import (  # noqa: E402
     place_in_volume,
     simulate_cameras,
 )
+from service.io.calibration import load_calibration  # noqa: E402
+from service.io.formats import read_labeled  # noqa: E402
+from service.io.recording import Recording  # noqa: E402
+from service.labeling.cloud import CloudLabeler  # noqa: E402
+from service.labeling.joint_3d import cross_camera_cloud  # noqa: E402
 
 SCENARIO = ROOT / "configs" / "scenarios" / "cmu-85-02-pose2sim-cameras.toml"
 RECORDING = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"

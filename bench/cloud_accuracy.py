@@ -19,11 +19,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from service.labeling.cloud import CloudLabeler  # noqa: E402
-from service.io.formats import read_labeled  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.scores import label_scores  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
+from service.io.formats import read_labeled  # noqa: E402
+from service.labeling.cloud import CloudLabeler  # noqa: E402
 
 RECORDING = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 

@@ -27,8 +27,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from formulations.methods.dp_extended import DpExtended  # noqa: E402
 from formulations.errors import FormulationError  # noqa: E402
+from formulations.methods.dp_extended import DpExtended  # noqa: E402
 from formulations.methods.ilp import Ilp  # noqa: E402
 from formulations.methods.lp_l1 import LpL1  # noqa: E402
 from formulations.window.build import build_window  # noqa: E402
@@ -37,9 +37,9 @@ from service.evaluation.jiang_instance import jiang_instance  # noqa: E402
 N_OBJECTS, N_FRAMES = 3, 20
 
 
-def timed(fn):
+def timed(fn, *args):
     start = time.perf_counter()
-    value = fn()
+    value = fn(*args)
     return value, time.perf_counter() - start
 
 
@@ -71,12 +71,12 @@ def main() -> None:
         for seed in range(args.seeds):
             instance = jiang_instance(N_OBJECTS, N_FRAMES, n_observations=k, seed=seed)
             problem = build_window(instance.candidates, instance.weights)[0]
-            lp_solution, lp_seconds = timed(lambda: lp.solve(problem))
-            ilp_solution, ilp_seconds = timed(lambda: ilp.solve(problem))
+            lp_solution, lp_seconds = timed(lp.solve, problem)
+            ilp_solution, ilp_seconds = timed(ilp.solve, problem)
             dp_cost, dp_seconds = np.nan, np.nan
             if not dp_stopped:
                 try:
-                    dp_solution, dp_seconds = timed(lambda: dp.solve(problem))
+                    dp_solution, dp_seconds = timed(dp.solve, problem)
                     dp_cost = dp_solution.cost
                     rate = dp_seconds / transition_entries(k)
                     if dp_seconds > args.budget:

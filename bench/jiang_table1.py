@@ -26,9 +26,9 @@ from formulations.window.build import build_window  # noqa: E402
 from service.evaluation.jiang_instance import jiang_instance  # noqa: E402
 
 
-def timed(fn):
+def timed(fn, *args):
     start = time.perf_counter()
-    value = fn()
+    value = fn(*args)
     return value, time.perf_counter() - start
 
 
@@ -62,7 +62,7 @@ def main() -> None:
     for seed in range(args.seeds):
         instance = jiang_instance(seed=seed)
         for _ in range(args.repeats):
-            (problem, _), seconds = timed(lambda: build_window(instance.candidates, instance.weights))
+            (problem, _), seconds = timed(build_window, instance.candidates, instance.weights)
             networks.append(seconds)
         per_seed = {}
         for name, method in methods.items():
@@ -76,7 +76,8 @@ def main() -> None:
           f"{problem.n_nodes} nodes, {problem.conflict_groups.shape[0]} conflict groups")
     print(f"network (candidates -> WindowProblem): median {1000 * np.median(networks):.1f} ms")
     print(f"largest disagreement of LP optima between methods: {max(bounds):.2e}")
-    header = f"{'method':34s} {'runs':>4s} {'build ms':>9s} {'solve ms':>9s} {'round ms':>9s} {'total ms':>9s} {'columns':>8s} {'integral':>8s}"
+    header = (f"{'method':34s} {'runs':>4s} {'build ms':>9s} {'solve ms':>9s} {'round ms':>9s} {'total ms':>9s} "
+              f"{'columns':>8s} {'integral':>8s}")
     print(header)
     for name, results in rows.items():
         med = {k: np.median([r[k] for r in results]) for k in ("build", "solve", "round", "total", "columns")}
@@ -89,7 +90,8 @@ def main() -> None:
     whole = np.median([r["total"] for r in rows["lp-l1 whole window (pricing)"]])
     cvx_total = np.median([r["total"] for r in rows["cvxpy + HiGHS, same LP"]])
     print(f"build: direct sparse {1000 * direct:.1f} ms vs cvxpy {1000 * via_cvxpy:.0f} ms -> {via_cvxpy / direct:.0f}x")
-    print(f"build+solve+round: lp-l1 whole window {1000 * whole:.0f} ms vs cvxpy {1000 * cvx_total:.0f} ms -> {cvx_total / whole:.0f}x")
+    print(f"build+solve+round: lp-l1 whole window {1000 * whole:.0f} ms vs cvxpy {1000 * cvx_total:.0f} ms "
+          f"-> {cvx_total / whole:.0f}x")
 
 
 if __name__ == "__main__":

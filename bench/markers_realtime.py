@@ -19,10 +19,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from service.labeling.cloud import CloudLabeler  # noqa: E402
-from service.io.formats import read_labeled  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
+from service.io.formats import read_labeled  # noqa: E402
+from service.labeling.cloud import CloudLabeler  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"
 

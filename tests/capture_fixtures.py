@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from conftest import DATA
+
 from formulations.cameras.camera import Camera
-from service.io.calibration import load_pose2sim_toml
 from service.capture.capture import Capture
+from service.capture.from_recording import capture_from_recording
+from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
+from service.io.calibration import load_pose2sim_toml
 from service.io.formats import read_labeled
 from service.io.recording import Recording
-from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
-from service.capture.from_recording import capture_from_recording
 
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 POSE2SIM = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"

@@ -19,19 +19,20 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
+from windows import random_window  # noqa: E402
+
+from formulations.methods.registry import get_formulation  # noqa: E402
 from formulations.relaxation.components import coupled_components, restrict  # noqa: E402
+from formulations.relaxation.viterbi import shortest_paths  # noqa: E402
 from formulations.window.build import build_window  # noqa: E402
 from formulations.window.objective import conflicts  # noqa: E402
-from formulations.methods.registry import get_formulation  # noqa: E402
-from formulations.relaxation.viterbi import shortest_paths  # noqa: E402
-from service.labeling.cloud import CloudLabeler  # noqa: E402
-from service.io.formats import read_labeled  # noqa: E402
 from service.evaluation.integrality import RECORD  # noqa: E402
 from service.evaluation.jiang_instance import jiang_instance  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
+from service.io.formats import read_labeled  # noqa: E402
 from service.io.window_files import save_window  # noqa: E402
-from windows import random_window  # noqa: E402
+from service.labeling.cloud import CloudLabeler  # noqa: E402
 
 FOLDER = ROOT / "tests" / "fixtures" / "integrality"
 DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"

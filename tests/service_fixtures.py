@@ -18,9 +18,9 @@ from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import CaptureDocument
 from service.evaluation.scenario import Scenario
 from service.evaluation.scene import generate_scene
+from service.evaluation.simulate_cloud import simulate_cloud
 from service.server.app import create_app
 from service.server.settings import Settings
-from service.evaluation.simulate_cloud import simulate_cloud
 
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)

@@ -16,6 +16,7 @@ from formulations.cameras.triangulation import (
     triangulate,
     triangulate_many,
 )
+from service.errors import InputError
 from service.io.calibration import (
     load_calibration,
     load_caliscope_toml,
@@ -23,7 +24,6 @@ from service.io.calibration import (
     load_pose2sim_toml,
     save_markerflow_json,
 )
-from service.errors import InputError
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 POSE2SIM = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"
@@ -80,7 +80,7 @@ def test_in_image_and_scaled():
     points = np.array([[0.3, -0.1, 0.5], [0.0, 0.2, 0.1]])
     np.testing.assert_allclose(mm.project(points * 1000.0), cam.project(points), atol=1e-9)
     np.testing.assert_allclose(mm.centre, cam.centre * 1000.0)
-    assert cam.from_rvec(cam.K, cam.distortion, cam.rvec, cam.t, cam.image_size, cam.name).R == pytest.approx(cam.R)
+    assert pytest.approx(cam.R) == cam.from_rvec(cam.K, cam.distortion, cam.rvec, cam.t, cam.image_size, cam.name).R
 
 
 @pytest.mark.parametrize(

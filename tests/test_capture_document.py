@@ -7,8 +7,8 @@ import json
 
 import numpy as np
 import pytest
-
 from capture_fixtures import camera_capture, points_capture
+
 from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument, read_capture_document
 from service.errors import InputError
@@ -75,7 +75,8 @@ def _singular_k(d: dict) -> None:
         (lambda d: d["markers"].append(d["markers"][0]), r"^bad.json: markers: marker name .* appears twice$"),
         (lambda d: d.update(rate=-1), r"rate: Input should be greater than 0"),
         (lambda d: d.update(colour="red"), r"colour: Extra inputs are not permitted"),
-        (lambda d: d["first_frame"][0].__setitem__(0, -1e300), r"first_frame\.0\.0: Input should be greater than or equal to -1000000000"),
+        (lambda d: d["first_frame"][0].__setitem__(0, -1e300),
+         r"first_frame\.0\.0: Input should be greater than or equal to -1000000000"),
     ],
 )
 def test_bad_documents_name_the_field(camera_document: dict, mutate, message: str):

@@ -6,12 +6,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-
 from capture_fixtures import camera_capture, points_capture
+
 from service.capture.capture import LabelingOptions
+from service.errors import InputError
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.cloud import first_marker_state
-from service.errors import InputError
 from service.labeling.outcome import WindowOutcome
 
 

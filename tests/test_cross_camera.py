@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
+from formulations.cameras.cross_camera.block import BlockDetections
 from formulations.cameras.cross_camera.matching import (
     CrossCameraPoints,
     epipolar_distances,
     match_across_cameras,
     match_frames,
 )
-from formulations.cameras.cross_camera.block import BlockDetections
 from formulations.cameras.triangulation import reprojection_errors, triangulate_many
 from service.io.calibration import load_caliscope_toml
 
@@ -220,7 +220,7 @@ def _real_frames(cameras):
     for sync in np.unique(data["sync_index"]):
         frame = data[data["sync_index"] == sync]
         detections, keypoints = [], []
-        for cam_id, c in sorted(index.items(), key=lambda kv: kv[1]):
+        for cam_id, _ in sorted(index.items(), key=lambda kv: kv[1]):
             rows = frame[frame["cam_id"] == cam_id]
             detections.append(np.column_stack([rows["img_loc_x"], rows["img_loc_y"]]))
             keypoints.append(rows["keypoint_id"].astype(int))

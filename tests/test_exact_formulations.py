@@ -2,16 +2,16 @@
 
 import numpy as np
 import pytest
+from windows import assert_feasible, brute_force, random_window
 
+from formulations.errors import FormulationError
 from formulations.methods.dp_extended import DpExtended
 from formulations.methods.dp_sequential import DpSequential
-from formulations.errors import FormulationError
 from formulations.methods.ilp import Ilp
 from formulations.methods.lp_l1 import LpL1
 from formulations.window.build import build_window
 from formulations.window.objective import path_cost
 from service.evaluation.jiang_instance import jiang_instance
-from windows import assert_feasible, brute_force, random_window
 
 # (seed, objects, frames): 2-3 objects drawing 2 of 3 shared points per frame, so most
 # windows are coupled by conflicts (and by the layout term when mu > 0).

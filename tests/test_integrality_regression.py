@@ -6,10 +6,10 @@ Windows and their recorded figures are fixture files written by
 
 import numpy as np
 import pytest
+from integrality_corpus import FOLDER
 
 from formulations.methods.lp_l1 import LpL1
 from service.evaluation.integrality import load_corpus, solve_corpus
-from integrality_corpus import FOLDER
 
 RECORDED = load_corpus(FOLDER)
 TOLERANCE = 1e-6

@@ -21,7 +21,10 @@ def test_joint_3d_labels_cmu_85_02_through_the_pose2sim_rig():
     names = capture.first_frame.names
     cloud, matched = cross_camera_cloud(cameras, capture.detections, capture.truth.rate)
     # Points share detections: the cloud's resources are what the conflict rows use.
-    assert all(r.shape == (len(p), sum(len(d) for d in det)) for r, p, det in zip(cloud.resources, cloud.points, capture.detections))
+    assert all(
+        r.shape == (len(p), sum(len(d) for d in det))
+        for r, p, det in zip(cloud.resources, cloud.points, capture.detections)
+    )
     result, windows = CloudLabeler().label(cloud, capture.first_frame.names, capture.first_frame.positions[0])
     scores = camera_scores(capture.marker_detection, capture.truth.positions, result, joint_3d_views(result, matched))
     assert scores.marker_frames > 0.9 * (FRAMES - 1) * len(names)

@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from formulations.markers.guide import assign_nearest
-from formulations.markers.state import MarkerState
 from formulations.markers.rigid import rigid_transform
+from formulations.markers.state import MarkerState
 
 
 def test_rigid_transform_recovers_rotation_and_translation():

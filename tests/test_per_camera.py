@@ -11,25 +11,25 @@ from capture_fixtures import camera_capture, capture_of, simulated_cmu
 from windows import assert_feasible, brute_force
 
 from formulations.cameras.camera import Camera
-from formulations.methods.ilp import Ilp
-from formulations.methods.lp_l1 import LpL1
-from formulations.markers.state import MarkerState
-from formulations.window.build import build_window
+from formulations.cameras.per_camera.advance import advance_state
 from formulations.cameras.per_camera.candidates import per_camera_candidates
 from formulations.cameras.per_camera.gating import PerCameraGating
 from formulations.cameras.per_camera.guide import per_camera_guide
-from formulations.cameras.per_camera.advance import advance_state
 from formulations.cameras.per_camera.locate import FrameViews, LocatedMarkers, locate_markers
 from formulations.cameras.per_camera.reacquire import locate_with_reacquisition
 from formulations.cameras.rig import Rig
 from formulations.cameras.triangulation import ray_compromise, reprojection_errors, triangulate_many
-from service.evaluation.camera_scores import camera_scores
+from formulations.markers.state import MarkerState
+from formulations.methods.ilp import Ilp
+from formulations.methods.lp_l1 import LpL1
+from formulations.window.build import build_window
 from service.capture.capture import LabelingOptions
+from service.evaluation.camera_scores import camera_scores
+from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.cloud import MARKER_COSTS
-from service.labeling.per_camera import PerCameraLabeler
-from service.io.recording import LabeledTrajectories
 from service.labeling.outcome import WindowOutcome
+from service.labeling.per_camera import PerCameraLabeler
 
 K = [[1000.0, 0, 960], [0, 1000.0, 540], [0, 0, 1]]
 
@@ -68,7 +68,10 @@ def test_per_camera_window_lp_is_the_brute_force_optimum_for_crossing_markers():
         assert_feasible(problem, solution.path)
         assert solution.cost == pytest.approx(optimum, abs=1e-6)
     views = window.views(node_candidate, best)  # (M, N, C)
-    truth = [[np.argmin(np.linalg.norm(frame[0] - camera[0].project(p[f + 2][None]), axis=1)) for p in (a, b)] for f, frame in enumerate(pixels)]
+    truth = [
+        [np.argmin(np.linalg.norm(frame[0] - camera[0].project(p[f + 2][None]), axis=1)) for p in (a, b)]
+        for f, frame in enumerate(pixels)
+    ]
     assert views.shape == (3, 2, 1)
     np.testing.assert_array_equal(views[:, :, 0], truth)  # through the crossing, each keeps its own
 
@@ -214,7 +217,8 @@ def test_rig_geometry_matches_the_generic_triangulation_and_ray():
     seen = np.isfinite(pixels[:, 0]).all(axis=1)
     prediction = points[: seen.sum()] + 40.0
     np.testing.assert_allclose(
-        rig.on_ray(0, rig.undistort(pixels)[seen, 0], prediction), ray_compromise(cameras[0], pixels[seen, 0], prediction), atol=1e-9
+        rig.on_ray(0, rig.undistort(pixels)[seen, 0], prediction),
+        ray_compromise(cameras[0], pixels[seen, 0], prediction), atol=1e-9
     )
 
 

@@ -7,8 +7,8 @@ import pytest
 from matplotlib.image import imread
 
 from service.evaluation.plot import plot_trajectories
-from service.io.recording import LabeledTrajectories, Recording
 from service.evaluation.scene import generate_scene
+from service.io.recording import LabeledTrajectories, Recording
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -5,14 +5,14 @@ import dataclasses
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from windows import brute_force, random_window
 
 from formulations.errors import FormulationError
 from formulations.methods.lp_l1 import LpL1
 from formulations.methods.nn_hungarian import NnHungarian
-from formulations.window.objective import conflicts, path_cost
 from formulations.methods.qp_l2 import QpL2, _layout_operator
+from formulations.window.objective import conflicts, path_cost
 from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE, WindowProblem
-from windows import brute_force, random_window
 
 
 def assert_feasible(problem, path):

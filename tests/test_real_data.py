@@ -3,9 +3,10 @@
 import dataclasses
 
 from conftest import DATA
+
 from service.evaluation.cloud import evaluate
-from service.io.formats import read_labeled
 from service.evaluation.scenario import Scenario
+from service.io.formats import read_labeled
 
 CMU_85_02 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 

@@ -7,8 +7,8 @@ import pytest
 from formulations.errors import FormulationError
 from formulations.methods.lp_l1 import LpL1
 from formulations.methods.registry import describe, get_formulation, names
-from service.errors import InputError
 from service.capture.formulation_spec import formulation_from_spec
+from service.errors import InputError
 from service.evaluation.scenario import Scenario
 
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from service.errors import InputError
-from service.io.recording import Recording
 from service.evaluation.scenario import Scenario
 from service.evaluation.simulate_cloud import simulate_cloud
+from service.io.recording import Recording
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios"
@@ -90,7 +90,8 @@ def test_bad_value_names_the_key(bad: dict) -> None:
 def test_camera_mode_needs_a_calibration_and_valid_camera_keys() -> None:
     with pytest.raises(InputError, match="'calibration'"):
         Scenario.from_dict({"mode": "cameras"})
-    assert Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-camera"}).association == "per-camera"
+    per_camera = Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-camera"})
+    assert per_camera.association == "per-camera"
     with pytest.raises(InputError, match="'association'"):
         Scenario.from_dict({"mode": "cameras", "calibration": "rig.toml", "association": "per-marker"})
     with pytest.raises(InputError, match="'occlusion_rate'"):

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from service.io.recording import LabeledTrajectories, Recording, UnlabeledCloud
 from service.evaluation.scenario import Scenario
 from service.evaluation.scores import label_scores
 from service.evaluation.simulated import SimulatedCapture
+from service.io.recording import LabeledTrajectories, Recording, UnlabeledCloud
 
 # Three markers, six frames; -1 is a ghost. Marker 2 is deleted in frame 5.
 POINT_MARKER = [

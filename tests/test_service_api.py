@@ -9,16 +9,16 @@ import time
 import ezc3d
 import numpy as np
 import pytest
-
 from capture_fixtures import camera_capture
+from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
+
 from service.capture.capture import Capture, LabelingOptions
-from service.labeling.capture_labeling import CaptureLabeling
-from service.io.formats import read_labeled, write_labeled
-from service.io.recording import Recording
 from service.capture.from_recording import capture_from_recording
 from service.evaluation.scene import generate_scene
+from service.io.formats import read_labeled, write_labeled
+from service.io.recording import Recording
+from service.labeling.capture_labeling import CaptureLabeling
 from service.server.settings import Settings
-from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 
 OPTIONS = LabelingOptions(window=10)
 
@@ -194,7 +194,9 @@ def test_formulations_health_and_metrics(client, capture):
     metrics = client.get("/metrics").text
     done = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith('markerflow_jobs{state="done"}')))
     solved = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_windows_solved_total")))
-    count = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_window_solve_seconds_count")))
+    count = float(next(
+        line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_window_solve_seconds_count")
+    ))
     assert done == health["jobs"]["done"] and solved == count >= job["windows_total"]
 
 

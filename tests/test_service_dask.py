@@ -8,10 +8,10 @@ import sqlite3
 import numpy as np
 import pytest
 from distributed import LocalCluster
+from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 
 from service.capture.capture import LabelingOptions
 from service.server.settings import Settings
-from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 
 OPTIONS = LabelingOptions(formulation="ilp", window=10)
 

@@ -6,9 +6,9 @@ import pytest
 import schemathesis
 from hypothesis import HealthCheck, Phase, given, settings
 from schemathesis import GenerationMode
+from service_fixtures import serving
 
 from service.server.settings import Limits, Settings
-from service_fixtures import serving
 
 EXAMPLES = 30  # per operation, valid and invalid requests mixed
 

@@ -10,10 +10,10 @@ import time
 
 import httpx
 import numpy as np
+from service_fixtures import ServerProcess, document_json, generated_capture, nan_array, wait_for
 
 from service.capture.capture import LabelingOptions
 from service.labeling.capture_labeling import CaptureLabeling
-from service_fixtures import ServerProcess, document_json, generated_capture, nan_array, wait_for
 
 # The ILP without its LP shortcut: ~40 ms a window, so the kill lands mid-job.
 OPTIONS = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=4)

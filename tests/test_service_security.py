@@ -7,13 +7,13 @@ import subprocess
 import sys
 
 import pytest
-
 from capture_fixtures import camera_capture
+from service_fixtures import REPO, document_json, serving, wait_for
+
 from service.capture.capture import Capture
 from service.errors import InputError
 from service.server.app import create_app
 from service.server.settings import Limits, Settings
-from service_fixtures import REPO, document_json, serving, wait_for
 
 ALICE, BOB = "alice-secret-0123456789", "bob-secret-0123456789"
 JSON = {"content-type": "application/json"}
@@ -130,7 +130,8 @@ def test_bad_input_is_422_naming_the_field(limited, camera_document):
     assert _problem(limited, '{"rate": 100,').startswith("Invalid JSON")
     assert _problem(limited, {**small_document(), "rate": "fast"}).startswith("rate: Input should be a valid number")
     assert _problem(limited, {**small_document(), "window": 1}).startswith("window: Input should be greater than or equal to 2")
-    assert _problem(limited, {**small_document(), "formulation": "simplex"}).startswith("formulation: unknown formulation 'simplex'")
+    unknown = _problem(limited, {**small_document(), "formulation": "simplex"})
+    assert unknown.startswith("formulation: unknown formulation 'simplex'")
     assert _problem(limited, {**small_document(), "formulation": {"name": "ilp", "time_limt": 3}}).startswith(
         "formulation: formulation 'ilp' has no parameter 'time_limt'")
     assert _problem(limited, {**small_document(), "formulation": {"name": "ilp", "decompose": "no"}}) == (

@@ -5,10 +5,10 @@ from __future__ import annotations
 import re
 
 import pytest
+from service_fixtures import REPO
 
 from service.errors import InputError
 from service.server.settings import Limits, Settings, load_settings
-from service_fixtures import REPO
 
 CONFIG = REPO / "configs" / "service.toml"
 

@@ -7,9 +7,9 @@ import pytest
 from conftest import DATA
 
 from service.errors import InputError
-from service.io.recording import Recording
-from service.io.calibration import load_pose2sim_toml
 from service.evaluation.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.io.calibration import load_pose2sim_toml
+from service.io.recording import Recording
 
 CALIBRATION = DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"
 CMU_85_02 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"

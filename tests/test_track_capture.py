@@ -6,12 +6,12 @@ import json
 
 import ezc3d
 import numpy as np
-
 from capture_fixtures import camera_capture, points_capture
+from test_cli import run_cli
+
 from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument
 from service.labeling.capture_labeling import CaptureLabeling
-from test_cli import run_cli
 
 
 def test_track_labels_a_camera_capture_json_like_the_library(tmp_path):
@@ -33,7 +33,8 @@ def test_track_options_on_the_command_line_override_the_document(tmp_path):
     source.write_text(CaptureDocument.of(points_capture(frames=10), LabelingOptions(window=5)).model_dump_json())
     assert run_cli("track", source, "--out", tmp_path / "a.csv").returncode == 0
     bad = run_cli("track", source, "--out", tmp_path / "b.csv", "--window", "1")
-    assert bad.returncode == 2 and bad.stderr.strip() == "error: window must be at least 2 frames (a template and one new frame), got 1"
+    assert bad.returncode == 2
+    assert bad.stderr.strip() == "error: window must be at least 2 frames (a template and one new frame), got 1"
 
 
 def test_track_reports_a_bad_capture_in_one_line(tmp_path):

@@ -1,12 +1,12 @@
 """The window LP against exhaustive search and against a plain cvxpy model."""
 
 import pytest
+from windows import assert_feasible, brute_force, random_window
 
 from formulations.methods.lp_l1 import LpL1
 from formulations.methods.lp_l1_cvxpy import LpL1Cvxpy
-from formulations.window.objective import conflicts, path_cost
 from formulations.relaxation.viterbi import shortest_paths
-from windows import assert_feasible, brute_force, random_window
+from formulations.window.objective import conflicts, path_cost
 
 TINY = [(seed, n_obj, per_object) for seed in range(12) for n_obj, per_object in ((2, 2), (3, 2), (3, 3))]
 

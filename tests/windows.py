@@ -7,9 +7,9 @@ import itertools
 import numpy as np
 import scipy.sparse as sp
 
+from formulations.window.build import build_window
 from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights
-from formulations.window.build import build_window
 from formulations.window.objective import conflicts, path_arcs
 from formulations.window.problem import WindowProblem
 

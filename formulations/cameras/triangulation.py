@@ -144,7 +144,9 @@ def ray_compromise(camera: Camera, pixel: np.ndarray, prediction: np.ndarray, we
     return (foot + pull * (flat - foot)).reshape(p.shape)
 
 
-def locate(cameras: list[Camera], pixels: list[np.ndarray | None], prediction: np.ndarray, weight: float = np.inf) -> Triangulated:
+def locate(
+    cameras: list[Camera], pixels: list[np.ndarray | None], prediction: np.ndarray, weight: float = np.inf
+) -> Triangulated:
     """Ringer & Lasenby's rule: DLT for 2+ views, ``ray_compromise`` for 1, prediction (filled) for 0."""
     views = [c for c, p in enumerate(pixels) if p is not None]
     if len(views) >= 2:

@@ -29,9 +29,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from formulations.window.candidates import WindowCandidates
 from formulations.markers.guide import Gate, GuideTrack, guide_track
 from formulations.markers.state import MarkerState
+from formulations.window.candidates import WindowCandidates
 
 SHAPE_CAP_MM = 50.0  # c
 SHAPE_WEIGHT_FLOOR = 0.05  # a_0: the weight of one neighbour whose distance varies by ~4 mm

@@ -26,12 +26,12 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
 
-from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.errors import FormulationError
 from formulations.methods.formulation import check_parameters
+from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.window.objective import path_cost
-from formulations.window.solution import WindowSolution
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 
 CHUNK_ELEMENTS = 1 << 20  # transition entries per chunk: 8 MB of float64, cache-sized
 

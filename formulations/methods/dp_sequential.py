@@ -23,10 +23,10 @@ from typing import ClassVar
 import numpy as np
 
 from formulations.methods.formulation import Formulation
-from formulations.window.objective import path_cost
-from formulations.window.solution import WindowSolution
 from formulations.relaxation.viterbi import shortest_paths
+from formulations.window.objective import path_cost
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,8 @@ from abc import ABC, abstractmethod
 from typing import ClassVar
 
 from formulations.errors import FormulationError
-from formulations.window.solution import WindowSolution
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 
 
 class Formulation(ABC):

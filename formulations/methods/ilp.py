@@ -21,15 +21,15 @@ from typing import ClassVar
 
 import numpy as np
 
-from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.methods.formulation import check_parameters
 from formulations.methods.lp_l1 import LpL1
+from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.relaxation.lp_model import inflow_matrix, window_lp
-from formulations.window.objective import path_cost
 from formulations.relaxation.rounding import round_greedy
-from formulations.window.solution import WindowSolution
 from formulations.solvers import create_backend
+from formulations.window.objective import path_cost
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 
 
 @dataclass(frozen=True)

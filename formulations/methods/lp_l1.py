@@ -8,16 +8,16 @@ from typing import ClassVar
 
 import numpy as np
 
-from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.methods.formulation import check_parameters
+from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.relaxation.lp_model import inflow_matrix, window_lp
-from formulations.window.objective import path_arcs, path_cost
 from formulations.relaxation.pricing import solve_with_pricing
 from formulations.relaxation.rounding import round_greedy
-from formulations.window.solution import WindowSolution
-from formulations.solvers import create_backend
 from formulations.relaxation.viterbi import shortest_paths
+from formulations.solvers import create_backend
+from formulations.window.objective import path_arcs, path_cost
 from formulations.window.problem import OCCLUSION, SINK, WindowProblem
+from formulations.window.solution import WindowSolution
 
 PRIMAL_SIMPLEX = 4  # HiGHS simplex_strategy
 

@@ -15,12 +15,12 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from formulations.methods.formulation import Formulation
-from formulations.window.objective import path_cost
 from formulations.errors import FormulationError
+from formulations.methods.formulation import Formulation
 from formulations.relaxation.rounding import round_greedy
-from formulations.window.solution import WindowSolution
+from formulations.window.objective import path_cost
 from formulations.window.problem import SOURCE, WindowProblem
+from formulations.window.solution import WindowSolution
 
 
 @dataclass(frozen=True)

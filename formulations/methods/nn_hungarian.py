@@ -27,8 +27,8 @@ from scipy.optimize import linear_sum_assignment
 
 from formulations.methods.formulation import Formulation
 from formulations.window.objective import path_cost
-from formulations.window.solution import WindowSolution
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 
 
 @dataclass(frozen=True)

@@ -12,15 +12,15 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.errors import FormulationError
 from formulations.methods.formulation import check_parameters
 from formulations.methods.lp_l1 import LpL1
+from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.relaxation.lp_model import inflow_matrix
-from formulations.window.objective import path_cost
 from formulations.relaxation.rounding import round_greedy
-from formulations.window.solution import WindowSolution
+from formulations.window.objective import path_cost
 from formulations.window.problem import SOURCE, WindowProblem
+from formulations.window.solution import WindowSolution
 
 BOUNDS = ("arc-lp", "l1-lp")
 CERTIFIED = 1e-9  # relative cost - bound under which the rounded paths count as proven optimal
@@ -64,7 +64,9 @@ class QpL2(ComponentwiseFormulation):
             raise FormulationError(f"{self.name}: parameter 'decompose' must be True or False, got {self.decompose!r}")
         check_parameters(self, positive=("integrality_tolerance",))
         if self.integrality_tolerance >= 0.5:
-            raise FormulationError(f"{self.name}: parameter 'integrality_tolerance' must be < 0.5, got {self.integrality_tolerance!r}")
+            raise FormulationError(
+                f"{self.name}: parameter 'integrality_tolerance' must be < 0.5, got {self.integrality_tolerance!r}"
+            )
         if self.bound not in BOUNDS:
             raise FormulationError(f"{self.name}: parameter 'bound' must be one of {', '.join(BOUNDS)}, got {self.bound!r}")
 

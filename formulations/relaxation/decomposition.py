@@ -11,16 +11,16 @@ from __future__ import annotations
 import time
 from abc import abstractmethod
 from collections import Counter
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from formulations.relaxation.components import coupled_components, restrict
 from formulations.methods.formulation import Formulation
-from formulations.window.objective import conflicts, path_cost
-from formulations.window.solution import WindowSolution
+from formulations.relaxation.components import coupled_components, restrict
 from formulations.relaxation.viterbi import shortest_paths
+from formulations.window.objective import conflicts, path_cost
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 
 
 def solve_decomposed(

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from formulations.solvers import LinearModel, SolveResult, SolverBackend
+from formulations.solvers import LinearModel, SolverBackend, SolveResult
 
 
 def solve_with_pricing(

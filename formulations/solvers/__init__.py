@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from importlib import import_module
 
-from formulations.solvers.base import LinearModel, SolveResult, SolverBackend
+from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 
 _BACKENDS = {"highs": "formulations.solvers.highs:HighsBackend"}
 

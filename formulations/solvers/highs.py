@@ -8,7 +8,7 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
-from formulations.solvers.base import LinearModel, SolveResult, SolverBackend
+from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 
 
 class HighsBackend(SolverBackend):

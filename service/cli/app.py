@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -14,8 +14,11 @@ from service.errors import InputError
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="Name every marker in every frame.")
 err = Console(stderr=True)
 
-FormulationOption = Annotated[Optional[str], typer.Option("--formulation", "-f", help="Formulation name (see `markerflow formulations`) or a TOML file with a [formulation] table.")]
-WindowOption = Annotated[Optional[int], typer.Option("--window", "-w", help="Frames per window, template included.")]
+FormulationOption = Annotated[str | None, typer.Option(
+    "--formulation", "-f",
+    help="Formulation name (see `markerflow formulations`) or a TOML file with a [formulation] table.",
+)]
+WindowOption = Annotated[int | None, typer.Option("--window", "-w", help="Frames per window, template included.")]
 
 
 @app.command()
@@ -32,7 +35,9 @@ def demo(
 
 @app.command()
 def track(
-    input: Annotated[Path, typer.Argument(help="Capture .json (see docs/capture-json.md), or a labeled .c3d/.trc whose first frame names the markers.")],
+    input: Annotated[Path, typer.Argument(
+        help="Capture .json (see docs/capture-json.md), or a labeled .c3d/.trc whose first frame names the markers."
+    )],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d or .csv.")],
     formulation: FormulationOption = None,
     window: WindowOption = None,
@@ -72,7 +77,7 @@ def list_formulations() -> None:
 @app.command()
 def integrality(
     formulation: Annotated[str, typer.Option("--formulation", "-f", help="Name or TOML with a [formulation] table.")] = "lp-l1",
-    corpus: Annotated[Optional[Path], typer.Option(help="Corpus folder (default: the repo's tests/fixtures/integrality).")] = None,
+    corpus: Annotated[Path | None, typer.Option(help="Corpus folder (default: the repo's tests/fixtures/integrality).")] = None,
 ) -> None:
     """Integral windows, gaps and agreement with the ILP optimum on the window corpus."""
     from service.cli.integrality import run_integrality
@@ -82,11 +87,13 @@ def integrality(
 
 @app.command()
 def serve(
-    host: Annotated[Optional[str], typer.Option(help="Address to bind (default 127.0.0.1; another needs tokens).")] = None,
-    port: Annotated[Optional[int], typer.Option(help="Port (default 8000; 0 picks a free one).")] = None,
-    db: Annotated[Optional[str], typer.Option(help="SQLAlchemy URL of the job store (default sqlite:///markerflow.db in the working folder).")] = None,
-    dask: Annotated[Optional[str], typer.Option(help="Dask scheduler address (tcp://...): run jobs there.")] = None,
-    config: Annotated[Optional[Path], typer.Option(help="Service TOML (see configs/service.toml).")] = None,
+    host: Annotated[str | None, typer.Option(help="Address to bind (default 127.0.0.1; another needs tokens).")] = None,
+    port: Annotated[int | None, typer.Option(help="Port (default 8000; 0 picks a free one).")] = None,
+    db: Annotated[str | None, typer.Option(
+        help="SQLAlchemy URL of the job store (default sqlite:///markerflow.db in the working folder)."
+    )] = None,
+    dask: Annotated[str | None, typer.Option(help="Dask scheduler address (tcp://...): run jobs there.")] = None,
+    config: Annotated[Path | None, typer.Option(help="Service TOML (see configs/service.toml).")] = None,
 ) -> None:
     """Run the HTTP service: submit captures as jobs, follow them, fetch labeled results."""
     from service.cli.serve import run_serve

@@ -9,11 +9,11 @@ from service.capture.document import CaptureDocument
 from service.cli.report import out, print_summary, window_progress
 from service.errors import InputError
 from service.evaluation.cloud import evaluate
-from service.io.formats import write_labeled
 from service.evaluation.plot import plot_trajectories
 from service.evaluation.scenario import Scenario
 from service.evaluation.scene import generate_scene
 from service.evaluation.simulated import SimulatedCapture
+from service.io.formats import write_labeled
 
 DEMO_SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)
 

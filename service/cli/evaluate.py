@@ -6,13 +6,13 @@ import dataclasses
 import json
 from pathlib import Path
 
+from service.capture.formulation_spec import formulation_from_spec, formulation_from_table
 from service.cli.report import print_summary, window_progress
-from service.labeling.cloud import CloudLabeler
 from service.evaluation.cameras import evaluate_cameras
 from service.evaluation.cloud import evaluate
-from service.capture.formulation_spec import formulation_from_spec, formulation_from_table
-from service.io.formats import read_labeled
 from service.evaluation.scenario import Scenario
+from service.io.formats import read_labeled
+from service.labeling.cloud import CloudLabeler
 
 
 def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, window: int | None, as_json: bool) -> None:

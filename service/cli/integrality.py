@@ -6,8 +6,8 @@ from pathlib import Path
 
 from rich.table import Table
 
-from service.cli.report import out
 from service.capture.formulation_spec import formulation_from_spec
+from service.cli.report import out
 from service.evaluation.integrality import corpus_figures
 
 DEFAULT_CORPUS = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "integrality"

@@ -9,12 +9,12 @@ import numpy as np
 
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import read_capture_document
-from service.labeling.capture_labeling import CaptureLabeling
+from service.capture.formulation_spec import formulation_table
+from service.capture.from_recording import capture_from_recording
 from service.cli.report import out, window_progress
 from service.errors import InputError
 from service.io.formats import check_output, read_labeled, write_labeled
-from service.capture.formulation_spec import formulation_table
-from service.capture.from_recording import capture_from_recording
+from service.labeling.capture_labeling import CaptureLabeling
 
 
 def run_track(input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool) -> None:

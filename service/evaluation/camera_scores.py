@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from service.io.recording import LabeledTrajectories
 from service.evaluation.scores import run_onsets
+from service.io.recording import LabeledTrajectories
 
 if TYPE_CHECKING:  # scoring per-camera labels needs no cross-camera matching
     from formulations.cameras.cross_camera.matching import CrossCameraPoints
@@ -67,7 +67,8 @@ def camera_scores(
     return CameraScores(
         label_accuracy=float(counted.sum() / max(seen_twice.sum(), 1)),
         rmse_mm=_rms(error[counted & (n_views >= 2)]), filled_rmse_mm=_rms(filled_error),
-        marker_frames=int(seen_twice.sum()), swaps=_swaps(expected, views), single_view_rmse_mm=_rms(error[counted & (n_views == 1)]),
+        marker_frames=int(seen_twice.sum()), swaps=_swaps(expected, views),
+        single_view_rmse_mm=_rms(error[counted & (n_views == 1)]),
     )
 
 

@@ -9,22 +9,22 @@ camera's image, then triangulation), and scored by the detections each marker us
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from formulations.cameras.camera import Camera
-from service.io.calibration import load_calibration
-from service.evaluation.camera_scores import CameraScores, camera_scores, joint_3d_views
 from service.capture.capture import Capture
-from service.labeling.spans import window_spans
+from service.evaluation.camera_scores import CameraScores, camera_scores, joint_3d_views
+from service.evaluation.scenario import Scenario
+from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
+from service.io.calibration import load_calibration
+from service.io.recording import LabeledTrajectories, Recording
 from service.labeling.cloud import CloudLabeler
 from service.labeling.joint_3d import cross_camera_cloud
 from service.labeling.per_camera import PerCameraLabeler
-from service.io.recording import LabeledTrajectories, Recording
-from service.evaluation.scenario import Scenario
-from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
+from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats, certificate_figures, finite_or_none
 
 

@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
-
-from service.labeling.cloud import CloudLabeler
 from service.capture.formulation_spec import formulation_from_table
-from service.io.recording import LabeledTrajectories, Recording
 from service.evaluation.scenario import Scenario
 from service.evaluation.scores import LabelScores, label_scores
 from service.evaluation.simulate_cloud import simulate_cloud
 from service.evaluation.simulated import SimulatedCapture
+from service.io.recording import LabeledTrajectories, Recording
+from service.labeling.cloud import CloudLabeler
 from service.labeling.stats import WindowStats, certificate_figures
 
 

@@ -14,8 +14,8 @@ from typing import NamedTuple
 import numpy as np
 
 from service.errors import InputError
-from service.io.recording import Recording
 from service.evaluation.scene_markers import MARKERS, SEGMENTS, mirror_name
+from service.io.recording import Recording
 
 _PELVIS_HEIGHT = 975.0  # mm; legs and feet in scene_markers reach the floor from here
 _STRIDE = 1250.0  # mm per gait cycle; about 1.2 m/s at the chosen cadence

@@ -4,8 +4,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from service.io.recording import LabeledTrajectories
 from service.evaluation.simulated import SimulatedCapture
+from service.io.recording import LabeledTrajectories
 
 
 @dataclass(frozen=True)

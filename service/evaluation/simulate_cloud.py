@@ -3,9 +3,9 @@
 import numpy as np
 
 from service.errors import InputError
-from service.io.recording import Recording, UnlabeledCloud
 from service.evaluation.scenario import Scenario
 from service.evaluation.simulated import SimulatedCapture
+from service.io.recording import Recording, UnlabeledCloud
 
 
 def simulate_cloud(truth: Recording, scenario: Scenario) -> SimulatedCapture:

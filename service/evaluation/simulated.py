@@ -4,8 +4,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from service.io.recording import Recording, UnlabeledCloud
 from service.evaluation.scenario import Scenario
+from service.io.recording import Recording, UnlabeledCloud
 
 
 @dataclass

@@ -19,14 +19,14 @@ from collections.abc import Callable, Iterator
 from functools import partial
 
 from service.capture.capture import Capture, LabelingOptions
-from service.labeling.spans import window_spans
-from service.labeling.cloud import CloudLabeler
-from service.errors import InputError
 from service.capture.formulation_spec import formulation_from_table
-from service.labeling.joint_3d import cross_camera_cloud
-from service.labeling.per_camera import PerCameraLabeler
+from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
+from service.labeling.cloud import CloudLabeler
+from service.labeling.joint_3d import cross_camera_cloud
 from service.labeling.outcome import WindowOutcome
+from service.labeling.per_camera import PerCameraLabeler
+from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 
 

@@ -8,26 +8,26 @@ frame; the labeled last frame becomes the next window's template.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
-from typing import Callable, Iterator
 
 import numpy as np
 
-from formulations.relaxation.components import coupled_components
-from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
-from formulations.window.costs import ArcCostWeights
 from formulations.errors import FormulationError
-from formulations.methods.formulation import Formulation
+from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
 from formulations.markers.guide import assign_nearest
 from formulations.markers.state import MarkerState
-from formulations.window.build import build_window
+from formulations.methods.formulation import Formulation
 from formulations.methods.registry import get_formulation
-from formulations.window.solution import WindowSolution
+from formulations.relaxation.components import coupled_components
+from formulations.window.build import build_window
+from formulations.window.costs import ArcCostWeights
 from formulations.window.problem import WindowProblem
-from service.labeling.spans import window_spans
+from formulations.window.solution import WindowSolution
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.outcome import WindowOutcome
+from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 
 MARKER_COSTS = ArcCostWeights(

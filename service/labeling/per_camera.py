@@ -19,16 +19,11 @@ Ringer & Lasenby 2004), and its positions are the labeled ones.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Iterator
 
 import numpy as np
 
-from formulations.window.costs import ArcCostWeights
-from formulations.errors import FormulationError
-from formulations.methods.formulation import Formulation
-from formulations.markers.state import MarkerState
-from formulations.window.build import build_window
 from formulations.cameras.per_camera.advance import advance_state
 from formulations.cameras.per_camera.candidates import per_camera_candidates
 from formulations.cameras.per_camera.gating import PerCameraGating
@@ -36,15 +31,20 @@ from formulations.cameras.per_camera.guide import per_camera_guide
 from formulations.cameras.per_camera.locate import FrameViews
 from formulations.cameras.per_camera.reacquire import locate_with_reacquisition
 from formulations.cameras.rig import Rig
+from formulations.errors import FormulationError
+from formulations.markers.state import MarkerState
+from formulations.methods.formulation import Formulation
 from formulations.methods.registry import get_formulation
-from formulations.window.solution import WindowSolution
+from formulations.window.build import build_window
+from formulations.window.costs import ArcCostWeights
 from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
 from service.capture.capture import Capture
-from service.labeling.spans import window_spans
-from service.labeling.cloud import MARKER_COSTS, first_marker_state
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories
+from service.labeling.cloud import MARKER_COSTS, first_marker_state
 from service.labeling.outcome import WindowOutcome
+from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 
 

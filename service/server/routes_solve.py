@@ -5,8 +5,8 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends, Request
 from starlette.concurrency import run_in_threadpool
 
-from service.labeling.capture_labeling import CaptureLabeling
 from service.errors import InputError
+from service.labeling.capture_labeling import CaptureLabeling
 from service.server.auth import caller
 from service.server.bodies import read_submission, request_body
 from service.server.results import trajectories_json

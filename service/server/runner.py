@@ -13,8 +13,8 @@ import socket
 from collections.abc import Callable
 
 from service.capture.document import CaptureDocument
-from service.labeling.capture_labeling import CaptureLabeling
 from service.errors import InputError
+from service.labeling.capture_labeling import CaptureLabeling
 from service.server.results import trajectories_to_bytes
 from service.server.store import WindowTaken, store_for
 

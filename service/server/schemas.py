@@ -7,8 +7,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from service.server.store import Job, StoredWindow
 from service.labeling.stats import WindowStats, finite_or_none
+from service.server.store import Job, StoredWindow
 
 State = Literal["queued", "running", "done", "failed", "cancelled"]
 Position = list[float | None]

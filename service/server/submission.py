@@ -21,13 +21,13 @@ from starlette.datastructures import FormData, UploadFile
 from formulations.methods.registry import describe
 from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument, describe_validation_error
-from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.spans import window_spans
+from service.capture.formulation_spec import formulation_from_table
+from service.capture.from_recording import capture_from_recording
 from service.errors import InputError
 from service.io.formats import read_labeled
-from service.capture.formulation_spec import formulation_from_table
 from service.io.recording import Recording
-from service.capture.from_recording import capture_from_recording
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.spans import window_spans
 from service.server.limits import check_limits
 from service.server.settings import Limits
 
@@ -58,7 +58,7 @@ def document_submission(body: bytes, limits: Limits) -> Submission:
 
 def upload_submission(form: FormData, limits: Limits) -> Submission:
     """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object) and ``window``."""
-    for name in form.keys():
+    for name in form:
         if name not in UPLOAD_FIELDS:
             raise InputError(f"{name}: unknown form field; the fields are {', '.join(UPLOAD_FIELDS)}")
     upload = form.get("file")

@@ -67,11 +67,14 @@ class BlockDetections:
     def of(cls, cameras: list[Camera], frames: list[list[np.ndarray]]) -> BlockDetections:
         """From ``frames[f][c]``, the (D, 2) pixel detections of frame f in camera c."""
         n_frames, n_cams = len(frames), len(cameras)
-        counts = np.array([[len(np.reshape(frames[f][c], (-1, 2))) for c in range(n_cams)] for f in range(n_frames)], dtype=int).reshape(n_frames, n_cams)
+        counts = np.array(
+            [[len(np.reshape(frames[f][c], (-1, 2))) for c in range(n_cams)] for f in range(n_frames)], dtype=int
+        ).reshape(n_frames, n_cams)
         offsets = (np.cumsum(counts.T.ravel()) - counts.T.ravel()).reshape(n_cams, n_frames).T
         pixels, normalised, a_rows, b_rows = [], [], [], []
         for c, cam in enumerate(cameras):
-            pix = np.concatenate([np.asarray(frames[f][c], dtype=float).reshape(-1, 2) for f in range(n_frames)] + [np.empty((0, 2))])
+            per_frame = [np.asarray(frames[f][c], dtype=float).reshape(-1, 2) for f in range(n_frames)]
+            pix = np.concatenate(per_frame + [np.empty((0, 2))])
             xy = cam.undistort(pix)
             pixels.append(pix)
             normalised.append(xy)

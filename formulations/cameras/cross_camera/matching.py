@@ -42,9 +42,9 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from formulations.cameras.camera import Camera
+from formulations.cameras.cross_camera.block import BlockDetections
 from formulations.cameras.cross_camera.hypotheses import Hypotheses
 from formulations.cameras.cross_camera.merge import merge_hypotheses
-from formulations.cameras.cross_camera.block import BlockDetections
 
 _GROW_FACTOR = 2.0  # growth search radius / max_reprojection_px
 
@@ -142,7 +142,9 @@ def _epipolar_pairs(block: BlockDetections, epipolar_px: float) -> tuple[np.ndar
     for a in range(n_cams):
         for b in range(a + 1, n_cams):
             index_a, index_b = block.padded[:, a], block.padded[:, b]  # (F, D_max)
-            distance = epipolar_distances(block.cameras[a], block.cameras[b], block.normalised[index_a], block.normalised[index_b])
+            distance = epipolar_distances(
+                block.cameras[a], block.cameras[b], block.normalised[index_a], block.normalised[index_b]
+            )
             f, i, j = np.nonzero(distance <= epipolar_px)  # padding is NaN: never within
             pair = np.full((len(f), n_cams), -1)
             pair[:, a], pair[:, b] = index_a[f, i], index_b[f, j]

@@ -33,8 +33,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from formulations.cameras.cross_camera.hypotheses import Hypotheses
 from formulations.cameras.cross_camera.block import BlockDetections
+from formulations.cameras.cross_camera.hypotheses import Hypotheses
 
 # A contested detection changes hands when the challenger's other views predict it this many
 # times closer than the owner's: 1 would also move views between correct points on a noisy

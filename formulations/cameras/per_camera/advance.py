@@ -17,8 +17,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from formulations.markers.state import MarkerState
 from formulations.cameras.per_camera.locate import LocatedMarkers
+from formulations.markers.state import MarkerState
 
 
 def advance_state(state: MarkerState, located: LocatedMarkers) -> MarkerState:

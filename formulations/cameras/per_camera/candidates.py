@@ -26,12 +26,12 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
 
-from formulations.window.candidates import WindowCandidates
-from formulations.markers.state import MarkerState
 from formulations.cameras.per_camera.gating import PerCameraGating
 from formulations.cameras.per_camera.guide import PerCameraGuide
 from formulations.cameras.per_camera.locate import FrameViews
 from formulations.cameras.rig import Rig
+from formulations.markers.state import MarkerState
+from formulations.window.candidates import WindowCandidates
 
 
 @dataclass(frozen=True)

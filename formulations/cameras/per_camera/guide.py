@@ -4,7 +4,8 @@ Each frame: predict every marker in 3D (``MarkerState.predict``), project the pr
 into every camera, assign each camera's detections to the markers by
 ``linear_sum_assignment`` on image-plane distance with a constant miss cost, locate the
 markers from those views (``per_camera_locate``: triangulation, dropping the views that
-disagree; ``per_camera_reacquire``: a second view for markers left with one), and advance the state with the markers seen by two or more cameras. As
+disagree; ``per_camera_reacquire``: a second view for markers left with one), and advance
+the state with the markers seen by two or more cameras. As
 ``formulations.markers.guide`` does for clouds, this decides only *where to look*; the window LP
 decides *what to take*.
 
@@ -21,13 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from formulations.markers.guide import assign_within_gates
-from formulations.markers.state import MarkerState
 from formulations.cameras.per_camera.advance import advance_state
 from formulations.cameras.per_camera.gating import PerCameraGating
 from formulations.cameras.per_camera.locate import FrameViews
 from formulations.cameras.per_camera.reacquire import locate_with_reacquisition
 from formulations.cameras.rig import Rig
+from formulations.markers.guide import assign_within_gates
+from formulations.markers.state import MarkerState
 
 
 @dataclass(frozen=True)

@@ -29,10 +29,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from formulations.markers.state import MarkerState
 from formulations.cameras.per_camera.gating import PerCameraGating
 from formulations.cameras.per_camera.locate import FrameViews, LocatedMarkers, locate_markers
 from formulations.cameras.rig import Rig
+from formulations.markers.state import MarkerState
 
 
 def locate_with_reacquisition(
