@@ -1,0 +1,1 @@
+"""The mathematics of markerflow: window problems, their formulations, markers and cameras."""

@@ -1,0 +1,1 @@
+"""Calibrated cameras (OpenCV conventions), the stacked rig, triangulation, and the two camera association modes."""

@@ -1,0 +1,1 @@
+"""Scenarios on labeled recordings: simulators, the demo scene, scores, plots and the integrality corpus."""

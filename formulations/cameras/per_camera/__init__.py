@@ -1,0 +1,1 @@
+"""``per-camera`` association: every marker tracked in every camera image by the window LP, then located across cameras."""
