@@ -5,9 +5,10 @@ from __future__ import annotations
 from conftest import DATA
 
 from formulations.cameras.camera import Camera
+from formulations.cameras.rig import Rig
 from service.capture.capture import Capture
 from service.capture.from_recording import capture_from_recording
-from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
+from service.evaluation.simulate_cameras import CameraCapture, place_in_volume, simulate_cameras
 from service.io.calibration import load_pose2sim_toml
 from service.io.formats import read_labeled
 from service.io.recording import Recording
@@ -26,7 +27,7 @@ def simulated_cmu(frames: int, markers: int = 41, seed: int = 0) -> tuple[list[C
     merging, 10 % occlusion in 15-frame bursts, 2 clutter points per camera)."""
     cameras = load_pose2sim_toml(POSE2SIM, units="mm")
     truth = read_labeled(CMU)
-    rig = CameraRig.from_cameras(cameras)
+    rig = Rig.of(cameras)
     placed = Recording(truth.names[:markers], place_in_volume(truth.positions[:frames, :markers], rig), truth.rate)
     simulated = simulate_cameras(placed, rig, pixel_noise=0.5, merge_radius_px=3.0, occlusion_rate=0.1,
                                  occlusion_burst_frames=15, clutter_per_camera=2, seed=seed)

@@ -1,4 +1,4 @@
-"""Cameras, triangulation and calibration loaders, checked by hand and on two real calibrations."""
+"""Cameras, the rig's triangulation and ray, and calibration loaders, checked by hand and on two real calibrations."""
 
 import csv
 import json
@@ -9,13 +9,7 @@ import numpy as np
 import pytest
 
 from formulations.cameras.camera import Camera
-from formulations.cameras.triangulation import (
-    locate,
-    ray_compromise,
-    reprojection_errors,
-    triangulate,
-    triangulate_many,
-)
+from formulations.cameras.rig import Rig
 from service.errors import InputError
 from service.io.calibration import (
     load_calibration,
@@ -45,6 +39,19 @@ def pose2sim_volume(cameras: list[Camera], rng: np.random.Generator, n: int, uni
     return points[visible][:n]
 
 
+def ray(cam: Camera, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Origin (3,) and unit directions (N, 3) of the world rays through pixels."""
+    return cam.centre, cam.direction(cam.undistort(pixels))
+
+
+def triangulated(rig: Rig, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """DLT points (P, 3), reprojection RMS (P,) over the views and views (P,) of (P, C, 2) pixels."""
+    points = rig.triangulate(rig.undistort(pixels))
+    errors = rig.errors(points, pixels)
+    n_views = np.isfinite(pixels).all(axis=2).sum(axis=1)
+    return points, np.sqrt(np.nansum(errors**2, axis=1) / np.maximum(n_views, 1)), n_views
+
+
 def test_project_matches_hand_computation():
     cam = simple_camera()
     points = np.array([[0.0, 0.0, 0.0], [0.3, -0.1, 0.5], [-0.2, 0.4, -0.3]])
@@ -61,10 +68,10 @@ def test_projected_point_lies_on_its_ray(path):
     for cam in load_calibration(path):
         # points 1-3 m in front of the camera, inside the image (where distortion is largest at the edges)
         pixels = rng.uniform([0, 0], cam.image_size, size=(200, 2))
-        origins, directions = cam.ray(pixels)
+        origins, directions = ray(cam, pixels)
         points = origins + rng.uniform(1.0, 3.0, size=(200, 1)) * directions
         np.testing.assert_allclose(cam.project(points), pixels, atol=1e-6)
-        origins, directions = cam.ray(cam.project(points))
+        origins, directions = ray(cam, cam.project(points))
         offset = points - origins
         off_ray = offset - np.einsum("nd,nd->n", offset, directions)[:, None] * directions
         assert np.abs(off_ray).max() < 1e-6
@@ -106,12 +113,13 @@ def test_dlt_recovers_points_through_real_calibration():
     rng = np.random.default_rng(1)
     points = pose2sim_volume(cameras, rng, 500)
     pixels = np.stack([cam.project(points) for cam in cameras], axis=1)
-    estimate, rms, n_views = triangulate_many(cameras, pixels)
+    rig = Rig.of(cameras)
+    estimate, rms, n_views = triangulated(rig, pixels)
     assert np.abs(estimate - points).max() < 1e-6  # mm
     assert rms.max() < 1e-6 and (n_views == 4).all()
 
     noisy = pixels + rng.normal(scale=0.5, size=pixels.shape)
-    estimate, rms, _ = triangulate_many(cameras, noisy)
+    estimate, rms, _ = triangulated(rig, noisy)
     error = np.linalg.norm(estimate - points, axis=1)
     print(f"0.5 px noise: 3D RMSE {np.sqrt(np.mean(error**2)):.3f} mm, reprojection RMS median {np.median(rms):.3f} px")
     assert np.sqrt(np.mean(error**2)) < 1.5
@@ -119,66 +127,46 @@ def test_dlt_recovers_points_through_real_calibration():
 
 
 @needs_data
-def test_batch_equals_per_point():
-    cameras = load_pose2sim_toml(POSE2SIM)  # metres: the solve must not depend on the unit
+def test_dlt_batch_equals_per_point_in_either_unit():
+    metres = Rig.of(load_pose2sim_toml(POSE2SIM))
+    millimetres = Rig.of(load_pose2sim_toml(POSE2SIM, units="mm"))
     rng = np.random.default_rng(2)
-    points = pose2sim_volume(cameras, rng, 60, unit_per_mm=1e-3)
-    pixels = np.stack([cam.project(points) for cam in cameras], axis=1) + rng.normal(scale=1.0, size=(60, 4, 2))
+    points = pose2sim_volume(metres.cameras, rng, 60, unit_per_mm=1e-3)
+    pixels = metres.project(points) + rng.normal(scale=1.0, size=(60, 4, 2))
     pixels[rng.random((60, 4)) < 0.4] = np.nan
-    estimate, rms, n_views = triangulate_many(cameras, pixels)
+    normalised = metres.undistort(pixels)
+    estimate, rms, n_views = triangulated(metres, pixels)
     assert (n_views < 2).any() and (n_views == 2).any()
+    # The solve must not depend on the unit (the preconditioning).
+    np.testing.assert_allclose(millimetres.triangulate(normalised), 1000.0 * estimate, rtol=0, atol=1e-6)
+    errors = metres.errors(estimate, pixels)
     for p in range(len(points)):
-        views = [None if np.isnan(px).any() else px for px in pixels[p]]
         if n_views[p] < 2:
-            assert np.isnan(estimate[p]).all() and np.isnan(rms[p])
-            with pytest.raises(ValueError, match="needs 2"):
-                triangulate(cameras, views)
+            assert np.isnan(estimate[p]).all()
             continue
-        single = triangulate(cameras, views)
-        np.testing.assert_allclose(single.point, estimate[p], atol=1e-9)
-        assert single.n_views == n_views[p] and not single.filled
-        seen = ~np.isnan(single.reprojection_error)
+        np.testing.assert_allclose(metres.triangulate(normalised[p : p + 1])[0], estimate[p], atol=1e-9)
+        seen = ~np.isnan(errors[p])
         assert seen.sum() == n_views[p]
-        assert np.sqrt(np.mean(single.reprojection_error[seen] ** 2)) == pytest.approx(rms[p])
+        assert np.sqrt(np.mean(errors[p, seen] ** 2)) == pytest.approx(rms[p])
 
 
-def test_ray_compromise_closed_form():
+def test_on_ray_is_the_ray_point_nearest_the_prediction():
     cam = simple_camera()
+    rig = Rig.of([cam])
     rng = np.random.default_rng(3)
     pixels = rng.uniform([50, 50], [590, 430], size=(20, 2))
     predictions = cam.centre + rng.normal(scale=0.5, size=(20, 3)) + 2.0 * cam.R[2]  # ~2 m in front
-    origins, directions = cam.ray(pixels)
-    on_ray = ray_compromise(cam, pixels, predictions)
-    for weight in (0.0, 0.3, 4.0):
-        x = ray_compromise(cam, pixels, predictions, weight)
-        for n in range(20):
-            # independent derivation: (I + w M) X = p + w M o with M = I - d d^T
-            m = np.eye(3) - np.outer(directions[n], directions[n])
-            expected = np.linalg.solve(np.eye(3) + weight * m, predictions[n] + weight * m @ origins[n])
-            np.testing.assert_allclose(x[n], expected, atol=1e-12)
-        # between prediction and ray: on the segment prediction -> foot, at fraction w / (1 + w)
-        np.testing.assert_allclose(x, predictions + weight / (1 + weight) * (on_ray - predictions), atol=1e-12)
-    offset = on_ray - origins
-    np.testing.assert_allclose(np.cross(offset, directions), 0.0, atol=1e-12)
+    origin, directions = ray(cam, pixels)
+    on_ray = rig.on_ray(0, cam.undistort(pixels), predictions)
+    for n in range(20):
+        # independent derivation: the least-squares s of o + s d = p
+        along = np.linalg.lstsq(directions[n][:, None], predictions[n] - origin, rcond=None)[0]
+        np.testing.assert_allclose(on_ray[n], origin + along * directions[n], atol=1e-12)
+    np.testing.assert_allclose(cam.project(on_ray), pixels, atol=1e-6)  # on the ray through the pixel
+    np.testing.assert_allclose(np.cross(on_ray - origin, directions), 0.0, atol=1e-12)
     np.testing.assert_allclose(np.einsum("nd,nd->n", predictions - on_ray, directions), 0.0, atol=1e-12)
-    single = ray_compromise(cam, pixels[0], predictions[0], 1.0)
-    assert single.shape == (3,)
-    with pytest.raises(ValueError, match="weight"):
-        ray_compromise(cam, pixels[0], predictions[0], -1.0)
-
-
-def test_locate_follows_views():
-    cameras = [simple_camera(name="a"), simple_camera(name="b", t=[0.6, -0.2, 2.0])]
-    point, prediction = np.array([0.05, 0.1, 0.2]), np.array([0.1, 0.1, 0.1])
-    pa, pb = (cam.project(point[None])[0] for cam in cameras)
-    both = locate(cameras, [pa, pb], prediction)
-    np.testing.assert_allclose(both.point, point, atol=1e-9)
-    one = locate(cameras, [None, pb], prediction, weight=2.0)
-    np.testing.assert_allclose(one.point, ray_compromise(cameras[1], pb, prediction, 2.0))
-    assert one.n_views == 1 and np.isnan(one.reprojection_error[0]) and not one.filled
-    none = locate(cameras, [None, None], prediction)
-    assert none.filled and none.n_views == 0
-    np.testing.assert_array_equal(none.point, prediction)
+    behind = cam.centre - 2.0 * cam.R[2]  # the nearest point of the ray is its origin
+    np.testing.assert_allclose(rig.on_ray(0, cam.undistort(pixels[:1]), behind[None]), cam.centre[None], atol=1e-12)
 
 
 @needs_data
@@ -193,9 +181,10 @@ def test_charuco_reprojection_error_real_detections():
     for r in rows:
         pixels[index[int(r["sync_index"]), int(r["keypoint_id"])], column[f"cam_{r['cam_id']}"]] = (
             float(r["img_loc_x"]), float(r["img_loc_y"]))
-    points, _, n_views = triangulate_many(cameras, pixels)
+    rig = Rig.of(cameras)
+    points, _, n_views = triangulated(rig, pixels)
     seen = n_views >= 2
-    errors = reprojection_errors(cameras, points[seen], pixels[seen])
+    errors = rig.errors(points[seen], pixels[seen])
     errors = errors[np.isfinite(errors)]
     median = float(np.median(errors))
     print(f"ChArUco: {seen.sum()} corners, {errors.size} detections, median reprojection {median:.3f} px, "

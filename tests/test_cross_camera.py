@@ -8,13 +8,8 @@ import pytest
 from scipy.optimize import least_squares
 
 from formulations.cameras.cross_camera.block import BlockDetections
-from formulations.cameras.cross_camera.matching import (
-    CrossCameraPoints,
-    epipolar_distances,
-    match_across_cameras,
-    match_frames,
-)
-from formulations.cameras.triangulation import reprojection_errors, triangulate_many
+from formulations.cameras.cross_camera.matching import CrossCameraPoints, epipolar_distances, match_frames
+from formulations.cameras.rig import Rig
 from service.io.calibration import load_caliscope_toml
 
 RECORDING = Path(__file__).resolve().parents[2] / "shared" / "data" / "multicam2d_caliscope_charuco" / "4_cam_recording"
@@ -23,6 +18,11 @@ RECORDING = Path(__file__).resolve().parents[2] / "shared" / "data" / "multicam2
 @pytest.fixture(scope="module")
 def cameras():
     return load_caliscope_toml(RECORDING / "camera_array.toml")  # metres
+
+
+def match_one(cameras, detections) -> CrossCameraPoints:
+    """The candidate points of one frame: ``match_frames`` of a block of that frame alone."""
+    return match_frames(cameras, [detections])[0]
 
 
 def _synthetic_scene(cameras, rng, n_points=30, min_separation_px=8.0):
@@ -59,7 +59,7 @@ def test_synthetic_points_recovered_with_all_views(cameras):
         perm = rng.permutation(len(truth))  # detection d of this camera is point perm[d]
         detections.append(pix[perm])
         truth_index.append(np.argsort(perm))  # point p -> its detection index
-    result = match_across_cameras(cameras, detections)
+    result = match_one(cameras, detections)
     assert isinstance(result, CrossCameraPoints)
     expected_views = np.column_stack(truth_index)  # (P, C)
     for p, point in enumerate(truth):
@@ -70,15 +70,15 @@ def test_synthetic_points_recovered_with_all_views(cameras):
     assert (result.reprojection_rms <= 2.0).all()
 
     offsets = np.cumsum([0] + [len(d) for d in detections])
-    resources = result.resources(offsets)
+    resources = result.resources(offsets[:-1], offsets[-1])
     assert resources.shape == (len(truth), offsets[-1])
     assert (resources.sum(axis=1) == 4).all() and (resources.sum(axis=0) == 1).all()
 
 
 def test_empty_and_single_camera_inputs(cameras):
-    empty = match_across_cameras(cameras, [np.empty((0, 2))] * len(cameras))
+    empty = match_one(cameras, [np.empty((0, 2))] * len(cameras))
     assert empty.points.shape == (0, 3) and empty.views.shape == (0, len(cameras))
-    one = match_across_cameras(cameras, [np.array([[600.0, 300.0]])] + [np.empty((0, 2))] * 3)
+    one = match_one(cameras, [np.array([[600.0, 300.0]])] + [np.empty((0, 2))] * 3)
     assert len(one.points) == 0
 
 
@@ -109,11 +109,12 @@ def test_block_triangulation_is_least_squares_in_pixels(cameras):
     noisy = [p + rng.normal(0, 0.5, p.shape) for p in exact]
     pixels = np.where(seen[..., None], np.stack(noisy, axis=1), np.nan)
     ours = BlockDetections.of(cameras, [noisy]).triangulate(views)
-    dlt, _, _ = triangulate_many(cameras, pixels)
+    rig = Rig.of(cameras)
+    dlt = rig.triangulate(rig.undistort(pixels))
     best = np.array([_least_squares_point(cameras, pix, start) for pix, start in zip(pixels, dlt)])
 
     def rms(points):
-        return np.sqrt(np.nanmean(reprojection_errors(cameras, points, pixels) ** 2, axis=1))
+        return np.sqrt(np.nanmean(rig.errors(points, pixels) ** 2, axis=1))
 
     # Weighting by depth brings the linear solve close to the pixel optimum, closer than the DLT.
     assert (rms(ours) - rms(best)).max() < 0.05
@@ -129,7 +130,7 @@ def test_leave_one_out_is_the_distance_to_the_point_from_the_other_views(cameras
     block = BlockDetections.of(cameras, [noisy])
     views = np.where(seen, np.arange(len(truth))[:, None] + block.offsets[0], -1)
     left_out = np.array([rng.choice(np.flatnonzero(s)) for s in seen])
-    distance = block.leave_one_out(views, left_out, block.depths(block.triangulate(views)))
+    distance = block.leave_one_out(views, left_out, block.rig.depth(block.triangulate(views)))
     expected = np.empty(len(truth))
     for p, c in enumerate(left_out):  # brute force: the pixel optimum from the other views, projected into c
         others = pixels[p].copy()
@@ -143,9 +144,10 @@ def test_leave_one_out_is_the_distance_to_the_point_from_the_other_views(cameras
 
 def _on_ray(cameras, camera, pixel, avoid, rng):
     """A point on ``camera``'s ray through ``pixel``, in every image and > 10 px from ``avoid`` elsewhere."""
-    origin, direction = cameras[camera].ray(np.asarray(pixel)[None])
+    origin = cameras[camera].centre
+    direction = cameras[camera].direction(cameras[camera].undistort(np.asarray(pixel)[None]))[0]
     for depth in rng.permutation(np.linspace(0.5, 1.4, 91)):
-        point = origin[0] + depth * direction[0]
+        point = origin + depth * direction
         ok = all(cam.in_image(cam.project(point[None]))[0] for cam in cameras)
         far = all(np.linalg.norm(cam.project(point[None])[0] - cam.project(avoid[None])[0]) > 10
                   for c, cam in enumerate(cameras) if c != camera)
@@ -167,7 +169,7 @@ def _match_two(cameras, a, b, a_views, b_views, merged_in=None):
                 expected[k, c] = len(pix)
                 pix.append(cam.project(point[None])[0])
         detections.append(np.array(pix).reshape(-1, 2))
-    return match_across_cameras(cameras, detections), expected
+    return match_one(cameras, detections), expected
 
 
 def test_a_detection_grown_onto_a_neighbour_goes_back_to_its_own_point(cameras):
@@ -208,7 +210,7 @@ def test_a_block_of_frames_matches_as_each_frame_alone(cameras):
     block = match_frames(cameras, frames)
     assert len(block) == len(frames)
     for together, detections in zip(block, frames):
-        alone = match_across_cameras(cameras, detections)
+        alone = match_one(cameras, detections)
         assert np.array_equal(together.views, alone.views)
         assert np.allclose(together.points, alone.points) and np.allclose(together.reprojection_rms, alone.reprojection_rms)
     assert sum(len(m.points) for m in block[:4]) >= 4 * 8
@@ -236,7 +238,7 @@ def test_real_charuco_corners_recovered(cameras):
         detections = [d[p] for d, p in zip(detections, perms)]
         keypoints = [k[p] for k, p in zip(keypoints, perms)]
         start = time.perf_counter()
-        result = match_across_cameras(cameras, detections)
+        result = match_one(cameras, detections)
         elapsed += time.perf_counter() - start
         n_frames += 1
 

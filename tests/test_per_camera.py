@@ -18,7 +18,6 @@ from formulations.cameras.per_camera.guide import per_camera_guide
 from formulations.cameras.per_camera.locate import FrameViews, LocatedMarkers, locate_markers
 from formulations.cameras.per_camera.reacquire import locate_with_reacquisition
 from formulations.cameras.rig import Rig
-from formulations.cameras.triangulation import ray_compromise, reprojection_errors, triangulate_many
 from formulations.markers.state import MarkerState
 from formulations.methods.ilp import Ilp
 from formulations.methods.lp_l1 import LpL1
@@ -29,7 +28,6 @@ from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.cloud import MARKER_COSTS
 from service.labeling.outcome import WindowOutcome
-from service.labeling.per_camera import PerCameraLabeler
 
 K = [[1000.0, 0, 960], [0, 1000.0, 540], [0, 0, 1]]
 
@@ -83,11 +81,11 @@ def test_a_wrong_camera_assignment_is_dropped_and_the_rest_triangulated():
     wrong = pixels.copy()
     wrong[0, 2] += [7.0, -5.0]  # camera 2 tracked the neighbouring blob
     # Without the check the wrong view spoils the point and reprojects badly.
-    spoiled = triangulate_many(cameras, wrong)[0]
-    assert np.linalg.norm(spoiled - point) > 5.0
-    assert np.nanmax(reprojection_errors(cameras, spoiled, wrong)) > 2.0
-
     rig = Rig.of(cameras)
+    spoiled = rig.triangulate(rig.undistort(wrong))
+    assert np.linalg.norm(spoiled - point) > 5.0
+    assert np.nanmax(rig.errors(spoiled, wrong)) > 2.0
+
     located = locate_markers(rig, wrong, rig.undistort(wrong), point + 30.0, max_error_px=2.0)
     np.testing.assert_array_equal(located.kept, [[True, True, False, True]])
     np.testing.assert_allclose(located.point, point, atol=1e-6)
@@ -104,7 +102,7 @@ def test_two_disagreeing_views_keep_the_one_the_prediction_supports():
     np.testing.assert_array_equal(located.kept, [[True, False, False, False]])
     # One view: the point of camera 0's ray nearest the prediction, so only along-ray error remains.
     assert np.linalg.norm(located.point - point) < 3.0 + 1e-6
-    assert reprojection_errors(cameras[:1], located.point, pixels[:, :1])[0, 0] < 1e-6
+    assert rig.errors(located.point, pixels)[0, 0] < 1e-6
 
 
 def test_no_view_leaves_the_prediction():
@@ -137,7 +135,7 @@ def test_a_single_view_marker_gets_its_second_view_from_the_epipolar_band():
     views[0] = [0, -1, -1, -1]  # marker 0 was tracked by camera 0 only
     # Marker 0's detections (index 0) lie free in cameras 1-3, and camera 1 also has a
     # clutter blob on marker 0's epipolar line, 150 mm deeper along camera 0's ray.
-    origin, direction = cameras[0].ray(detections[0][:1])
+    origin, direction = cameras[0].centre, cameras[0].direction(cameras[0].undistort(detections[0][:1]))
     decoy = cameras[1].project(origin + (np.linalg.norm(frame[0] - origin) + 150.0) * direction)
     detections[1] = np.concatenate([detections[1], decoy])
     prediction = frame + [0.0, 0.0, 120.0]  # a drifted prediction does not matter: the body does
@@ -175,7 +173,7 @@ def test_per_camera_labels_cmu_85_02_through_the_pose2sim_rig():
     outcomes = list(labeling.windows())
     result = labeling.result(outcomes)
     scores = camera_scores(simulated.marker_detection, simulated.truth.positions, result,
-                           PerCameraLabeler().views(capture, outcomes))
+                           labeling.views(outcomes))
     assert scores.marker_frames > 0.9 * 299 * len(capture.names)
     assert scores.label_accuracy >= 0.999
     assert scores.rmse_mm <= 3.0
@@ -204,24 +202,6 @@ def test_resumed_per_camera_labeling_equals_the_uninterrupted_run():
     np.testing.assert_array_equal(full.positions, again.positions)
 
 
-def test_rig_geometry_matches_the_generic_triangulation_and_ray():
-    cameras = ring(4)
-    rng = np.random.default_rng(5)
-    points = rng.uniform(-300, 300, (30, 3))
-    pixels = np.stack([camera.project(points) for camera in cameras], axis=1) + rng.normal(0, 0.5, (30, 4, 2))
-    pixels[rng.random((30, 4)) < 0.3] = np.nan
-    pixels[:, :2] = np.where(np.isnan(pixels[:, :2]), pixels[:, 2:], pixels[:, :2])  # two views or more
-    pixels = pixels[np.isfinite(pixels).all(axis=2).sum(axis=1) >= 2]
-    rig = Rig.of(cameras)
-    np.testing.assert_allclose(rig.triangulate(rig.undistort(pixels)), triangulate_many(cameras, pixels)[0], atol=1e-9)
-    seen = np.isfinite(pixels[:, 0]).all(axis=1)
-    prediction = points[: seen.sum()] + 40.0
-    np.testing.assert_allclose(
-        rig.on_ray(0, rig.undistort(pixels)[seen, 0], prediction),
-        ray_compromise(cameras[0], pixels[seen, 0], prediction), atol=1e-9
-    )
-
-
 def test_locate_markers_equals_the_brute_force_over_every_subset():
     cameras, rig = ring(4), Rig.of(ring(4))
     rng = np.random.default_rng(11)
@@ -240,8 +220,8 @@ def test_locate_markers_equals_the_brute_force_over_every_subset():
                 continue
             used = np.full((1, 4, 2), np.nan)
             used[0, subset] = pixels[n, subset]
-            point = triangulate_many(cameras, used)[0]
-            if np.nanmax(reprojection_errors(cameras, point, used)) <= 2.0:
+            point = rig.triangulate(rig.undistort(used))
+            if np.nanmax(rig.errors(point, used)) <= 2.0:
                 key = (-len(subset), np.linalg.norm(point[0] - prediction[n]))
                 best = min(best, (key, subset, point[0]), key=lambda b: b[0]) if best else (key, subset, point[0])
         if best is not None:
@@ -257,7 +237,7 @@ def test_a_two_view_point_the_body_rejects_is_split_and_the_marker_reacquired():
     detections = [camera.project(frame) for camera in cameras]
     # Camera 1 gave marker 0 a clutter blob on its epipolar line, 300 mm deeper along
     # camera 0's ray: the pair reprojects exactly, but sits 300 mm off the body.
-    origin, direction = cameras[0].ray(detections[0][:1])
+    origin, direction = cameras[0].centre, cameras[0].direction(cameras[0].undistort(detections[0][:1]))
     decoy = cameras[1].project(origin + (np.linalg.norm(frame[0] - origin) + 300.0) * direction)
     detections[1] = np.concatenate([detections[1], decoy])
     views = np.tile(np.arange(5)[:, None], (1, 4))

@@ -1,13 +1,13 @@
 """Camera-mode simulator on CMU/HDM05 85_02 placed in the Pose2Sim Qualisys rig."""
 
-import cv2
 import ezc3d
 import numpy as np
 import pytest
 from conftest import DATA
 
+from formulations.cameras.rig import Rig
 from service.errors import InputError
-from service.evaluation.simulate_cameras import CameraRig, place_in_volume, simulate_cameras
+from service.evaluation.simulate_cameras import place_in_volume, simulate_cameras
 from service.io.calibration import load_pose2sim_toml
 from service.io.recording import Recording
 
@@ -24,12 +24,12 @@ CLEAN = {
 
 
 @pytest.fixture(scope="module")
-def rig() -> CameraRig:
+def rig() -> Rig:
     return rig_from(CALIBRATION)
 
 
 @pytest.fixture(scope="module")
-def placed(rig: CameraRig) -> Recording:
+def placed(rig: Rig) -> Recording:
     c3d = ezc3d.c3d(str(CMU_85_02))
     positions = c3d["data"]["points"][:3].transpose(2, 1, 0)
     names = c3d["parameters"]["POINT"]["LABELS"]["value"]
@@ -37,17 +37,14 @@ def placed(rig: CameraRig) -> Recording:
 
 
 @pytest.fixture(scope="module")
-def clean(placed: Recording, rig: CameraRig):
+def clean(placed: Recording, rig: Rig):
     return simulate_cameras(placed, rig, **CLEAN)
 
 
-def _projections(rig: CameraRig, positions: np.ndarray) -> np.ndarray:
-    """(frames, cameras, markers, 2) cv2.projectPoints of every sample."""
+def _projections(rig: Rig, positions: np.ndarray) -> np.ndarray:
+    """(frames, cameras, markers, 2) projection of every sample by each camera on its own."""
     F, N = positions.shape[:2]
-    per_camera = [
-        cv2.projectPoints(positions.reshape(-1, 3), r, t, k, d)[0].reshape(F, N, 2)
-        for r, t, k, d in zip(rig.rvec, rig.tvec, rig.K, rig.distortion)
-    ]
+    per_camera = [camera.project(positions.reshape(-1, 3)).reshape(F, N, 2) for camera in rig.cameras]
     return np.stack(per_camera, axis=1)
 
 
@@ -55,10 +52,10 @@ def _seen(capture) -> np.ndarray:
     return capture.marker_detection >= 0
 
 
-def test_rig_reads_pose2sim_toml_in_millimetres(rig: CameraRig):
-    assert rig.K.shape == (4, 3, 3) and rig.distortion.shape == (4, 4)
+def test_rig_reads_pose2sim_toml_in_millimetres(rig: Rig):
+    assert len(rig) == 4 and all(camera.distortion.shape == (4,) for camera in rig.cameras)
     assert rig.image_size.tolist() == [[1088.0, 1920.0]] * 4
-    assert rig.tvec[0] == pytest.approx([321.10489, 956.33206, 2890.71305])
+    assert rig.extrinsic[0, :, 3] == pytest.approx([321.10489, 956.33206, 2890.71305])
 
 
 def test_placed_markers_are_seen_by_at_least_two_cameras(clean):
@@ -108,13 +105,13 @@ def test_clutter_count_and_pixel_noise_match_the_settings(placed, rig):
     assert np.concatenate(residuals).std() == pytest.approx(0.5, rel=0.05)
 
 
-def test_projections_two_pixels_apart_merge_at_their_mean(rig: CameraRig):
+def test_projections_two_pixels_apart_merge_at_their_mean(rig: Rig):
     centre = place_in_volume(np.zeros((1, 1, 3)), rig)[0, 0]
-    R0 = cv2.Rodrigues(rig.rvec[0])[0]
-    depth = R0[2] @ centre + rig.tvec[0, 2]
+    camera = rig.cameras[0]
+    depth = camera.R[2] @ centre + camera.t[2]
     # Two pixels along camera 0's image x at that depth; a third marker 300 mm away.
     positions = np.stack(
-        [centre, centre + R0[0] * 2.0 * depth / rig.K[0, 0, 0], centre]
+        [centre, centre + camera.R[0] * 2.0 * depth / camera.K[0, 0], centre]
     )
     positions[2, 2] += 300.0
     truth = Recording(["a", "b", "far"], np.repeat(positions[None], 2, axis=0), 120.0)
@@ -123,7 +120,7 @@ def test_projections_two_pixels_apart_merge_at_their_mean(rig: CameraRig):
     assert np.linalg.norm(expected[0, 0, 0] - expected[0, 0, 1]) == pytest.approx(
         2.0, abs=0.05
     )
-    for c in range(len(rig.K)):
+    for c in range(len(rig)):
         detection = capture.marker_detection[0, c]
         if np.linalg.norm(expected[0, c, 0] - expected[0, c, 1]) < 3.0:
             assert detection[0] == detection[1] != detection[2]
@@ -148,7 +145,7 @@ def test_same_seed_same_capture_and_different_seeds_differ(placed, rig):
     a, b, other = (simulate_cameras(short, rig, **settings, seed=s) for s in (7, 7, 8))
     np.testing.assert_array_equal(a.marker_detection, b.marker_detection)
     for f in range(short.n_frames):
-        for c in range(len(rig.K)):
+        for c in range(len(rig)):
             np.testing.assert_array_equal(a.detections[f][c], b.detections[f][c])
             np.testing.assert_array_equal(
                 a.detection_markers[f][c], b.detection_markers[f][c]
@@ -167,5 +164,5 @@ def test_bad_settings_and_unlabeled_first_frame_are_input_errors(placed, rig):
         simulate_cameras(Recording(placed.names, gappy, 120.0), rig, **CLEAN)
 
 
-def rig_from(path) -> CameraRig:
-    return CameraRig.from_cameras(load_pose2sim_toml(path, units="mm"))
+def rig_from(path) -> Rig:
+    return Rig.of(load_pose2sim_toml(path, units="mm"))

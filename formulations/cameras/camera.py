@@ -18,6 +18,7 @@ from typing import NoReturn
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 # cv2.undistortPoints stops after 5 fixed-point iterations by default: about 1 px off at the
 # image edge with webcam-strength distortion (k1 = -0.34). Iterate to convergence instead.
@@ -38,10 +39,10 @@ class Camera:
         name: label used in messages and files.
     """
 
-    K: np.ndarray
-    distortion: np.ndarray
-    R: np.ndarray
-    t: np.ndarray
+    K: npt.NDArray[np.float64]
+    distortion: npt.NDArray[np.float64]
+    R: npt.NDArray[np.float64]
+    t: npt.NDArray[np.float64]
     image_size: tuple[int, int]
     name: str = "camera"
 
@@ -76,34 +77,43 @@ class Camera:
         raise ValueError(f"camera {self.name!r}: {problem}")
 
     @classmethod
-    def from_rvec(cls, K, distortion, rvec, t, image_size, name: str = "camera") -> Camera:
+    def from_rvec(
+        cls, K: npt.ArrayLike, distortion: npt.ArrayLike, rvec: npt.ArrayLike, t: npt.ArrayLike,
+        image_size: tuple[int, int], name: str = "camera",
+    ) -> Camera:
         """Build from a Rodrigues vector (axis * angle, world -> camera) instead of R."""
         try:
-            rvec = np.array(rvec, dtype=float).reshape(3)
+            vector = np.array(rvec, dtype=float).reshape(3)
         except (TypeError, ValueError):
             raise ValueError(f"camera {name!r}: rvec must be 3 numbers, got {rvec!r}") from None
-        if not np.isfinite(rvec).all():
+        if not np.isfinite(vector).all():
             raise ValueError(f"camera {name!r}: rvec has non-finite values")
-        return cls(K, distortion, cv2.Rodrigues(rvec)[0], t, image_size, name)
+        rotation = np.asarray(cv2.Rodrigues(vector)[0], dtype=float)
+        # __post_init__ converts and validates any array-like, with the camera's name in its messages.
+        return cls(K, distortion, rotation, t, image_size, name)  # type: ignore[arg-type]
 
     def __eq__(self, other: object) -> bool:
+        """Equal by value; defining ``__eq__`` leaves ``__hash__`` None (arrays are not hashable)."""
         if not isinstance(other, Camera):
             return NotImplemented
         return self.name == other.name and self.image_size == other.image_size and all(
             np.array_equal(getattr(self, f), getattr(other, f)) for f in ("K", "distortion", "R", "t")
         )
 
-    __hash__ = None  # arrays are not hashable; equality is by value
-
     @property
     def rvec(self) -> np.ndarray:
         """(3,) Rodrigues vector of R."""
-        return cv2.Rodrigues(self.R)[0].reshape(3)
+        return np.asarray(cv2.Rodrigues(self.R)[0], dtype=float).reshape(3)
 
     @property
     def centre(self) -> np.ndarray:
         """(3,) camera centre in world coordinates, C = -R^T t."""
         return -self.R.T @ self.t
+
+    @property
+    def focal(self) -> float:
+        """Mean focal length f = (fx + fy) / 2 in pixels: pixels per normalised unit."""
+        return 0.5 * float(self.K[0, 0] + self.K[1, 1])
 
     def scaled(self, factor: float) -> Camera:
         """The same camera in a world unit ``factor`` times smaller (m -> mm: 1000)."""
@@ -130,20 +140,19 @@ class Camera:
         )
         return normalised.reshape(-1, 2)
 
-    def ray(self, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World rays through (N, 2) pixels: origins (N, 3) = C, unit directions (N, 3).
+    def direction(self, normalised: np.ndarray) -> np.ndarray:
+        """(N, 3) unit world directions of the rays through (N, 2) normalised coordinates.
 
-        The direction is R^T (x, y, 1) / ||(x, y, 1)|| for the undistorted normalised (x, y);
-        every world point X = C + s d with s > 0 projects onto the pixel.
+        d = R^T (x, y, 1) / ||(x, y, 1)||: every world point X = C + s d with s > 0 has the
+        normalised image (x, y) (``undistort`` turns pixels into those).
         """
-        normalised = self.undistort(pixels)
-        camera_dirs = np.column_stack([normalised, np.ones(len(normalised))])
-        directions = camera_dirs @ self.R  # row-wise R^T v
+        directions: np.ndarray = np.column_stack([normalised, np.ones(len(normalised))]) @ self.R  # row-wise R^T v
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-        return np.broadcast_to(self.centre, directions.shape).copy(), directions
+        return directions
 
     def in_image(self, pixels: np.ndarray) -> np.ndarray:
         """(N,) bool: the pixel lies on the sensor ([-0.5, size - 0.5] per axis; NaN -> False)."""
         pixels = np.asarray(pixels, dtype=float).reshape(-1, 2)
         upper = np.asarray(self.image_size, dtype=float) - 0.5
-        return ((pixels >= -0.5) & (pixels <= upper)).all(axis=1)
+        inside: np.ndarray = np.all((pixels >= -0.5) & (pixels <= upper), axis=1)
+        return inside

@@ -1,17 +1,24 @@
-"""The cameras of a rig, stacked once for the per-frame geometry of ``per-camera`` association.
+"""The cameras of a rig, stacked once: the one place for the rig's projection and triangulation.
 
-``per-camera`` locates every marker in every frame, twice (guide and final pass), from
-detections that are undistorted once per frame. ``triangulation.triangulate_many`` takes
-pixels and undistorts them again on every call (an iterative solve per point), and
-``Camera.project`` rebuilds its Rodrigues vector per call; at 41 markers x 4 cameras x
-2 passes per frame those repeats cost more than the geometry. ``Rig`` keeps what does not
-change (extrinsics, focal lengths, the Hartley preconditioning, Rodrigues vectors) and
-triangulates from normalised coordinates, with the same DLT as ``triangulate_many``:
+The simulator, ``per-camera`` association and the cross-camera matcher all work on whole
+rigs. ``Rig`` keeps what does not change (extrinsics, centres, focal lengths, the Hartley
+preconditioning, Rodrigues vectors) and works on normalised coordinates, undistorted once
+per detection (an iterative solve per point): ``per-camera`` locates 41 markers x 4
+cameras x 2 passes per frame, where repeating those costs more than the geometry.
 
-    rows of camera c:  f_c (x P3_c - P1_c),  f_c (y P3_c - P2_c),  P_c = [R_c | t_c],
+Triangulation is the DLT. For camera c with P_c = [R_c | t_c] (rows P1, P2, P3) and
+undistorted normalised detection (x, y), the point X_h = (X, 1) satisfies
 
-X_h the right singular vector of the stacked rows (world preconditioned by the centroid
-and mean spread of the camera centres) with the smallest singular value.
+    f_c (x P3_c - P1_c) . X_h = 0,    f_c (y P3_c - P2_c) . X_h = 0.
+
+Stacking these rows over the cameras that saw the point gives A X_h = 0, solved in the
+least-squares sense by the right singular vector of A with the smallest singular value
+(batched SVD over the (P, 2C, 4) stack; rows of unseen cameras are zero and drop out). Two
+choices keep the algebraic error close to the pixel error: each camera's rows carry its
+focal length f_c (a row's residual is then depth x pixel error rather than depth x pixel
+error / f_c), and the world is preconditioned (Hartley) by X = s X' + m with m, s the
+centroid and mean spread of the camera centres, so the solve does not depend on the unit
+(m or mm).
 """
 
 from __future__ import annotations
@@ -31,13 +38,15 @@ class Rig:
     Attributes:
         cameras: The C cameras.
         extrinsic: ``(C, 3, 4)`` [R_c | t_c].
-        focal: ``(C,)`` mean focal length in pixels, the DLT row weight.
+        centres: ``(C, 3)`` camera centres C_c = -R_c^T t_c.
+        focal: ``(C,)`` mean focal length in pixels (``Camera.focal``), the DLT row weight.
         precondition: ``(4, 4)`` X_h = H X_h' (Hartley: centroid and spread of the centres).
         rvec: ``(C, 3)`` Rodrigues vectors for ``cv2.projectPoints``.
     """
 
     cameras: list[Camera]
     extrinsic: np.ndarray
+    centres: np.ndarray
     focal: np.ndarray
     precondition: np.ndarray
     rvec: np.ndarray
@@ -53,12 +62,22 @@ class Rig:
         return cls(
             cameras=list(cameras),
             extrinsic=np.stack([np.column_stack([camera.R, camera.t]) for camera in cameras]),
-            focal=np.array([0.5 * (camera.K[0, 0] + camera.K[1, 1]) for camera in cameras]),
+            centres=centres, focal=np.array([camera.focal for camera in cameras]),
             precondition=precondition, rvec=np.stack([camera.rvec for camera in cameras]),
         )
 
     def __len__(self) -> int:
         return len(self.cameras)
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """``(C, 3, 3)`` world -> camera rotations R_c; row i is camera axis i in the world."""
+        return self.extrinsic[:, :, :3]
+
+    @property
+    def image_size(self) -> np.ndarray:
+        """``(C, 2)`` image width and height in pixels."""
+        return np.array([camera.image_size for camera in self.cameras], dtype=float)
 
     def undistort(self, pixels: np.ndarray) -> np.ndarray:
         """``(P, C, 2)`` pixels -> normalised coordinates, NaN kept where a view is missing."""
@@ -69,18 +88,26 @@ class Rig:
         return normalised
 
     def triangulate(self, normalised: np.ndarray) -> np.ndarray:
-        """``(P, 3)`` DLT points from ``(P, C, 2)`` normalised views (NaN: none; 2+ per point)."""
+        """``(P, 3)`` DLT points (module doc) from ``(P, C, 2)`` normalised views, NaN where unseen.
+
+        NaN for the points seen by fewer than two cameras.
+        """
         seen = np.isfinite(normalised).all(axis=2)
-        rows = np.nan_to_num(normalised)[..., None] * self.extrinsic[None, :, 2:3, :] - self.extrinsic[None, :, :2, :]
-        rows *= (self.focal * seen)[..., None, None]
-        if len(rows) == 0:
-            return np.zeros((0, 3))
-        homogeneous = np.linalg.svd(rows.reshape(len(rows), -1, 4) @ self.precondition, full_matrices=False)[2][:, -1]
-        homogeneous = homogeneous @ self.precondition.T
-        return homogeneous[:, :3] / homogeneous[:, 3:]
+        solvable = seen.sum(axis=1) >= 2
+        rows = np.nan_to_num(normalised[solvable])[..., None] * self.extrinsic[None, :, 2:3, :] - self.extrinsic[None, :, :2, :]
+        rows *= (self.focal * seen[solvable])[..., None, None]
+        points = np.full((len(normalised), 3), np.nan)
+        if len(rows):
+            homogeneous = np.linalg.svd(rows.reshape(len(rows), -1, 4) @ self.precondition, full_matrices=False)[2][:, -1]
+            homogeneous = homogeneous @ self.precondition.T
+            points[solvable] = homogeneous[:, :3] / homogeneous[:, 3:]
+        return points
 
     def project(self, points: np.ndarray) -> np.ndarray:
-        """``(P, C, 2)`` pixels of ``(P, 3)`` world points, distortion included."""
+        """``(P, C, 2)`` pixels of ``(P, 3)`` world points, distortion included (``Camera.project``).
+
+        Points behind a camera still get a pixel there; ``depth`` tells them apart.
+        """
         projected = np.empty((len(points), len(self.cameras), 2))
         if len(points) == 0:
             return projected
@@ -91,23 +118,27 @@ class Rig:
 
     def errors(self, points: np.ndarray, pixels: np.ndarray) -> np.ndarray:
         """``(P, C)`` reprojection errors ||project_c(X_p) - u_pc||, NaN where no view."""
-        return np.linalg.norm(self.project(points) - pixels, axis=2)
+        errors: np.ndarray = np.linalg.norm(self.project(points) - pixels, axis=2)
+        return errors
 
     def depth(self, points: np.ndarray) -> np.ndarray:
-        """``(P, C)`` depth z_c of each point in each camera."""
-        return points @ self.extrinsic[:, 2, :3].T + self.extrinsic[:, 2, 3]
+        """``(P, C)`` depth z_c = P3_c . X_h of each point in each camera."""
+        depth: np.ndarray = points @ self.extrinsic[:, 2, :3].T + self.extrinsic[:, 2, 3]
+        return depth
 
     def on_ray(self, camera: int, normalised: np.ndarray, prediction: np.ndarray) -> np.ndarray:
         """``(K, 3)`` points of camera c's rays through ``(K, 2)`` normalised views nearest ``prediction``.
 
-        ``triangulation.ray_compromise`` with w = inf: q = o + max(0, d . (p - o)) d for the
-        centre o and the unit direction d = R^T (x, y, 1) / ||(x, y, 1)||.
+        For the centre o and the unit direction d (``Camera.direction``), the point of the
+        ray o + s d (s >= 0) nearest p is q = o + max(0, d . (p - o)) d: the foot of the
+        perpendicular from p, or the centre when p lies behind the camera. One view fixes
+        two coordinates; the prediction supplies only the depth along the ray (Ringer &
+        Lasenby 2004, Sec. 2, step 3, trusting the ray fully).
         """
-        rotation, centre = self.extrinsic[camera, :, :3], self.cameras[camera].centre
-        direction = np.column_stack([normalised, np.ones(len(normalised))]) @ rotation
-        direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+        centre, direction = self.centres[camera], self.cameras[camera].direction(normalised)
         along = np.maximum(np.einsum("kd,kd->k", prediction - centre, direction), 0.0)
-        return centre + along[:, None] * direction
+        on_ray: np.ndarray = centre + along[:, None] * direction
+        return on_ray
 
     def image_plane(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Normalised coordinates ``(C, ..., 2)`` of ``(..., 3)`` world points and their depth ``(C, ...)``.

@@ -118,7 +118,8 @@ def _shape_deviation(
     distance = np.linalg.norm(location[:, None] - predicted, axis=2)
     weight = guide.tracked[frame[:, None] - 1, neighbours] / (state.distance_var[obj] + 1.0)
     deviation = np.minimum(np.abs(distance - state.distance_mean[obj]), SHAPE_CAP_MM)
-    return (weight * deviation).sum(axis=1) / np.maximum(weight.sum(axis=1), SHAPE_WEIGHT_FLOOR)
+    mean_deviation: np.ndarray = (weight * deviation).sum(axis=1) / np.maximum(weight.sum(axis=1), SHAPE_WEIGHT_FLOOR)
+    return mean_deviation
 
 
 def _window_resources(frames: list[np.ndarray], point_resources: list[sp.csr_matrix] | None) -> sp.csr_matrix:

@@ -62,7 +62,9 @@ class MarkerState:
 
     @property
     def visible(self) -> np.ndarray:
-        return self.unseen == 0
+        """``(N,)`` seen at the template frame."""
+        visible: np.ndarray = self.unseen == 0
+        return visible
 
     def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
         """The state one frame later.

@@ -8,59 +8,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from formulations.cameras.camera import Camera
+from formulations.cameras.rig import Rig
 from service.errors import InputError
 from service.io.recording import Recording
-
-
-@dataclass(frozen=True)
-class CameraRig:
-    """A calibrated rig of ``C`` pinhole cameras with OpenCV distortion, as plain arrays.
-
-    A world point ``X`` (mm) maps to camera coordinates ``R(rvec[c]) X + tvec[c]`` and then
-    through ``K[c]`` and ``distortion[c]`` to pixels, exactly as ``cv2.projectPoints``.
-
-    Attributes:
-        K: ``(C, 3, 3)`` intrinsic matrices, pixels.
-        distortion: ``(C, k)`` OpenCV coefficients ``k1, k2, p1, p2[, k3, ...]``.
-        rvec: ``(C, 3)`` Rodrigues vectors of the world -> camera rotation.
-        tvec: ``(C, 3)`` world -> camera translations, millimetres.
-        image_size: ``(C, 2)`` image width and height, pixels.
-    """
-
-    K: np.ndarray
-    distortion: np.ndarray
-    rvec: np.ndarray
-    tvec: np.ndarray
-    image_size: np.ndarray
-
-    @classmethod
-    def from_cameras(cls, cameras: list[Camera]) -> "CameraRig":
-        """Stack validated cameras (e.g. from ``service.io.calibration``, in mm) into a rig."""
-        width = max(len(c.distortion) for c in cameras)
-        distortion = np.zeros((len(cameras), width))
-        for i, camera in enumerate(cameras):
-            distortion[i, : len(camera.distortion)] = camera.distortion
-        return cls(
-            K=np.stack([c.K for c in cameras]), distortion=distortion,
-            rvec=np.stack([c.rvec for c in cameras]), tvec=np.stack([c.t for c in cameras]),
-            image_size=np.stack([np.asarray(c.image_size, dtype=float) for c in cameras]),
-        )
-
-    def rotations(self) -> np.ndarray:
-        """``(C, 3, 3)`` world -> camera rotations; row ``i`` is camera axis ``i`` in world."""
-        return np.stack([cv2.Rodrigues(r)[0] for r in self.rvec])
-
-    def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pixels ``(C, P, 2)`` and camera-frame depths ``(C, P)`` of world points ``(P, 3)``."""
-        pixels = [
-            cv2.projectPoints(points, r, t, k, d)[0][:, 0]
-            for r, t, k, d in zip(self.rvec, self.tvec, self.K, self.distortion)
-        ]
-        depth = (
-            np.einsum("cj,pj->cp", self.rotations()[:, 2], points) + self.tvec[:, 2:]
-        )
-        return np.stack(pixels), depth
 
 
 @dataclass
@@ -89,7 +39,7 @@ class CameraCapture:
 
 
 def place_in_volume(
-    positions: np.ndarray, rig: CameraRig, up_axis: int = 2
+    positions: np.ndarray, rig: Rig, up_axis: int = 2
 ) -> np.ndarray:
     """Move trajectories into the rig's viewing volume, upright.
 
@@ -112,7 +62,7 @@ def place_in_volume(
     Returns:
         ``(F, N, 3)`` positions in the rig's world frame, mm.
     """
-    R = rig.rotations()
+    R = rig.rotation
     up = -R[:, 1].mean(axis=0)
     up /= np.linalg.norm(up)
     e = np.eye(3)[up_axis]
@@ -120,15 +70,15 @@ def place_in_volume(
     cross = np.cross(e, up)
     sine = np.linalg.norm(cross)
     Q = cv2.Rodrigues(cross * (np.arctan2(sine, e @ up) / max(sine, 1e-12)))[0]
-    axes, centres = R[:, 2], -np.einsum("cji,cj->ci", R, rig.tvec)
+    axes = R[:, 2]
     perp = np.eye(3) - axes[:, :, None] * axes[:, None, :]
-    target = np.linalg.solve(perp.sum(axis=0), np.einsum("cij,cj->i", perp, centres))
+    target = np.linalg.solve(perp.sum(axis=0), np.einsum("cij,cj->i", perp, rig.centres))
     return (positions - np.nanmean(positions, axis=(0, 1))) @ Q.T + target
 
 
 def simulate_cameras(
     truth: Recording,
-    rig: CameraRig,
+    rig: Rig,
     pixel_noise: float,
     merge_radius_px: float,
     occlusion_rate: float,
@@ -140,7 +90,7 @@ def simulate_cameras(
 
     Steps, all from one ``numpy.random.default_rng(seed)``:
 
-    1. Project every sample into every camera (``cv2.projectPoints``).
+    1. Project every sample into every camera (``Rig.project``, i.e. ``cv2.projectPoints``).
     2. Add ``N(0, pixel_noise^2)`` to each pixel coordinate.
     3. Drop projections behind a camera or outside ``[0, w) x [0, h)``, and missing samples.
     4. Occlude in bursts with a visible/occluded Markov chain per (camera, marker):
@@ -178,14 +128,14 @@ def simulate_cameras(
             f"marker {truth.names[np.argmax(missing[0])]} is missing in frame 0"
         )
     rng = np.random.default_rng(seed)
-    F, N, C = truth.n_frames, truth.n_markers, len(rig.K)
+    F, N, C = truth.n_frames, truth.n_markers, len(rig)
     positions = np.where(missing[..., None], np.nan, truth.positions)
-    pixels, depth = rig.project(np.nan_to_num(positions.reshape(-1, 3)))
-    pixels = pixels.reshape(C, F, N, 2).transpose(1, 0, 2, 3)
+    samples = np.nan_to_num(positions.reshape(-1, 3))
+    pixels = rig.project(samples).reshape(F, N, C, 2).transpose(0, 2, 1, 3)
     pixels = pixels + rng.normal(0.0, pixel_noise, pixels.shape)
     size = rig.image_size[None, :, None, :]
     seen = (
-        (depth.reshape(C, F, N).transpose(1, 0, 2) > 0)
+        (rig.depth(samples).reshape(F, N, C).transpose(0, 2, 1) > 0)
         & (pixels >= 0).all(axis=3)
         & (pixels < size).all(axis=3)
         & ~missing[:, None, :]

@@ -1,11 +1,10 @@
 """Triangulation of many cross-camera hypotheses, over a block of frames at once.
 
 A hypothesis is one frame's choice of at most one detection per camera. The matcher
-triangulates a few hundred per frame; ``triangulation.triangulate_many`` would undistort each
-detection again for every hypothesis using it and solve one small SVD per hypothesis, which
-dominated the matcher's time. Here every detection of the block is undistorted once
-(``BlockDetections.of``), its two linear equations are summed once, and each hypothesis is a
-closed-form 3x3 solve; a block of frames shares every numpy and OpenCV call.
+triangulates a few hundred per frame; the DLT (``Rig.triangulate``) would solve one small SVD
+per hypothesis, which dominated the matcher's time. Here every detection of the block is
+undistorted once (``BlockDetections.of``), its two linear equations are summed once, and each
+hypothesis is a closed-form 3x3 solve; a block of frames shares every numpy and OpenCV call.
 
 For camera c with rows r_1, r_2, r_3 of R_c and translation t_c, a detection with undistorted
 normalised coordinates (x, y) of the point X gives two linear equations a_k . X = b_k:
@@ -18,7 +17,7 @@ pixels) makes the residuals pixel-sized, f_c (x - x'); the weighted normal equat
 
     M X = g,    M = sum_c w_c^2 A_c,    g = sum_c w_c^2 B_c,    A = sum_k a_k a_k^T,  B = sum_k a_k b_k,
 
-are solved with the depths of a first solution (weights f_c^2, as ``triangulate_many``) or of a
+are solved with the depths of a first solution (weights f_c^2, as the DLT's) or of a
 nearby earlier point. Leaving camera c out is dropping its term. Residuals are measured in
 pixels through the cameras' own projection, distortion included.
 """
@@ -31,6 +30,7 @@ import numpy as np
 
 from formulations.cameras.camera import Camera
 from formulations.cameras.cross_camera.hypotheses import Hypotheses
+from formulations.cameras.rig import Rig
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class BlockDetections:
     last row of zeros (NaN pixels), so a camera a hypothesis does not use adds nothing.
 
     Attributes:
-        cameras: The C cameras.
+        rig: The C cameras.
         frame: (D,) frame of each detection; ``camera`` (D,) its camera; ``local`` (D,) its
             index among that frame's detections in that camera.
         offsets: (F, C) global index of the first detection of frame f in camera c.
@@ -52,7 +52,7 @@ class BlockDetections:
         normal: (D + 1, 3, 3) A of every detection, then zeros; ``right`` (D + 1, 3) B, then zeros.
     """
 
-    cameras: list[Camera]
+    rig: Rig
     frame: np.ndarray
     camera: np.ndarray
     local: np.ndarray
@@ -89,7 +89,7 @@ class BlockDetections:
         padded = np.full((n_frames, n_cams, int(counts.max(initial=0))), -1)
         padded[frame, camera, local] = np.arange(total)
         return cls(
-            list(cameras), frame, camera, local, offsets, padded,
+            Rig.of(cameras), frame, camera, local, offsets, padded,
             np.concatenate(pixels + [np.full((1, 2), np.nan)]), np.concatenate(normalised + [np.full((1, 2), np.nan)]),
             np.einsum("dki,dkj->dij", a, a), np.einsum("dki,dk->di", a, b),
         )
@@ -98,33 +98,23 @@ class BlockDetections:
     def n_frames(self) -> int:
         return len(self.offsets)
 
-    @property
-    def focal(self) -> np.ndarray:
-        """(C,) focal length per camera, pixels per normalised unit."""
-        return np.array([0.5 * (cam.K[0, 0] + cam.K[1, 1]) for cam in self.cameras])
-
-    def depths(self, points: np.ndarray) -> np.ndarray:
-        """(H, C) depth z_c of each point in each camera."""
-        third = np.stack([cam.R[2] for cam in self.cameras])
-        return points @ third.T + np.array([cam.t[2] for cam in self.cameras])
-
     def triangulate(self, views: np.ndarray, depth: np.ndarray | None = None) -> np.ndarray:
         """(H, 3) points of hypotheses ``views`` (H, C) with two or more views (see module doc).
 
         ``depth`` (H, C): depths to weight by, from a nearby earlier estimate; None: two passes.
         """
         normal, right = self.normal[views], self.right[views]  # (H, C, 3, 3), (H, C, 3)
-        focal2 = self.focal**2
+        focal2 = self.rig.focal**2
         if depth is None:
-            depth = self.depths(_solve(normal, right, np.broadcast_to(focal2, views.shape)))
+            depth = self.rig.depth(_solve(normal, right, np.broadcast_to(focal2, views.shape)))
         return _solve(normal, right, focal2 / np.maximum(np.abs(depth), 1e-9) ** 2)
 
     def hypotheses(self, views: np.ndarray, frame: np.ndarray, depth: np.ndarray | None = None) -> Hypotheses:
         """Triangulate (``triangulate``) and measure hypotheses ``views`` (H, C) of frames ``frame`` (H,)."""
         points = self.triangulate(views, depth)
-        projected = np.stack([cam.project(points) for cam in self.cameras], axis=1).reshape(len(views), len(self.cameras), 2)
+        projected = self.rig.project(points)
         residual = np.linalg.norm(projected - self.pixels[views], axis=2)
-        return Hypotheses(views, frame, points, projected, residual, self.depths(points))
+        return Hypotheses(views, frame, points, projected, residual, self.rig.depth(points))
 
     def leave_one_out(self, views: np.ndarray, camera: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """(H,) pixel distance of view ``camera[h]`` of hypothesis h to the point from its other views.
@@ -140,7 +130,7 @@ class BlockDetections:
         for c in np.unique(camera[enough]):
             mine = camera[enough] == c
             pixel = self.pixels[views[enough[mine], c]]
-            distance[enough[mine]] = np.linalg.norm(self.cameras[c].project(points[mine]) - pixel, axis=1)
+            distance[enough[mine]] = np.linalg.norm(self.rig.cameras[c].project(points[mine]) - pixel, axis=1)
         return distance
 
 
@@ -159,6 +149,6 @@ def _solve(normal: np.ndarray, right: np.ndarray, weight: np.ndarray) -> np.ndar
     scale = (a + e + i) / 3.0
     solvable = np.abs(det) > 1e-12 * np.maximum(scale, 1e-300) ** 3
     with np.errstate(divide="ignore", invalid="ignore"):
-        points = (inverse @ g[..., None])[..., 0] / det[:, None]
+        points: np.ndarray = (inverse @ g[..., None])[..., 0] / det[:, None]
     points[~solvable] = np.nan
     return points

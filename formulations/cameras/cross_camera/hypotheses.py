@@ -32,12 +32,15 @@ class Hypotheses:
 
     @property
     def n_views(self) -> np.ndarray:
-        return (self.views >= 0).sum(axis=1)
+        """(H,) views each hypothesis uses."""
+        n_views: np.ndarray = (self.views >= 0).sum(axis=1)
+        return n_views
 
     @property
     def rms(self) -> np.ndarray:
         """(H,) root mean square residual over the views used, pixels."""
-        return np.sqrt(np.nansum(self.residual**2, axis=1) / np.maximum(self.n_views, 1))
+        rms: np.ndarray = np.sqrt(np.nansum(self.residual**2, axis=1) / np.maximum(self.n_views, 1))
+        return rms
 
     def take(self, index: np.ndarray) -> Hypotheses:
         return Hypotheses(*(array[index] for array in self._arrays()))

@@ -17,7 +17,7 @@ l_b = E x_a is the epipolar line of x_a in b's normalised plane; the distance of
 unit) is a distance in pixels. The gate uses the larger of that and the symmetric distance of
 x_a to l_a = E^T x_b (times f_a), computed as a (D_a, D_b) matrix per camera pair.
 
-Each gated pair is triangulated (``cross_camera_triangulation``), kept if in front of both
+Each gated pair is triangulated (``BlockDetections.triangulate``), kept if in front of both
 cameras and its reprojection RMS is <= ``max_reprojection_px``, then grown (twice): it is
 projected into every camera it does not use, the nearest detection within
 ``_GROW_FACTOR * max_reprojection_px`` is added, and the point is re-triangulated; the growth
@@ -27,9 +27,9 @@ the re-triangulated one does (on the real caliscope corners, before merging gave
 back, a 1x radius recovered 89 % of corners with all their views, 2x 98.6 %). The second
 growth only revisits the hypotheses the first one grew: the others' points did not move.
 Growth may also pick up another marker's detection that lies near the projection;
-``cross_camera_merge`` gives such a detection back.
+``merge_hypotheses`` gives such a detection back.
 
-Merging (``cross_camera_merge``): one hypothesis per 3D point, and a detection contested by
+Merging (``merge_hypotheses``): one hypothesis per 3D point, and a detection contested by
 two distinct points goes to the one whose other views predict it best.
 """
 
@@ -63,26 +63,19 @@ class CrossCameraPoints:
     views: np.ndarray
     reprojection_rms: np.ndarray
 
-    def resources(self, detection_offsets: np.ndarray, n_detections: int | None = None) -> sp.csr_matrix:
-        """(P, total_detections) 0/1 matrix of the (camera, detection) pairs each point uses.
+    def resources(self, detection_offsets: np.ndarray, n_detections: int) -> sp.csr_matrix:
+        """(P, n_detections) 0/1 matrix of the (camera, detection) pairs each point uses.
 
-        ``detection_offsets[c]`` is the global index of camera c's first detection; a (C + 1)-th
-        entry, or ``n_detections``, gives the total (else: last column used + 1).
+        ``detection_offsets[c]`` is the global index of camera c's first detection in the frame.
         """
         offsets = np.asarray(detection_offsets, dtype=int)
         rows, cams = np.nonzero(self.views >= 0)
         cols = offsets[cams] + self.views[rows, cams]
-        if n_detections is None:
-            n_detections = int(offsets[-1]) if len(offsets) > self.views.shape[1] else int(cols.max(initial=-1) + 1)
         return sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(self.views), n_detections))
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
-def _focal(camera: Camera) -> float:
-    return 0.5 * float(camera.K[0, 0] + camera.K[1, 1])
 
 
 def epipolar_distances(cam_a: Camera, cam_b: Camera, norm_a: np.ndarray, norm_b: np.ndarray) -> np.ndarray:
@@ -94,20 +87,15 @@ def epipolar_distances(cam_a: Camera, cam_b: Camera, norm_a: np.ndarray, norm_b:
     lines_b = xa @ essential.T  # (..., D_a, 3): E x_a
     lines_a = xb @ essential  # (..., D_b, 3): E^T x_b
     algebraic = np.abs(lines_b @ np.swapaxes(xb, -1, -2))  # |x_b^T E x_a|, (..., D_a, D_b)
-    dist_b = algebraic / np.linalg.norm(lines_b[..., :2], axis=-1)[..., :, None] * _focal(cam_b)
-    dist_a = algebraic / np.linalg.norm(lines_a[..., :2], axis=-1)[..., None, :] * _focal(cam_a)
-    return np.maximum(dist_a, dist_b)
-
-
-def match_across_cameras(cameras: list[Camera], detections: list[np.ndarray], epipolar_px: float = 3.0,
-                         max_reprojection_px: float = 2.0) -> CrossCameraPoints:
-    """Candidate 3D points of one frame from (D_c, 2) pixel detections per camera (see module doc)."""
-    return match_frames(cameras, [detections], epipolar_px, max_reprojection_px)[0]
+    dist_b = algebraic / np.linalg.norm(lines_b[..., :2], axis=-1)[..., :, None] * cam_b.focal
+    dist_a = algebraic / np.linalg.norm(lines_a[..., :2], axis=-1)[..., None, :] * cam_a.focal
+    distance: np.ndarray = np.maximum(dist_a, dist_b)
+    return distance
 
 
 def match_frames(cameras: list[Camera], frames: list[list[np.ndarray]], epipolar_px: float = 3.0,
                  max_reprojection_px: float = 2.0) -> list[CrossCameraPoints]:
-    """``match_across_cameras`` of every frame of ``frames`` (``frames[f][c]``: (D, 2) pixels).
+    """Candidate 3D points of every frame of ``frames`` (``frames[f][c]``: (D, 2) pixels; module doc).
 
     Frames are independent; matching a block of them at once shares every numpy and OpenCV
     call between them, which is most of the cost of one frame.
@@ -137,13 +125,13 @@ def _distinct_views(views: np.ndarray) -> np.ndarray:
 def _epipolar_pairs(block: BlockDetections, epipolar_px: float) -> tuple[np.ndarray, np.ndarray]:
     """Views (H, C) and frames (H,) of every same-frame detection pair of two cameras within
     ``epipolar_px`` of each other's epipolar line."""
-    n_cams = len(block.cameras)
+    n_cams = len(block.rig)
     views, frames = [np.empty((0, n_cams), dtype=int)], [np.empty(0, dtype=int)]
     for a in range(n_cams):
         for b in range(a + 1, n_cams):
             index_a, index_b = block.padded[:, a], block.padded[:, b]  # (F, D_max)
             distance = epipolar_distances(
-                block.cameras[a], block.cameras[b], block.normalised[index_a], block.normalised[index_b]
+                block.rig.cameras[a], block.rig.cameras[b], block.normalised[index_a], block.normalised[index_b]
             )
             f, i, j = np.nonzero(distance <= epipolar_px)  # padding is NaN: never within
             pair = np.full((len(f), n_cams), -1)
@@ -162,7 +150,7 @@ def _grow(block: BlockDetections, hypotheses: Hypotheses, todo: np.ndarray, radi
     """
     grown = hypotheses.views.copy()
     lift = 2.0 * radius_px + 1.0  # a third coordinate frame * lift puts other frames out of reach
-    for c in range(len(block.cameras)):
+    for c in range(len(block.rig)):
         mine = np.flatnonzero(block.camera == c)
         lacking = todo[(grown[todo, c] < 0) & (hypotheses.depth[todo, c] > 0)]
         if len(mine) == 0 or len(lacking) == 0:

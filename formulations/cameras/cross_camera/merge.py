@@ -45,7 +45,7 @@ _CLOSER_BY = 2.0
 def merge_hypotheses(block: BlockDetections, hypotheses: Hypotheses, max_px: float) -> Hypotheses:
     """The kept points of ``hypotheses``, ordered by frame (see module doc)."""
     order = np.lexsort((hypotheses.rms, -hypotheses.n_views, hypotheses.frame))
-    ranked = hypotheses.take(order[_distinct_points(hypotheses.take(order), block.focal, max_px)])
+    ranked = hypotheses.take(order[_distinct_points(hypotheses.take(order), block.rig.focal, max_px)])
     views = ranked.views.copy()
     keep = _share_detections(block, ranked, views)
     changed = np.flatnonzero(keep & (views != ranked.views).any(axis=1))
@@ -78,7 +78,7 @@ def _share_detections(block: BlockDetections, ranked: Hypotheses, views: np.ndar
     contested = strong[:, None] & (views >= 0) & (users[views] > 1)
     loo = _contested_leave_one_out(block, ranked, contested)
     owner: dict[int, int] = {}
-    for h in np.flatnonzero(contested.any(axis=1)):  # in rank order
+    for h in np.flatnonzero(contested.any(axis=1)).tolist():  # in rank order
         for c in np.flatnonzero(views[h] >= 0):
             detection = int(views[h, c])
             k = owner.get(detection)
@@ -92,7 +92,8 @@ def _share_detections(block: BlockDetections, ranked: Hypotheses, views: np.ndar
     # Two-view points yield to the points of three or more views that still use a detection of theirs.
     stronger = _users(views, n_views > 2, len(block.pixels))
     yields = ~strong & ((views >= 0) & (stronger[views] > 0)).any(axis=1)
-    return ~yields & (n_views >= 2)
+    kept: np.ndarray = ~yields & (n_views >= 2)
+    return kept
 
 
 def _users(views: np.ndarray, which: np.ndarray, n_detections: int) -> np.ndarray:

@@ -85,7 +85,7 @@ def per_camera_candidates(
     counts = np.array([[len(d) for d in frame.normalised] for frame in frames]).ravel()
     first_column = np.concatenate([[0], np.cumsum(counts)])[:-1].reshape(m_count, c_count)
     sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen  # (M, N)
-    parts = []
+    parts: list[tuple[np.ndarray, ...]] = []
     for m, frame in enumerate(frames):
         for c, found in enumerate(frame.normalised):
             if len(found) == 0:
@@ -99,11 +99,11 @@ def per_camera_candidates(
                 c * n + marker, np.full(len(marker), m + 1), np.full(len(marker), c), detection,
                 found[detection] * scale[c, marker, None], cost, first_column[m, c] + detection,
             ))
-    obj, frame, camera_of, detection, location, cost, column = _stack(parts)
+    obj, frame_of, camera_of, detection, location, cost, column = _stack(parts)
     candidates = WindowCandidates(
         template_location=np.nan_to_num((template * scale[..., None]).reshape(c_count * n, 2)),
         template_occluded=np.tile(~state.visible, c_count), n_frames=m_count,
-        object=obj, frame=frame, location=location, template_cost=cost,
+        object=obj, frame=frame_of, location=location, template_cost=cost,
         resources=sp.csr_matrix((np.ones(len(column)), (np.arange(len(column)), column)), shape=(len(column), counts.sum())),
         occlusion_location=np.nan_to_num(occlusion.transpose(0, 2, 1, 3).reshape(c_count * n, m_count, 2)),
         motion=motion.transpose(0, 2, 1, 3).reshape(c_count * n, m_count, 2),

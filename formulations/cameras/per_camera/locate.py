@@ -71,7 +71,8 @@ class LocatedMarkers:
     @property
     def n_views(self) -> np.ndarray:
         """``(N,)`` views behind each position (0: the position is the prediction)."""
-        return self.kept.sum(axis=1)
+        n_views: np.ndarray = self.kept.sum(axis=1)
+        return n_views
 
 
 def locate_markers(
@@ -128,4 +129,5 @@ def _best_subsets(
 def _view_subsets(n_cameras: int) -> np.ndarray:
     """``(S, C)`` bool, every subset of two or more cameras."""
     every = (np.arange(2**n_cameras)[:, None] >> np.arange(n_cameras)) & 1
-    return every[every.sum(axis=1) >= 2].astype(bool)
+    subsets: np.ndarray = every[every.sum(axis=1) >= 2].astype(bool)
+    return subsets

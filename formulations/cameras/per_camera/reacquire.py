@@ -101,14 +101,16 @@ def second_views(
     """
     count = (kept >= 0).sum(axis=1)
     single = np.flatnonzero(count == 1)
-    marker, camera, detection = [], [], []
+    marker_parts: list[np.ndarray] = []
+    camera_parts: list[np.ndarray] = []
+    detection_parts: list[np.ndarray] = []
     for b, found in enumerate(frame.pixels):
         free = np.setdiff1d(np.arange(len(found)), kept[count >= 2, b])
         others = single[kept[single, b] < 0]
-        marker.append(np.repeat(others, len(free)))
-        camera.append(np.full(len(others) * len(free), b))
-        detection.append(np.tile(free, len(others)))
-    marker, camera, detection = (np.concatenate(a) for a in (marker, camera, detection))
+        marker_parts.append(np.repeat(others, len(free)))
+        camera_parts.append(np.full(len(others) * len(free), b))
+        detection_parts.append(np.tile(free, len(others)))
+    marker, camera, detection = (np.concatenate(parts) for parts in (marker_parts, camera_parts, detection_parts))
     if len(marker) == 0:
         return kept
     pixels, normalised = frame.of(kept[marker])
