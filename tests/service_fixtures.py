@@ -26,10 +26,10 @@ REPO = Path(__file__).resolve().parents[1]
 SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)
 
 
-def generated_capture(frames: int, seed: int = 0) -> Capture:
-    """A walking figure's noisy, gappy, ghosted 3D points, frame 0 labeled."""
+def generated_capture(frames: int, seed: int = 0, **scenario: float) -> Capture:
+    """A walking figure's noisy, gappy, ghosted 3D points, frame 0 labeled; ``scenario`` overrides ``SCENARIO``."""
     truth = generate_scene(n_frames=frames, seed=seed)
-    simulated = simulate_cloud(truth, Scenario(**{**SCENARIO.__dict__, "seed": seed}))
+    simulated = simulate_cloud(truth, Scenario(**{**SCENARIO.__dict__, **scenario, "seed": seed}))
     return Capture(list(truth.names), simulated.first_frame.positions[0], truth.rate, points=simulated.cloud.points)
 
 

@@ -1,5 +1,6 @@
 """The service over real HTTP: jobs from JSON and from an uploaded C3D, in both input modes,
-give exactly what the library gives; solve, events, listing, cancel, metrics."""
+give exactly what the library gives; solve, events, listing, cancel, metrics. Certificates
+are checked against windows solved by the formulations themselves."""
 
 from __future__ import annotations
 
@@ -12,15 +13,23 @@ import pytest
 from capture_fixtures import camera_capture
 from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 
+from formulations.markers.cloud_candidates import CloudGating, cloud_candidates
+from formulations.markers.state import MarkerState
+from formulations.methods.registry import get_formulation
+from formulations.window.build import build_window
+from formulations.window.solution import WindowSolution
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.from_recording import capture_from_recording
 from service.evaluation.scene import generate_scene
 from service.io.formats import read_labeled, write_labeled
 from service.io.recording import Recording
 from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.cloud import MARKER_COSTS
+from service.labeling.stats import WindowStats, finite_or_none
 from service.server.settings import Settings
 
 OPTIONS = LabelingOptions(window=10)
+JSON = {"content-type": "application/json"}
 
 
 @pytest.fixture(scope="module")
@@ -33,6 +42,47 @@ def client(tmp_path_factory):
 @pytest.fixture(scope="module")
 def capture() -> Capture:
     return generated_capture(frames=60, seed=3)
+
+
+@pytest.fixture(scope="module")
+def cluttered() -> Capture:
+    """One 20-frame window in heavy clutter whose LP optimum is fractional (a nonzero gap)."""
+    return generated_capture(frames=20, seed=10, noise_mm=10.0, ghosts_per_frame=100.0)
+
+
+def _solved_directly(capture: Capture, formulation: str) -> WindowSolution:
+    """A one-window capture solved by the formulations themselves, posed as the service poses 3D
+    points: candidates gated from the labeled first frame, marker arc costs, no layout term."""
+    state = MarkerState.from_first_frame(np.asarray(capture.first_frame, dtype=float))
+    gated = cloud_candidates(state, capture.points[1:], CloudGating(), None)
+    return get_formulation(formulation).solve(build_window(gated.candidates, MARKER_COSTS)[0])
+
+
+def _solve(client, capture: Capture, formulation: str) -> dict:
+    options = LabelingOptions(formulation=formulation, window=capture.n_frames)
+    answer = client.post("/v1/solve", content=document_json(capture, options), headers=JSON)
+    assert answer.status_code == 200, answer.text
+    return answer.json()
+
+
+def _assert_consistent(certificate: dict) -> None:
+    """The figures agree: gap = max(0, cost - bound) / |cost|, and null exactly when no bound is proven."""
+    if certificate["lower_bound"] is None:
+        assert certificate["gap"] is None and not certificate["integral"]
+        return
+    cost, bound = certificate["cost"], certificate["lower_bound"]
+    assert bound <= cost + 1e-9 * abs(cost)
+    assert certificate["gap"] == pytest.approx(max(0.0, cost - bound) / abs(cost), rel=1e-9, abs=1e-15)
+
+
+def _assert_same_certificates(windows: list[dict], stats: list[WindowStats]) -> None:
+    """Each served window's certificate is the library's, with null for what nothing proved."""
+    for window, s in zip(windows, stats, strict=True):
+        assert (window["template"], window["last"], window["integral"], window["status"]) == (
+            s.template, s.last, s.integral, s.status)
+        assert (window["cost"], window["lower_bound"], window["gap"]) == (
+            s.cost, finite_or_none(s.lower_bound), finite_or_none(s.gap))
+        _assert_consistent(window)
 
 
 def _submit(client, body: str) -> dict:
@@ -84,6 +134,7 @@ def test_json_job_runs_to_done_and_matches_the_library(client, capture, tmp_path
     assert [w["index"] for w in job["windows"]] == list(range(7))
     expected, stats = CaptureLabeling(capture, OPTIONS).label()
     assert [w["integral"] for w in job["windows"]] == [s.integral for s in stats]
+    _assert_same_certificates(job["windows"], stats)
     _assert_same_result(client, accepted["id"], expected, tmp_path)
 
 
@@ -149,10 +200,49 @@ def test_solve_answers_one_window_with_its_certificate(client):
     certificate = body["certificate"]
     assert certificate["integral"] == stats[0].integral and certificate["cost"] == stats[0].cost
     assert certificate["lower_bound"] <= certificate["cost"] + 1e-9 and certificate["status"] == stats[0].status
+    optimum = _solved_directly(capture, "dp-extended")  # exact by dynamic programming: no LP, no HiGHS
+    assert certificate["integral"] and certificate["gap"] == pytest.approx(0.0, abs=1e-12)
+    assert certificate["cost"] == pytest.approx(optimum.cost, rel=1e-12)
+    assert certificate["lower_bound"] == pytest.approx(optimum.cost, rel=1e-9)
+    _assert_consistent(certificate)
     longer = client.post("/v1/solve", content=document_json(capture, LabelingOptions(window=5)),
                          headers={"content-type": "application/json"})
     assert longer.status_code == 422
     assert longer.json()["message"].startswith("frames: 12 frames is more than one window (window = 5)")
+
+
+def test_solve_reports_the_gap_of_a_fractional_window(client, cluttered):
+    certificate = _solve(client, cluttered, "lp-l1")["certificate"]
+    relaxed, optimum = _solved_directly(cluttered, "lp-l1"), _solved_directly(cluttered, "ilp")
+    assert not certificate["integral"] and certificate["gap"] > 1e-5 and certificate["status"] == relaxed.status
+    assert certificate["cost"] == pytest.approx(relaxed.cost, rel=1e-12)
+    assert certificate["lower_bound"] == pytest.approx(relaxed.lower_bound, rel=1e-12)
+    # The LP bound is below the 0/1 optimum, and the rounded paths' cost above it.
+    assert certificate["lower_bound"] <= optimum.cost <= certificate["cost"]
+    _assert_consistent(certificate)
+
+
+def test_solve_proves_nothing_for_a_heuristic(client, cluttered):
+    """nn-hungarian has no bound: its gap is null, not 0, and its cost is above the optimum."""
+    certificate = _solve(client, cluttered, "nn-hungarian")["certificate"]
+    baseline, optimum = _solved_directly(cluttered, "nn-hungarian"), _solved_directly(cluttered, "ilp")
+    assert certificate["gap"] is None and certificate["lower_bound"] is None and not certificate["integral"]
+    assert certificate["cost"] == pytest.approx(baseline.cost, rel=1e-12) and certificate["cost"] > optimum.cost
+    _assert_consistent(certificate)
+
+
+@pytest.mark.parametrize("formulation", ["lp-l1", "nn-hungarian"])
+def test_job_status_certifies_a_window_as_solve_does(client, cluttered, formulation):
+    options = LabelingOptions(formulation=formulation, window=cluttered.n_frames)
+    job = wait_for(client, _submit(client, document_json(cluttered, options))["id"])
+    assert job["state"] == "done", job
+    (window,) = job["windows"]
+    solved = _solve(client, cluttered, formulation)["certificate"]
+    figures = ("integral", "gap", "cost", "lower_bound", "status")
+    assert {k: window[k] for k in figures} == {k: solved[k] for k in figures}
+    assert window["cost"] == pytest.approx(_solved_directly(cluttered, formulation).cost, rel=1e-12)
+    _, stats = CaptureLabeling(cluttered, options).label()
+    _assert_same_certificates(job["windows"], stats)
 
 
 def test_cancel_stops_a_running_job_between_windows(client):

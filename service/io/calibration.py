@@ -18,6 +18,8 @@ from formulations.cameras.camera import Camera
 from service.errors import InputError
 
 METRES_PER_UNIT = {"m": 1.0, "mm": 1e-3}
+# Pose2Sim's and caliscope's tables: K, distortions, rotation (Rodrigues or 3x3), t, image size.
+TOML_KEYS = ("matrix", "distortions", "rotation", "translation", "size")
 
 
 def _read(path: Path, parse: Callable[[str], Any]) -> Any:
@@ -27,18 +29,15 @@ def _read(path: Path, parse: Callable[[str], Any]) -> Any:
         raise InputError(f"{path}: cannot read calibration: {exc}") from None
 
 
-def _camera(path: Path, name: str, table: Any, build: Callable[[Callable[[str], Any]], Camera]) -> Camera:
-    """Run ``build(get)``, turning a missing key or an invalid camera into an InputError."""
+def _camera(path: Path, name: str, table: Any, make: Callable[..., Camera], keys: tuple[str, ...]) -> Camera:
+    """``make(*(table[key] for key in keys), name)``; a missing key or an invalid camera is an InputError."""
     if not isinstance(table, dict):
         raise InputError(f"{path}: camera {name!r}: expected a table of camera parameters")
-
-    def get(key: str) -> Any:
+    for key in keys:
         if key not in table:
             raise InputError(f"{path}: camera {name!r}: missing key {key!r}")
-        return table[key]
-
     try:
-        return build(get)
+        return make(*(table[key] for key in keys), name)
     except ValueError as exc:  # Camera names the camera and the problem
         raise InputError(f"{path}: {exc}") from None
 
@@ -63,8 +62,7 @@ def load_pose2sim_toml(path: Path, units: str | None = None) -> list[Camera]:
         name = str(table.get("name", section)) if isinstance(table, dict) else section
         if isinstance(table, dict) and table.get("fisheye", False):
             raise InputError(f"{path}: camera {name!r}: fisheye lenses are not supported")
-        cameras.append(_camera(path, name, table, lambda get, name=name: Camera.from_rvec(
-            get("matrix"), get("distortions"), get("rotation"), get("translation"), get("size"), name)))
+        cameras.append(_camera(path, name, table, Camera.from_rvec, TOML_KEYS))
     if not cameras:
         raise InputError(f"{path}: no camera tables found")
     return _in_units(cameras, "m", units, path)
@@ -83,8 +81,7 @@ def load_caliscope_toml(path: Path, units: str | None = None) -> list[Camera]:
         name = f"cam_{table.get('cam_id', key) if isinstance(table, dict) else key}"
         if isinstance(table, dict) and table.get("ignore", False):
             continue
-        cameras.append(_camera(path, name, table, lambda get, name=name: Camera(
-            get("matrix"), get("distortions"), get("rotation"), get("translation"), get("size"), name)))
+        cameras.append(_camera(path, name, table, Camera, TOML_KEYS))
     return _in_units(cameras, "m", units, path)
 
 
@@ -100,14 +97,8 @@ def load_markerflow_json(path: Path, units: str | None = None) -> list[Camera]:
     cameras = []
     for index, table in enumerate(data["cameras"]):
         name = str(table.get("name", f"#{index}")) if isinstance(table, dict) else f"#{index}"
-
-        def build(get: Callable[[str], Any], name: str = name, table: Any = table) -> Camera:
-            fields = (get("K"), get("distortion"))
-            if "R" in table:
-                return Camera(*fields, get("R"), get("t"), get("image_size"), name)
-            return Camera.from_rvec(*fields, get("rvec"), get("t"), get("image_size"), name)
-
-        cameras.append(_camera(path, name, table, build))
+        rotation, make = ("R", Camera) if isinstance(table, dict) and "R" in table else ("rvec", Camera.from_rvec)
+        cameras.append(_camera(path, name, table, make, ("K", "distortion", rotation, "t", "image_size")))
     return _in_units(cameras, file_units, units, path)
 
 

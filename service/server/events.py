@@ -27,7 +27,7 @@ async def job_events(store: JobStore, job_id: str, poll_seconds: float) -> Async
     sent, state = -1, None
     while True:
         # The job first, then its windows: a job seen terminal has all its windows stored.
-        job = await run_in_threadpool(store.get, job_id)
+        job = await run_in_threadpool(store.known, job_id)
         for window in await run_in_threadpool(store.windows, job_id, sent):
             sent = window.index
             summary = WindowSummary.of_stored(window).model_dump()

@@ -40,7 +40,7 @@ class BodyLimit:
                 return await self._refuse(send)
             chunks.append(chunk)
             more = message.get("more_body", False)
-        body = b"".join(chunks)
+        body: bytes | None = b"".join(chunks)
 
         async def replay() -> Message:
             nonlocal body
@@ -69,13 +69,13 @@ def check_limits(document: CaptureDocument, limits: Limits) -> None:
     _at_most("frames", document.n_frames, "frames", limits.max_frames, "max_frames")
     _at_most("markers", len(document.markers), "markers", limits.max_markers, "max_markers")
     if document.points is not None:
-        for f, frame in enumerate(document.points):
-            _at_most(f"points.{f}", len(frame), "points", limits.max_points_per_frame, "max_points_per_frame")
+        for f, points in enumerate(document.points):
+            _at_most(f"points.{f}", len(points), "points", limits.max_points_per_frame, "max_points_per_frame")
     if document.cameras is not None:
         _at_most("cameras", len(document.cameras), "cameras", limits.max_cameras, "max_cameras")
     for camera, frames in (document.detections or {}).items():
-        for f, frame in enumerate(frames):
-            _at_most(f"detections.{camera}.{f}", len(frame), "detections", limits.max_detections_per_camera,
+        for f, detections in enumerate(frames):
+            _at_most(f"detections.{camera}.{f}", len(detections), "detections", limits.max_detections_per_camera,
                      "max_detections_per_camera")
 
 

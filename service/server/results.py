@@ -10,6 +10,7 @@ import io
 import json
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,9 +38,11 @@ def trajectories_from_bytes(data: bytes) -> LabeledTrajectories:
         )
 
 
-def nullable(values: np.ndarray) -> list:
+def nullable(values: np.ndarray) -> list[Any]:
     """Nested lists with None where NaN (JSON has no NaN)."""
-    return np.where(np.isnan(values), None, values).tolist()
+    cells = values.astype(object)
+    cells[np.isnan(values)] = None
+    return cells.tolist()
 
 
 def trajectories_json(traj: LabeledTrajectories) -> dict:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
 from fastapi.responses import StreamingResponse
@@ -15,7 +15,8 @@ from service.server.results import MEDIA_TYPES, render, trajectories_from_bytes
 from service.server.schemas import ErrorBody, JobAccepted, JobPage, JobStatus, JobSummary, LabeledResult, WindowSummary
 from service.server.store import ACTIVE, Job, JobStore
 
-ERRORS = {401: {"model": ErrorBody}, 404: {"model": ErrorBody, "description": "No such job for this caller."}}
+ERRORS: dict[int | str, dict[str, Any]] = {
+    401: {"model": ErrorBody}, 404: {"model": ErrorBody, "description": "No such job for this caller."}}
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses={401: {"model": ErrorBody}})
 
 

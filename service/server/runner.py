@@ -32,7 +32,7 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     store = store_for(db_url)
     worker = f"{socket.gethostname()}:{os.getpid()}"  # which process computed each window
     if not store.start(job_id):
-        return store.get(job_id).state
+        return store.known(job_id).state
     try:
         document = CaptureDocument.model_validate_json(store.input(job_id))
         labeling = CaptureLabeling(document.capture(), document.options())
@@ -41,8 +41,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
             store.save_window(job_id, outcome, worker)
             outcomes.append(outcome)
             # Between windows: a cancel (from any process) or a shutdown stops the job here.
-            if stop() or store.get(job_id).state != "running":
-                return store.get(job_id).state
+            if stop() or store.known(job_id).state != "running":
+                return store.known(job_id).state
         store.finish(job_id, trajectories_to_bytes(labeling.result(outcomes)))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
@@ -51,4 +51,4 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     except Exception as error:  # a bug: the job fails with its name, the server keeps serving
         log.exception("job %s failed", job_id)
         store.fail(job_id, f"internal error: {type(error).__name__}: {error}")
-    return store.get(job_id).state
+    return store.known(job_id).state

@@ -9,8 +9,8 @@ from pydantic import BaseModel, Field
 
 from service.labeling.stats import WindowStats, finite_or_none
 from service.server.store import Job, StoredWindow
+from service.server.tables import JobState
 
-State = Literal["queued", "running", "done", "failed", "cancelled"]
 Position = list[float | None]
 
 
@@ -52,7 +52,7 @@ class WindowSummary(Certificate):
 
 class JobSummary(BaseModel):
     id: str
-    state: State
+    state: JobState
     source: str = Field(description="'json', or the uploaded file's name.")
     created_at: datetime
     updated_at: datetime

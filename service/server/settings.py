@@ -28,13 +28,14 @@ class Limits(BaseModel):
     """What one request may ask for; beyond it the answer is 413 (body) or 422 (content)."""
 
     model_config = ConfigDict(extra="forbid")
-    max_body_bytes: int = Field(64 * 2**20, gt=0)
-    max_frames: int = Field(100_000, gt=0)
-    max_markers: int = Field(300, gt=0)
-    max_points_per_frame: int = Field(2_000, gt=0)
-    max_detections_per_camera: int = Field(2_000, gt=0)
-    max_cameras: int = Field(64, gt=0)
-    max_solve_frames: int = Field(200, ge=2)
+    # Defaults by keyword: type checkers take only a keyword default for one (Limits() needs no argument).
+    max_body_bytes: int = Field(default=64 * 2**20, gt=0)
+    max_frames: int = Field(default=100_000, gt=0)
+    max_markers: int = Field(default=300, gt=0)
+    max_points_per_frame: int = Field(default=2_000, gt=0)
+    max_detections_per_camera: int = Field(default=2_000, gt=0)
+    max_cameras: int = Field(default=64, gt=0)
+    max_solve_frames: int = Field(default=200, ge=2)
 
 
 class Settings(BaseSettings):
@@ -42,11 +43,11 @@ class Settings(BaseSettings):
 
     model_config = SettingsConfigDict(env_prefix="MARKERFLOW_", env_nested_delimiter="__", extra="forbid")
     host: str = "127.0.0.1"
-    port: int = Field(8000, ge=0, le=65535)
+    port: int = Field(default=8000, ge=0, le=65535)
     db: str = "sqlite:///markerflow.db"
     dask: str | None = None
-    max_parallel_jobs: int = Field(2, gt=0)
-    events_poll_seconds: float = Field(0.2, gt=0)
+    max_parallel_jobs: int = Field(default=2, gt=0)
+    events_poll_seconds: float = Field(default=0.2, gt=0)
     tokens: dict[str, str] | list[str] = Field(default_factory=dict, repr=False)  # secrets stay out of logs
     limits: Limits = Field(default_factory=Limits)
 
@@ -115,10 +116,19 @@ def load_settings(config: Path | None = None, **options: Any) -> Settings:
         if not config.is_file():
             raise InputError(f"{config}: no such config file")
         source = str(config)
-        cls = type("FileSettings", (Settings,), {"model_config": SettingsConfigDict(toml_file=config)})
+        cls = _read_from(config)
     try:
         return cls(**given)
     except ValidationError as error:
         raise InputError(f"{source}: {describe_validation_error(error)}") from None
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{source}: not valid TOML ({error})") from None
+
+
+def _read_from(config: Path) -> type[Settings]:
+    """``Settings`` whose TOML source is ``config``."""
+
+    class FileSettings(Settings):
+        model_config = SettingsConfigDict(toml_file=config)
+
+    return FileSettings

@@ -13,16 +13,18 @@ import uuid
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from functools import cache
+from typing import Any, cast, get_args
 
 from sqlalchemy import case, func, select, update
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
 
 from service.labeling.outcome import WindowOutcome
-from service.server.tables import JobRow, WindowRow, engine_for
+from service.server.tables import JobRow, JobState, WindowRow, engine_for
 
-ACTIVE = ("queued", "running")
-STATES = ("queued", "running", "done", "failed", "cancelled")
+ACTIVE: tuple[JobState, ...] = ("queued", "running")
+STATES: tuple[JobState, ...] = get_args(JobState)
 
 
 @dataclass(frozen=True)
@@ -31,7 +33,7 @@ class Job:
 
     id: str
     owner: str
-    state: str
+    state: JobState
     source: str
     created_at: datetime
     updated_at: datetime
@@ -99,14 +101,19 @@ class JobStore:
             row = session.scalars(query).first()
             return Job.of(row) if row else None
 
+    def known(self, job_id: str) -> Job:
+        """A job known to exist (jobs are never deleted), e.g. one a runner or an event stream follows."""
+        with self.session() as session:
+            return Job.of(session.execute(select(JobRow).where(JobRow.id == job_id)).scalar_one())
+
     def page(self, owner: str, limit: int, offset: int) -> tuple[list[Job], int]:
         """The owner's jobs, newest first, and how many there are."""
         with self.session() as session:
             rows = session.scalars(
                 select(JobRow).where(JobRow.owner == owner).order_by(JobRow.seq.desc()).limit(limit).offset(offset)
             ).all()
-            total = session.scalar(select(func.count()).select_from(JobRow).where(JobRow.owner == owner))
-            return [Job.of(row) for row in rows], int(total)
+            total = session.execute(select(func.count()).select_from(JobRow).where(JobRow.owner == owner)).scalar_one()
+            return [Job.of(row) for row in rows], total
 
     def unfinished(self) -> list[str]:
         with self.session() as session:
@@ -114,11 +121,15 @@ class JobStore:
 
     def input(self, job_id: str) -> bytes:
         with self.session() as session:
-            return session.scalar(select(JobRow.input).where(JobRow.id == job_id))
+            return session.execute(select(JobRow.input).where(JobRow.id == job_id)).scalar_one()
 
-    def result(self, job_id: str) -> bytes | None:
+    def result(self, job_id: str) -> bytes:
+        """The result of a done job (``finish`` stores it with the state)."""
         with self.session() as session:
-            return session.scalar(select(JobRow.result).where(JobRow.id == job_id))
+            stored = session.execute(select(JobRow.result).where(JobRow.id == job_id)).scalar_one()
+        if stored is None:
+            raise LookupError(f"job {job_id} has no result")
+        return stored
 
     def outcomes(self, job_id: str) -> list[WindowOutcome]:
         with self.session() as session:
@@ -163,13 +174,14 @@ class JobStore:
     def cancel(self, job_id: str) -> bool:
         return self._move(job_id, ACTIVE, state="cancelled")
 
-    def _move(self, job_id: str, allowed: tuple[str, ...], **values) -> bool:
+    def _move(self, job_id: str, allowed: tuple[JobState, ...], **values: Any) -> bool:
         """Change the job only if its state is in ``allowed``: a cancel is never overwritten."""
         with self.session.begin() as session:
             moved = session.execute(
                 update(JobRow).where(JobRow.id == job_id, JobRow.state.in_(allowed)).values(updated_at=_now(), **values)
             )
-            return moved.rowcount == 1
+            # Session.execute is typed as returning a Result; an UPDATE's result is a CursorResult.
+            return cast(CursorResult[Any], moved).rowcount == 1
 
     def count_by_state(self) -> dict[str, int]:
         with self.session() as session:

@@ -84,8 +84,9 @@ def _checked(document: CaptureDocument, source: str, limits: Limits) -> Submissi
     check_formulation(document.formulation)
     # The library checks its options (formulation, window, association) itself; on the
     # first two frames that costs nothing in either input mode.
+    # A validated document has either points or detections.
     head = {"points": document.points[:2]} if document.points is not None else {
-        "detections": {camera: frames[:2] for camera, frames in document.detections.items()}}
+        "detections": {camera: frames[:2] for camera, frames in (document.detections or {}).items()}}
     CaptureLabeling(document.model_copy(update=head).capture(), document.options())
     return Submission(document, source, len(window_spans(document.n_frames, document.window)))
 

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 from datetime import datetime
+from typing import Literal
 
 from sqlalchemy import ForeignKey, LargeBinary, String, Text, create_engine, event
 from sqlalchemy.engine import Engine
 from sqlalchemy.orm import DeclarativeBase, Mapped, deferred, mapped_column
+
+JobState = Literal["queued", "running", "done", "failed", "cancelled"]
 
 
 class Base(DeclarativeBase):
@@ -18,7 +21,7 @@ class JobRow(Base):
     seq: Mapped[int] = mapped_column(primary_key=True, autoincrement=True)  # newest-first order
     id: Mapped[str] = mapped_column(String(32), unique=True)
     owner: Mapped[str] = mapped_column(String(200), index=True)
-    state: Mapped[str] = mapped_column(String(16), index=True)
+    state: Mapped[JobState] = mapped_column(String(16), index=True)  # typed only: stored as text
     source: Mapped[str] = mapped_column(String(300))
     created_at: Mapped[datetime]
     updated_at: Mapped[datetime]
