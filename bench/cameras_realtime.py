@@ -4,11 +4,11 @@ CMU 85_02 placed in the real Pose2Sim 4-camera rig through the issue's scenario
 (``configs/scenarios/cmu-85-02-pose2sim-cameras.toml``: 0.5 px noise, 3 px blob merging,
 10 % occlusion in 15-frame bursts, 2 clutter points per camera). Prints medians over runs.
 
-``joint-3d``: matching (epipolar gating, triangulation, growth and merging of the cross-camera
-points, plus their detection resources), labeling (window LP on those points), and the total.
-The matcher works on blocks of frames (``service.labeling.joint_3d``); one frame at a time is printed
-beside it, measured in the same run. ``per-camera``: the total (its own stages interleave).
-Goal: <= 4 ms per frame in total.
+Both associations are timed through ``CaptureLabeling``, from detections to labeled 3D (the
+total). For ``joint-3d`` the matching alone (epipolar gating, triangulation, growth and merging
+of the cross-camera points, plus their detection resources) is timed beside it, in the blocks
+of frames the labeling matches in (``service.labeling.joint_3d``) and one frame at a time;
+labeling is the total less the matching in blocks. Goal: <= 4 ms per frame in total.
 
     .venv/bin/python bench/cameras_realtime.py [--runs 5] [--frames 0] [--association joint-3d|per-camera]
 """
@@ -25,27 +25,25 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from formulations.cameras.camera import Camera  # noqa: E402
+from formulations.cameras.rig import Rig  # noqa: E402
+from service.capture.capture import Capture, LabelingOptions  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
-from service.evaluation.simulate_cameras import (  # noqa: E402
-    CameraCapture,
-    CameraRig,
-    place_in_volume,
-    simulate_cameras,
-)
+from service.evaluation.simulate_cameras import CameraCapture, place_in_volume, simulate_cameras  # noqa: E402
 from service.io.calibration import load_calibration  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
 from service.io.recording import Recording  # noqa: E402
-from service.labeling.cloud import CloudLabeler  # noqa: E402
+from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 from service.labeling.joint_3d import cross_camera_cloud  # noqa: E402
 
 SCENARIO = ROOT / "configs" / "scenarios" / "cmu-85-02-pose2sim-cameras.toml"
 RECORDING = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 
 
-def simulate(frames: int) -> tuple[list, CameraCapture]:
+def simulate(frames: int) -> tuple[list[Camera], CameraCapture]:
     scenario = Scenario.from_toml(SCENARIO)
-    cameras = load_calibration(scenario.calibration, units="mm")
-    rig = CameraRig.from_cameras(cameras)
+    cameras = load_calibration(Path(scenario.calibration), units="mm")
+    rig = Rig.of(cameras)
     truth = read_labeled(RECORDING)
     positions = truth.positions[: frames or truth.n_frames]
     capture = simulate_cameras(
@@ -57,31 +55,23 @@ def simulate(frames: int) -> tuple[list, CameraCapture]:
     return cameras, capture
 
 
-def joint_3d(cameras: list, capture: CameraCapture, block_frames: int) -> dict[str, float]:
-    """Seconds per frame: matching (all frames, with resources), labeling, total."""
-    n = len(capture.detections)
+def matching(cameras: list[Camera], simulated: CameraCapture, block_frames: int) -> float:
+    """Seconds per frame to match every frame across cameras, with its resources."""
+    n = len(simulated.detections)
     start = time.perf_counter()
-    cloud, _ = cross_camera_cloud(cameras, capture.detections, capture.truth.rate, block_frames=block_frames)
+    cloud, _ = cross_camera_cloud(cameras, simulated.detections, simulated.truth.rate, block_frames=block_frames)
     for f in range(n):
         cloud.resources[f]  # matches the frame's block, then builds its resource rows
-    matched = time.perf_counter()
-    CloudLabeler().label(cloud, capture.first_frame.names, capture.first_frame.positions[0])
-    done = time.perf_counter()
-    return {"matching": (matched - start) / n, "labeling": (done - matched) / n, "total": (done - start) / n}
+    return (time.perf_counter() - start) / n
 
 
-def per_camera(cameras: list, capture: CameraCapture) -> dict[str, float]:
-    try:
-        from service.capture.capture import Capture
-        from service.labeling.per_camera import PerCameraLabeler
-    except ImportError as error:
-        raise SystemExit(f"--association per-camera is not available in this tree ({error})") from None
-    first = capture.first_frame
-    job = Capture(list(first.names), first.positions[0], first.rate, cameras=cameras, detections=capture.detections)
-    labeler = PerCameraLabeler()
+def total(cameras: list[Camera], simulated: CameraCapture, association: str) -> float:
+    """Seconds per frame from the detections to the labeled trajectories."""
+    first = simulated.first_frame
+    capture = Capture(list(first.names), first.positions[0], first.rate, cameras=cameras, detections=simulated.detections)
     start = time.perf_counter()
-    labeler.assemble(job, list(labeler.windows(job)))
-    return {"total": (time.perf_counter() - start) / len(capture.detections)}
+    CaptureLabeling(capture, LabelingOptions(association=association)).label()
+    return (time.perf_counter() - start) / len(simulated.detections)
 
 
 def main() -> None:
@@ -93,15 +83,13 @@ def main() -> None:
     cameras, capture = simulate(args.frames)
     n_markers, n_frames = capture.marker_detection.shape[2], len(capture.detections)
     print(f"85_02: {n_frames} frames, {n_markers} markers, {len(cameras)} cameras, {args.association}")
-    if args.association == "per-camera":
-        runs = [per_camera(cameras, capture) for _ in range(args.runs)]
-        print(f"total {1000 * np.median([r['total'] for r in runs]):.2f} ms/frame")
-    else:
+    ms = {"total": 1000 * float(np.median([total(cameras, capture, args.association) for _ in range(args.runs)]))}
+    if args.association == "joint-3d":
         for block in (20, 1):
-            runs = [joint_3d(cameras, capture, block) for _ in range(args.runs)]
-            figures = {k: 1000 * float(np.median([r[k] for r in runs])) for k in runs[0]}
-            print(f"matching in blocks of {block:2d} frame(s): matching {figures['matching']:.2f}  "
-                  f"labeling {figures['labeling']:.2f}  total {figures['total']:.2f} ms/frame")
+            ms[f"matching {block}"] = 1000 * float(np.median([matching(cameras, capture, block) for _ in range(args.runs)]))
+        print(f"matching in blocks of 20 frames {ms['matching 20']:.2f}, one frame at a time {ms['matching 1']:.2f}; "
+              f"labeling {ms['total'] - ms['matching 20']:.2f} ms/frame")
+    print(f"total {ms['total']:.2f} ms/frame")
     print(f"(medians of {args.runs} runs; real time at 120 Hz is 8.33 ms per frame, the goal 4 ms)")
 
 

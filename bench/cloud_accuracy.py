@@ -19,11 +19,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from service.capture.capture import LabelingOptions  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.scores import label_scores  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
-from service.labeling.cloud import CloudLabeler  # noqa: E402
+from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 
 RECORDING = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 
@@ -35,18 +36,18 @@ def main() -> None:
     parser.add_argument("--formulations", nargs="+", default=["lp-l1"])
     args = parser.parse_args()
     truth = read_labeled(RECORDING)
-    captures = [simulate_cloud(truth, Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10,
+    simulations = [simulate_cloud(truth, Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10,
                                                ghosts_per_frame=2.0, seed=s)) for s in range(args.seeds)]
     print(f"{'formulation':14s} {'mu':>5s} {'accuracy per seed':40s} {'median':>7s} {'swaps':>5s} "
           f"{'integral':>8s} {'max gap':>8s} {'ms/frame':>8s}")
     for name, mu in [(f, m) for f in args.formulations for m in args.mu]:
         accuracy, swaps, integral, gaps, speed = [], 0, [], [], []
-        for capture in captures:
+        for simulated in simulations:
             start = time.perf_counter()
-            result, windows = CloudLabeler(formulation=name, layout_weight=mu).label(
-                capture.cloud, capture.first_frame.names, capture.first_frame.positions[0])
-            speed.append((time.perf_counter() - start) / capture.cloud.n_frames)
-            scores = label_scores(capture, result)
+            options = LabelingOptions(formulation=name, layout_weight=mu)
+            result, windows = CaptureLabeling(simulated.capture(), options).label()
+            speed.append((time.perf_counter() - start) / simulated.cloud.n_frames)
+            scores = label_scores(simulated, result)
             accuracy.append(scores.label_accuracy)
             swaps += scores.swaps
             integral += [w.integral for w in windows]

@@ -22,7 +22,7 @@ sys.path.insert(0, str(ROOT))
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
-from service.labeling.cloud import CloudLabeler  # noqa: E402
+from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"
 
@@ -31,20 +31,19 @@ def measure(path: Path, frames: int, runs: int) -> dict[str, float]:
     truth = read_labeled(path)
     scenario = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0,
                         frames=min(frames, truth.n_frames))
-    capture = simulate_cloud(truth, scenario)
-    names, first = capture.first_frame.names, capture.first_frame.positions[0]
+    simulated = simulate_cloud(truth, scenario)
     rows = []
     for _ in range(runs):
         start = time.perf_counter()
-        _, windows = CloudLabeler().label(capture.cloud, names, first)
+        _, windows = CaptureLabeling(simulated.capture()).label()
         total = time.perf_counter() - start
-        n = capture.cloud.n_frames - 1
+        n = simulated.cloud.n_frames - 1
         prepare = sum(w.prepare_seconds for w in windows)
         formulation = sum(w.build_seconds + w.solve_seconds + w.round_seconds for w in windows)
         lp_windows = sum(w.components.get("coupled", 0) > 0 for w in windows)
         rows.append({"total": total / n, "prepare": prepare / n, "formulation": formulation / n,
                      "other": (total - prepare - formulation) / n, "lp_window_share": lp_windows / len(windows)})
-    return {k: float(np.median([r[k] for r in rows])) for k in rows[0]} | {"frames": capture.cloud.n_frames}
+    return {k: float(np.median([r[k] for r in rows])) for k in rows[0]} | {"frames": simulated.cloud.n_frames}
 
 
 def main() -> None:

@@ -32,7 +32,7 @@ from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
 from service.io.window_files import save_window  # noqa: E402
-from service.labeling.cloud import CloudLabeler  # noqa: E402
+from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 
 FOLDER = ROOT / "tests" / "fixtures" / "integrality"
 DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"
@@ -61,9 +61,9 @@ def from_recording(name: str, seeds: range, frames: int, limit: int) -> list:
             found.append(restrict(problem, np.flatnonzero(label == component))[0])
 
     for seed in seeds:
-        capture = simulate_cloud(truth, Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10,
+        simulated = simulate_cloud(truth, Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10,
                                                  ghosts_per_frame=2.0, seed=seed, frames=frames))
-        CloudLabeler().label(capture.cloud, capture.first_frame.names, capture.first_frame.positions[0], observer=keep)
+        CaptureLabeling(simulated.capture()).label(observer=keep)
     return found[:limit]
 
 

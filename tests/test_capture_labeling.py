@@ -11,7 +11,7 @@ from capture_fixtures import camera_capture, points_capture
 from service.capture.capture import LabelingOptions
 from service.errors import InputError
 from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.cloud import first_marker_state
+from service.labeling.loop import first_marker_state
 from service.labeling.outcome import WindowOutcome
 
 

@@ -99,6 +99,23 @@ def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
     assert set(summary) == SUMMARY_KEYS
     assert (summary["frames"], summary["markers"], summary["formulation"]) == (240, 41, "lp-l1")
     assert summary["label_accuracy"] > 0.99
+    assert_figures_agree(summary, 240)
+
+
+def assert_figures_agree(summary: dict, scenario_frames: int) -> None:
+    """The figures against the input file and against each other."""
+    labels, points = read_c3d(CMU)
+    assert summary["markers"] == len(labels) and summary["frames"] == min(scenario_frames, points.shape[2])
+    assert 0.0 <= summary["label_accuracy"] <= 1.0
+    assert isinstance(summary["swaps"], int) and summary["swaps"] >= 0
+    # A swap is a marker holding another marker's point: a wrong label, so accuracy below 1.
+    assert summary["swaps"] == 0 or summary["label_accuracy"] < 1.0
+    assert all(0.0 <= summary[key] <= 1.0 for key in ("ghost_precision", "ghost_recall") if summary[key] is not None)
+    # An integral window is proven optimal (gap 0, up to rounding); only fractional ones add to the gaps.
+    assert 0.0 <= summary["integral_window_fraction"] <= 1.0
+    assert 0.0 <= summary["gap_median"] <= summary["gap_max"]
+    assert summary["integral_window_fraction"] < 1.0 or summary["gap_max"] < 1e-9
+    assert summary["seconds_per_frame"] > 0.0
 
 
 def test_eval_takes_the_formulation_option(tmp_path: Path) -> None:
@@ -126,6 +143,7 @@ def test_eval_runs_a_camera_scenario_through_a_real_calibration(tmp_path: Path) 
     summary = json.loads(result.stdout)
     assert summary["frames"] == 120 and summary["label_accuracy"] >= 0.98
     assert 0 < summary["rmse_mm"] <= 3.0 < summary["filled_rmse_mm"]
+    assert_figures_agree(summary, 120)
 
 
 def test_track_writes_c3d_that_puts_every_point_back_under_its_label(tmp_path: Path) -> None:

@@ -7,10 +7,10 @@ whole recording 99.83 %); they may not get worse.
 """
 
 import numpy as np
-from capture_fixtures import simulated_cmu
+from capture_fixtures import capture_of, simulated_cmu
 
-from service.evaluation.camera_scores import camera_scores, joint_3d_views
-from service.labeling.cloud import CloudLabeler
+from service.evaluation.camera_scores import camera_scores
+from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.joint_3d import cross_camera_cloud
 
 FRAMES = 300
@@ -19,14 +19,16 @@ FRAMES = 300
 def test_joint_3d_labels_cmu_85_02_through_the_pose2sim_rig():
     cameras, capture = simulated_cmu(FRAMES)
     names = capture.first_frame.names
-    cloud, matched = cross_camera_cloud(cameras, capture.detections, capture.truth.rate)
+    cloud, _ = cross_camera_cloud(cameras, capture.detections, capture.truth.rate)
     # Points share detections: the cloud's resources are what the conflict rows use.
     assert all(
         r.shape == (len(p), sum(len(d) for d in det))
         for r, p, det in zip(cloud.resources, cloud.points, capture.detections)
     )
-    result, windows = CloudLabeler().label(cloud, capture.first_frame.names, capture.first_frame.positions[0])
-    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, joint_3d_views(result, matched))
+    labeling = CaptureLabeling(capture_of(cameras, capture))
+    outcomes = list(labeling.windows())
+    result, windows = labeling.result(outcomes), [o.stats for o in outcomes]
+    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, labeling.views(outcomes))
     assert scores.marker_frames > 0.9 * (FRAMES - 1) * len(names)
     assert scores.label_accuracy >= 0.999
     assert scores.rmse_mm <= 3.0

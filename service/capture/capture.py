@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from formulations.cameras.camera import Camera
+from formulations.methods.formulation import Formulation
 from service.errors import InputError
 
 ASSOCIATIONS = ("joint-3d", "per-camera")
@@ -23,15 +24,19 @@ class LabelingOptions:
     """How to label a capture.
 
     Attributes:
-        formulation: A formulation name, or a ``[formulation]`` table (``{"name": ..., **parameters}``).
+        formulation: A formulation name, a ``[formulation]`` table (``{"name": ..., **parameters}``),
+            or a formulation instance.
         window: Frames per window, template included.
         association: Camera mode only: ``"joint-3d"`` (cross-camera 3D points labeled by the
             window LP) or ``"per-camera"`` (2D window LP per camera, then triangulation).
+        layout_weight: mu of the L1 layout term between rigid neighbours coupled by shared
+            candidates, 3D points (and joint-3d) only; 0, the default, leaves it out.
     """
 
-    formulation: str | dict = "lp-l1"
+    formulation: str | dict | Formulation = "lp-l1"
     window: int = 20
     association: str = "joint-3d"
+    layout_weight: float = 0.0
 
 
 @dataclass
@@ -66,4 +71,14 @@ class Capture:
 
     @property
     def n_frames(self) -> int:
-        return len(self.points if self.points is not None else self.detections)
+        return len(self.points) if self.points is not None else len(self.camera_frames()[1])
+
+    def camera_frames(self) -> tuple[list[Camera], list[list[np.ndarray]]]:
+        """Camera mode: the cameras and each frame's detections per camera.
+
+        Raises:
+            InputError: A capture of 3D points.
+        """
+        if self.cameras is None or self.detections is None:
+            raise InputError("a capture of 3D points has no cameras")
+        return self.cameras, self.detections

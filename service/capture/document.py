@@ -36,6 +36,7 @@ Finite = Annotated[float, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
 Point3 = tuple[Finite, Finite, Finite]
 Pixel = tuple[Finite, Finite]
 MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
+_ONE_ROTATION = "give the world -> camera rotation as exactly one of R or rvec"
 
 
 class CameraDocument(BaseModel):
@@ -52,16 +53,19 @@ class CameraDocument(BaseModel):
 
     @model_validator(mode="after")
     def _camera(self) -> CameraDocument:
-        if (self.R is None) == (self.rvec is None):
-            raise ValueError("give the world -> camera rotation as exactly one of R or rvec")
+        if self.R is not None and self.rvec is not None:
+            raise ValueError(_ONE_ROTATION)
         self.camera(1.0)  # K, R and distortion checks, with the camera's own message
         return self
 
     def camera(self, mm_per_unit: float) -> Camera:
+        K, distortion, t = (np.asarray(value, dtype=float) for value in (self.K, self.distortion, self.t))
         if self.R is not None:
-            camera = Camera(self.K, self.distortion, self.R, self.t, self.image_size, self.name)
+            camera = Camera(K, distortion, np.asarray(self.R, dtype=float), t, self.image_size, self.name)
+        elif self.rvec is not None:
+            camera = Camera.from_rvec(K, distortion, self.rvec, t, self.image_size, self.name)
         else:
-            camera = Camera.from_rvec(self.K, self.distortion, self.rvec, self.t, self.image_size, self.name)
+            raise ValueError(_ONE_ROTATION)
         return camera.scaled(mm_per_unit)
 
 
@@ -97,32 +101,32 @@ class CaptureDocument(BaseModel):
         if (self.points is None) == (self.detections is None):
             raise ValueError("give exactly one of points (3D mode) or detections (camera mode)")
         if self.detections is not None:
-            self._check_detections()
+            self._check_detections(self.detections)
         if self.n_frames < 2:
             raise ValueError("a capture needs at least 2 frames (the labeled frame and one more)")
         return self
 
-    def _check_detections(self) -> None:
+    def _check_detections(self, detections: dict[str, list[list[Pixel]]]) -> None:
         if not self.cameras:
             raise ValueError("detections need cameras")
         cameras = {camera.name: camera for camera in self.cameras}
         if len(cameras) != len(self.cameras):
             raise ValueError("camera names must be unique")
-        counts = {name: len(frames) for name, frames in self.detections.items()}
+        counts = {name: len(frames) for name, frames in detections.items()}
         for name in counts:
             if name not in cameras:
                 raise ValueError(f"detections.{name}: camera {name!r} is not in cameras ({', '.join(cameras)})")
         if len(set(counts.values())) > 1:
             listed = ", ".join(f"{name}: {count}" for name, count in counts.items())
             raise ValueError(f"detections: cameras have different frame counts ({listed})")
-        for name, frames in self.detections.items():
+        for name, frames in detections.items():
             _check_in_image(name, frames, cameras[name].image_size)
 
     @property
     def n_frames(self) -> int:
         if self.points is not None:
             return len(self.points)
-        return max((len(frames) for frames in self.detections.values()), default=0)
+        return max((len(frames) for frames in (self.detections or {}).values()), default=0)
 
     def capture(self) -> Capture:
         """The capture in millimetres; cameras without detections see nothing."""
@@ -131,9 +135,10 @@ class CaptureDocument(BaseModel):
         if self.points is not None:
             points = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
             return Capture(list(self.markers), first_frame, self.rate, points=points)
-        cameras = [camera.camera(scale) for camera in self.cameras]
-        empty = [[] for _ in range(self.n_frames)]
-        per_camera = [self.detections.get(camera.name, empty) for camera in self.cameras]
+        documents, found = self.cameras or [], self.detections or {}  # both there: _consistent checked it
+        cameras = [camera.camera(scale) for camera in documents]
+        empty: list[list[Pixel]] = [[] for _ in range(self.n_frames)]
+        per_camera = [found.get(camera.name, empty) for camera in documents]
         detections = [
             [np.asarray(per_camera[c][f], dtype=float).reshape(-1, 2) for c in range(len(cameras))]
             for f in range(self.n_frames)
@@ -147,13 +152,14 @@ class CaptureDocument(BaseModel):
                   "formulation": options.formulation, "window": options.window, "association": options.association}
         if capture.points is not None:
             return cls(points=[frame.tolist() for frame in capture.points], **fields)
-        cameras = [
+        cameras, found = capture.camera_frames()
+        documents = [
             {"name": c.name, "K": c.K.tolist(), "distortion": c.distortion.tolist(), "R": c.R.tolist(),
              "t": c.t.tolist(), "image_size": list(c.image_size)}
-            for c in capture.cameras
+            for c in cameras
         ]
-        detections = {c.name: [frame[i].tolist() for frame in capture.detections] for i, c in enumerate(capture.cameras)}
-        return cls(cameras=cameras, detections=detections, **fields)
+        detections = {c.name: [frame[i].tolist() for frame in found] for i, c in enumerate(cameras)}
+        return cls.model_validate({"cameras": documents, "detections": detections, **fields})
 
     def options(self) -> LabelingOptions:
         return LabelingOptions(formulation=self.formulation, window=self.window, association=self.association)

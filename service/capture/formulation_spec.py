@@ -1,4 +1,4 @@
-"""A formulation from what a user writes: a name, or a ``[formulation]`` TOML table.
+"""A formulation from what a user writes: a name, or a ``[formulation]`` TOML table (or an instance).
 
     [formulation]
     name = "ilp"
@@ -33,10 +33,21 @@ def formulation_from_table(table: dict[str, Any], where: str) -> Formulation:
         raise InputError(f"{where}: {error}") from None
 
 
+def resolve_formulation(spec: str | dict[str, Any] | Formulation, where: str = "formulation") -> Formulation:
+    """The formulation of a name, a ``[formulation]`` table or an instance (returned as is).
+
+    Raises:
+        InputError: As ``formulation_from_table``.
+    """
+    if isinstance(spec, Formulation):
+        return spec
+    return formulation_from_table({"name": spec} if isinstance(spec, str) else spec, where)
+
+
 def formulation_from_spec(spec: str) -> Formulation:
     """``spec`` is a formulation name, or the path of a TOML file with a ``[formulation]`` table."""
     if not spec.endswith(".toml"):
-        return formulation_from_table({"name": spec}, "--formulation")
+        return resolve_formulation(spec, "--formulation")
     return formulation_from_table(formulation_table(Path(spec)), spec)
 
 

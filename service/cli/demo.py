@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from service.capture.capture import Capture
 from service.capture.document import CaptureDocument
 from service.cli.report import out, print_summary, window_progress
 from service.errors import InputError
@@ -41,9 +40,7 @@ def run_demo(folder: Path, frames: int, seed: int) -> None:
 
 def _write_capture(path: Path, simulated: SimulatedCapture) -> None:
     """The demo's input as a capture JSON: what a user would hand ``track`` or the service."""
-    first = simulated.first_frame
-    capture = Capture(first.names, first.positions[0], simulated.cloud.rate, points=simulated.cloud.points)
-    path.write_text(CaptureDocument.of(capture).model_dump_json())
+    path.write_text(CaptureDocument.of(simulated.capture()).model_dump_json())
 
 
 def _make_folder(folder: Path) -> None:

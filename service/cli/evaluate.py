@@ -6,13 +6,12 @@ import dataclasses
 import json
 from pathlib import Path
 
-from service.capture.formulation_spec import formulation_from_spec, formulation_from_table
+from service.capture.formulation_spec import formulation_from_spec, resolve_formulation
 from service.cli.report import print_summary, window_progress
-from service.evaluation.cameras import evaluate_cameras
-from service.evaluation.cloud import evaluate
+from service.evaluation.cameras import CameraEvaluation, evaluate_cameras
+from service.evaluation.cloud import Evaluation, evaluate
 from service.evaluation.scenario import Scenario
 from service.io.formats import read_labeled
-from service.labeling.cloud import CloudLabeler
 
 
 def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, window: int | None, as_json: bool) -> None:
@@ -20,17 +19,18 @@ def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, w
     scenario = Scenario.from_toml(scenario_path)
     if window is not None:
         scenario = dataclasses.replace(scenario, window=window)
+    # Resolved here so that a bad formulation names the option or scenario file it came from.
     if formulation is not None:
         chosen = formulation_from_spec(formulation)
     else:
-        chosen = formulation_from_table({"name": scenario.formulation, **scenario.formulation_parameters}, str(scenario_path))
-    labeler = CloudLabeler(formulation=chosen, window=scenario.window)
+        chosen = resolve_formulation(scenario.formulation_table, str(scenario_path))
     truth = read_labeled(trajectories)
+    result: Evaluation | CameraEvaluation
     with window_progress(f"labeling {trajectories.name}") as progress:
         if scenario.mode == "cameras":
-            result = evaluate_cameras(truth, scenario, labeler, progress=progress)
+            result = evaluate_cameras(truth, scenario, chosen, progress=progress)
         else:
-            result = evaluate(truth, scenario, labeler, progress=progress)
+            result = evaluate(truth, scenario, chosen, progress=progress)
     if as_json:
         print(json.dumps(result.summary(), allow_nan=False))
     else:

@@ -2,17 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from service.evaluation.scores import run_onsets
 from service.io.recording import LabeledTrajectories
-
-if TYPE_CHECKING:  # scoring per-camera labels needs no cross-camera matching
-    from formulations.cameras.cross_camera.matching import CrossCameraPoints
 
 
 @dataclass(frozen=True)
@@ -52,7 +47,7 @@ def camera_scores(
         truth: ``(F, N, 3)`` true positions (mm).
         result: The labeling.
         views: ``(F, N, C)`` detection each labeled marker used in each camera, -1 none
-            (``joint_3d_views`` for joint-3d; the labeler's own views for per-camera).
+            (``CaptureLabeling.views``, either association).
     """
     seen_twice = (marker_detection >= 0).sum(axis=1) >= 2  # (F, N)
     seen_twice[0] = False
@@ -79,21 +74,11 @@ def _swaps(expected: np.ndarray, views: np.ndarray) -> int:
     """
     used = views >= 0
     holds = ((views[:, :, None, :] == expected[:, None, :, :]) | ~used[:, :, None, :]).all(axis=3)
-    holds &= used.any(axis=2)[:, :, None]
+    holds &= used.any(axis=2, keepdims=True)
     any_own = ((views == expected) & used).any(axis=2)  # a merged blob can be its own and another's
     other = holds.any(axis=2) & ~any_own
     other[0] = False  # frame 0 is the user's
     return run_onsets(other)
-
-
-def joint_3d_views(result: LabeledTrajectories, matched: Sequence[CrossCameraPoints]) -> np.ndarray:
-    """``(F, N, C)`` detections behind the cross-camera point each marker took, -1 none."""
-    n_cameras = matched[0].views.shape[1]
-    views = np.full(result.point_index.shape + (n_cameras,), -1)
-    for f, points in enumerate(matched):
-        took = np.flatnonzero(result.point_index[f] >= 0)
-        views[f, took] = points.views[result.point_index[f, took]]
-    return views
 
 
 def _rms(values: np.ndarray) -> float:

@@ -9,22 +9,19 @@ camera's image, then triangulation), and scored by the detections each marker us
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
-import numpy as np
-
-from formulations.cameras.camera import Camera
+from formulations.cameras.rig import Rig
+from formulations.methods.formulation import Formulation
 from service.capture.capture import Capture
-from service.evaluation.camera_scores import CameraScores, camera_scores, joint_3d_views
+from service.evaluation.camera_scores import CameraScores, camera_scores
 from service.evaluation.scenario import Scenario
-from service.evaluation.simulate_cameras import CameraCapture, CameraRig, place_in_volume, simulate_cameras
+from service.evaluation.simulate_cameras import place_in_volume, simulate_cameras
 from service.io.calibration import load_calibration
-from service.io.recording import LabeledTrajectories, Recording
-from service.labeling.cloud import CloudLabeler
-from service.labeling.joint_3d import cross_camera_cloud
-from service.labeling.per_camera import PerCameraLabeler
-from service.labeling.spans import window_spans
+from service.io.recording import Recording
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.loop import Progress
 from service.labeling.stats import WindowStats, certificate_figures, finite_or_none
 
 
@@ -54,49 +51,30 @@ class CameraEvaluation:
 
 
 def evaluate_cameras(
-    truth: Recording, scenario: Scenario, labeler: CloudLabeler,
-    progress: Callable[[int, int], None] | None = None,
+    truth: Recording, scenario: Scenario, formulation: str | dict | Formulation | None = None,
+    progress: Progress | None = None,
 ) -> CameraEvaluation:
     """Simulate ``scenario`` (mode "cameras") on ``truth``, label with its association, score.
 
-    ``labeler`` gives the formulation and window of either association.
+    ``formulation`` replaces the scenario's own.
     """
-    cameras = load_calibration(scenario.calibration, units="mm")
-    rig = CameraRig.from_cameras(cameras)
+    cameras = load_calibration(Path(scenario.calibration), units="mm")
+    rig = Rig.of(cameras)
     stop = scenario.start_frame + scenario.frames if scenario.frames else truth.n_frames
     positions = place_in_volume(truth.positions[scenario.start_frame : stop], rig, up_axis=scenario.up_axis)
-    capture = simulate_cameras(
+    simulated = simulate_cameras(
         Recording(truth.names, positions, truth.rate), rig, pixel_noise=scenario.pixel_noise,
         merge_radius_px=scenario.merge_radius_px, occlusion_rate=scenario.occlusion_rate,
         occlusion_burst_frames=scenario.occlusion_burst_frames,
         clutter_per_camera=scenario.clutter_per_camera, seed=scenario.seed,
     )
-    start = time.perf_counter()
-    if scenario.association == "per-camera":
-        result, windows, views = _per_camera(cameras, capture, labeler, progress)
-    else:
-        cloud, matched = cross_camera_cloud(cameras, capture.detections, truth.rate)
-        result, windows = labeler.label(cloud, capture.first_frame.names, capture.first_frame.positions[0], progress)
-        views = joint_3d_views(result, matched)
-    seconds = time.perf_counter() - start
-    scores = camera_scores(capture.marker_detection, capture.truth.positions, result, views)
-    name = labeler.formulation if isinstance(labeler.formulation, str) else labeler.formulation.name
-    return CameraEvaluation(scores, windows, len(positions), truth.n_markers, seconds, name)
-
-
-def _per_camera(
-    cameras: list[Camera], simulated: CameraCapture, labeler: CloudLabeler,
-    progress: Callable[[int, int], None] | None,
-) -> tuple[LabeledTrajectories, list[WindowStats], np.ndarray]:
-    """Label the simulated detections camera by camera: trajectories, window stats, views."""
     first = simulated.first_frame
-    capture = Capture(
-        list(first.names), first.positions[0], first.rate, cameras=cameras, detections=simulated.detections,
-    )
-    per_camera = PerCameraLabeler(formulation=labeler.formulation, window=labeler.window)
-    n_windows, outcomes = len(window_spans(capture.n_frames, labeler.window)), []
-    for outcome in per_camera.windows(capture):
-        outcomes.append(outcome)
-        if progress:
-            progress(outcome.index + 1, n_windows)
-    return per_camera.assemble(capture, outcomes), [o.stats for o in outcomes], per_camera.views(capture, outcomes)
+    capture = Capture(list(first.names), first.positions[0], first.rate, cameras=cameras, detections=simulated.detections)
+    start = time.perf_counter()
+    labeling = CaptureLabeling(capture, scenario.labeling_options(formulation))
+    outcomes = list(labeling.windows(progress=progress))
+    result, views = labeling.result(outcomes), labeling.views(outcomes)
+    seconds = time.perf_counter() - start
+    scores = camera_scores(simulated.marker_detection, simulated.truth.positions, result, views)
+    windows = [o.stats for o in outcomes]
+    return CameraEvaluation(scores, windows, len(positions), truth.n_markers, seconds, labeling.formulation.name)

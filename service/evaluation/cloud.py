@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 
-from service.capture.formulation_spec import formulation_from_table
+from formulations.methods.formulation import Formulation
 from service.evaluation.scenario import Scenario
 from service.evaluation.scores import LabelScores, label_scores
 from service.evaluation.simulate_cloud import simulate_cloud
 from service.evaluation.simulated import SimulatedCapture
 from service.io.recording import LabeledTrajectories, Recording
-from service.labeling.cloud import CloudLabeler
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.loop import Progress
 from service.labeling.stats import WindowStats, certificate_figures
 
 
@@ -27,7 +27,7 @@ class Evaluation:
     seconds: float
     formulation: str
 
-    def summary(self) -> dict[str, float | int | str]:
+    def summary(self) -> dict[str, float | int | str | None]:
         """The stable figures ``markerflow eval --json`` prints.
 
         Gaps are None where a formulation proves no bound (heuristics): JSON has no inf.
@@ -47,16 +47,17 @@ class Evaluation:
 
 
 def evaluate(
-    truth: Recording, scenario: Scenario, labeler: CloudLabeler | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    truth: Recording, scenario: Scenario, formulation: str | dict | Formulation | None = None,
+    progress: Progress | None = None,
 ) -> Evaluation:
-    """Simulate ``scenario`` on ``truth``, label it, and score the result."""
-    if labeler is None:
-        table = {"name": scenario.formulation, **scenario.formulation_parameters}
-        labeler = CloudLabeler(formulation=formulation_from_table(table, "scenario"), window=scenario.window)
-    capture = simulate_cloud(truth, scenario)
+    """Simulate ``scenario`` on ``truth``, label it, and score the result.
+
+    ``formulation`` replaces the scenario's own.
+    """
+    simulated = simulate_cloud(truth, scenario)
     start = time.perf_counter()
-    result, windows = labeler.label(capture.cloud, capture.first_frame.names, capture.first_frame.positions[0], progress)
+    labeling = CaptureLabeling(simulated.capture(), scenario.labeling_options(formulation))
+    result, windows = labeling.label(progress)
     seconds = time.perf_counter() - start
-    name = labeler.formulation if isinstance(labeler.formulation, str) else labeler.formulation.name
-    return Evaluation(capture, result, windows, label_scores(capture, result), seconds, name)
+    scores = label_scores(simulated, result)
+    return Evaluation(simulated, result, windows, scores, seconds, labeling.formulation.name)

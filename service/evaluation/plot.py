@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import numpy as np
@@ -11,12 +12,13 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.typing import ColorType
 
 from service.io.recording import LabeledTrajectories, Recording
 
 _AXIS_LABELS = ("x (mm)", "y (mm)", "z (mm)")
-_COLOURS = matplotlib.colormaps["tab10"].colors
-_TRUTH_STYLE = {"color": "0.55", "linewidth": 0.8, "zorder": 1}
+_COLOURS = matplotlib.color_sequences["tab10"]
+_TRUTH_STYLE: dict[str, Any] = {"color": "0.55", "linewidth": 0.8, "zorder": 1}  # matplotlib keywords
 
 
 def plot_trajectories(
@@ -84,7 +86,7 @@ def _choose_columns(
     return sorted({traj.names.index(name) for name in markers})
 
 
-def _colour(slot: int) -> tuple[float, float, float]:
+def _colour(slot: int) -> ColorType:
     return _COLOURS[slot % len(_COLOURS)]
 
 

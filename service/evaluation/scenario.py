@@ -6,10 +6,13 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from formulations.methods.formulation import Formulation
+from service.capture.capture import LabelingOptions
 from service.errors import InputError
 
 MODES = ("cloud", "cameras")
 ASSOCIATIONS = ("joint-3d", "per-camera")
+_EXPECTED: dict[object, str] = {float: "a number", int: "an integer", str: "a string", dict: "a table"}
 _NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames")
 
 
@@ -113,6 +116,18 @@ class Scenario:
         return cls.from_dict(data)
 
     @property
+    def formulation_table(self) -> dict[str, Any]:
+        """The ``[formulation]`` table: the name and its parameters."""
+        return {"name": self.formulation, **self.formulation_parameters}
+
+    def labeling_options(self, formulation: str | dict | Formulation | None = None) -> LabelingOptions:
+        """How to label this scenario's capture; ``formulation`` replaces the scenario's own."""
+        return LabelingOptions(
+            formulation=self.formulation_table if formulation is None else formulation, window=self.window,
+            association=self.association,
+        )
+
+    @property
     def deletion_transitions(self) -> tuple[float, float]:
         """Per-frame transition probabilities of the visible/deleted Markov chain.
 
@@ -161,7 +176,7 @@ class Scenario:
             )
 
 
-def _typed(key: str, value: Any, kind: type) -> Any:
+def _typed(key: str, value: Any, kind: object) -> Any:
     """Check ``value`` against the field's annotation ``kind``; ints widen to float."""
     # bool is an int subclass in Python, but `window = true` is a mistake, not 1.
     if kind is float and isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -174,6 +189,6 @@ def _typed(key: str, value: Any, kind: type) -> Any:
         return value
     if kind is dict and isinstance(value, dict):
         return value
-    expected = {float: "a number", int: "an integer", str: "a string", dict: "a table"}[kind]
+    expected = _EXPECTED[kind]
     raise InputError(f"scenario key '{key}' must be {expected}, got {value!r}")
 

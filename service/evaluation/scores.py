@@ -1,6 +1,7 @@
 """Scores of a labeling against the truth of a simulated capture."""
 
 from dataclasses import dataclass
+from typing import TypedDict
 
 import numpy as np
 
@@ -109,17 +110,22 @@ def _checked_point_index(
     return taken
 
 
-def _ghost_scores(
-    marker: np.ndarray, in_scope: np.ndarray, flat_taken: np.ndarray
-) -> dict[str, float | int]:
+class _GhostScores(TypedDict):
+    ghost_precision: float
+    ghost_recall: float
+    ghosts: int
+    declared_ghosts: int
+
+
+def _ghost_scores(marker: np.ndarray, in_scope: np.ndarray, flat_taken: np.ndarray) -> _GhostScores:
     """Ghost precision, recall and counts over the points flagged ``in_scope``."""
     declared = in_scope.copy()
     declared[flat_taken] = False
     ghost = in_scope & (marker < 0)
-    hits = np.sum(declared & ghost)
+    hits = int(np.sum(declared & ghost))
     return {
-        "ghost_precision": _ratio(hits, declared.sum()),
-        "ghost_recall": _ratio(hits, ghost.sum()),
+        "ghost_precision": _ratio(hits, int(declared.sum())),
+        "ghost_recall": _ratio(hits, int(ghost.sum())),
         "ghosts": int(ghost.sum()),
         "declared_ghosts": int(declared.sum()),
     }

@@ -4,6 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from service.capture.capture import Capture
 from service.evaluation.scenario import Scenario
 from service.io.recording import Recording, UnlabeledCloud
 
@@ -28,3 +29,8 @@ class SimulatedCapture:
     truth: Recording
     first_frame: Recording
     scenario: Scenario
+
+    def capture(self) -> Capture:
+        """What a user would hand markerflow: the points and the labeled first frame."""
+        first = self.first_frame
+        return Capture(list(first.names), first.positions[0], self.cloud.rate, points=self.cloud.points)

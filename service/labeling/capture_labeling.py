@@ -1,6 +1,7 @@
 """Label a capture in any input mode, window by window, resumably.
 
-This is the one entry point the CLI, the HTTP jobs and the Dask workers share:
+This is the one entry point the CLI (``track``, ``eval``, ``demo``), the HTTP jobs and the
+Dask workers share:
 
     labeling = CaptureLabeling(capture, LabelingOptions(formulation="ilp"))
     outcomes = []
@@ -11,23 +12,37 @@ This is the one entry point the CLI, the HTTP jobs and the Dask workers share:
 3D points are labeled by the window LP directly. Camera detections are either matched
 across cameras first (``joint-3d``) into 3D points whose resources are their detections,
 or tracked by the window LP in each camera's image and then triangulated (``per-camera``).
+Each association is a chain (``service.labeling.loop``) with its own assembly; the window
+loop, the formulation and the first marker state are the same for all.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from functools import partial
+from collections.abc import Iterator
+from typing import Any, Protocol
 
+import numpy as np
+
+from formulations.cameras.rig import Rig
 from service.capture.capture import Capture, LabelingOptions
-from service.capture.formulation_spec import formulation_from_table
+from service.capture.formulation_spec import resolve_formulation
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
-from service.labeling.cloud import CloudLabeler
-from service.labeling.joint_3d import cross_camera_cloud
+from service.labeling.cloud import CloudChain
+from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
+from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
 from service.labeling.outcome import WindowOutcome
-from service.labeling.per_camera import PerCameraLabeler
+from service.labeling.per_camera import PerCameraChain
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
+
+
+class Association(WindowChain[Any], Protocol):
+    """A per-window chain, and what its windows' outcomes assemble into."""
+
+    def assemble(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories: ...
+
+    def views(self, outcomes: list[WindowOutcome]) -> np.ndarray: ...
 
 
 class CaptureLabeling:
@@ -35,49 +50,61 @@ class CaptureLabeling:
 
     Args:
         capture: What to label.
-        options: Formulation, window size, association.
+        options: Formulation (name, table or instance), window size, association.
 
     Raises:
-        InputError: Unknown formulation or parameter, bad window size, or an
-            association that does not apply.
+        InputError: Unknown formulation or parameter, bad window size, a first frame
+            without a position for every marker, or an association that does not apply.
     """
 
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
-        table = {"name": options.formulation} if isinstance(options.formulation, str) else options.formulation
-        formulation = formulation_from_table(table, "formulation")
+        self.formulation = resolve_formulation(options.formulation)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
-        if capture.mode == "cameras" and options.association == "per-camera":
-            labeler = PerCameraLabeler(formulation=formulation, window=options.window)
-            self._windows = partial(labeler.windows, capture)
-            self._assemble = partial(labeler.assemble, capture)
-            return
-        labeler = CloudLabeler(formulation=formulation, window=options.window)
-        given = (_cloud(capture, options.association), capture.names, capture.first_frame)
-        self._windows = partial(labeler.windows, *given)
-        self._assemble = partial(labeler.assemble, *given)
+        self._first = first_marker_state(capture.names, capture.first_frame)
+        self._frames, self._window = capture.n_frames, options.window
+        self._association = _association(capture, options)
 
-    def windows(self, after: WindowOutcome | None = None) -> Iterator[WindowOutcome]:
-        """Each window's outcome as it finishes; ``after`` resumes after a finished window."""
-        return self._windows(after=after)
+    def windows(
+        self, after: WindowOutcome | None = None, progress: Progress | None = None, observer: Observer | None = None,
+    ) -> Iterator[WindowOutcome]:
+        """Each window's outcome as it finishes; ``after`` resumes after a finished window.
+
+        ``progress`` is called with (windows done, windows), ``observer`` with (template
+        frame, problem, solution), after each window.
+        """
+        return label_windows(
+            self._association, self.formulation, self._first, self._frames, self._window, after, progress, observer
+        )
 
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes."""
-        return self._assemble(outcomes)
+        return self._association.assemble(outcomes)
 
-    def label(self, progress: Callable[[int, int], None] | None = None) -> tuple[LabeledTrajectories, list[WindowStats]]:
+    def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
+        """``(F, N, C)`` detection each marker took in each camera, -1 for none (camera mode).
+
+        Raises:
+            InputError: A capture of 3D points.
+        """
+        return self._association.views(outcomes)
+
+    def label(
+        self, progress: Progress | None = None, observer: Observer | None = None,
+    ) -> tuple[LabeledTrajectories, list[WindowStats]]:
         """Label every window in one go."""
-        outcomes = []
-        for outcome in self.windows():
-            outcomes.append(outcome)
-            if progress:
-                progress(len(outcomes), self.n_windows)
+        outcomes = list(self.windows(progress=progress, observer=observer))
         return self.result(outcomes), [o.stats for o in outcomes]
 
 
-def _cloud(capture: Capture, association: str) -> UnlabeledCloud:
-    """The points the window LP labels: the capture's own, or the cross-camera points."""
-    if capture.mode == "points":
-        return UnlabeledCloud(points=capture.points, rate=capture.rate)
-    if association != "joint-3d":
-        raise InputError(f"association {association!r} is not available; use joint-3d or per-camera")
-    return cross_camera_cloud(capture.cameras, capture.detections, capture.rate)[0]
+def _association(capture: Capture, options: LabelingOptions) -> Association:
+    """The chain of the capture's input mode and the chosen association."""
+    if capture.points is not None:
+        cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
+        return CloudChain(cloud, capture.names, capture.first_frame, layout_weight=options.layout_weight)
+    cameras, detections = capture.camera_frames()
+    if options.association == "per-camera":
+        return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)
+    if options.association != "joint-3d":
+        raise InputError(f"association {options.association!r} is not available; use joint-3d or per-camera")
+    cloud, matched = cross_camera_cloud(cameras, detections, capture.rate)
+    return Joint3dChain(cloud, capture.names, capture.first_frame, layout_weight=options.layout_weight, matched=matched)

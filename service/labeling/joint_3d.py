@@ -10,25 +10,29 @@ and a block no longer than a window adds no latency the window LP does not alrea
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 
 from formulations.cameras.camera import Camera
 from formulations.cameras.cross_camera.matching import CrossCameraPoints, match_frames
 from service.io.recording import UnlabeledCloud
+from service.labeling.cloud import CloudChain
+from service.labeling.outcome import WindowOutcome
 
 
-class LazyFrames(Sequence):
+class LazyFrames(Sequence[Any]):
     """A per-frame sequence whose items are computed when first asked for, then kept."""
 
     def __init__(self, n_frames: int, compute: Callable[[int], Any]) -> None:
-        self._n, self._compute, self._done = n_frames, compute, {}
+        self._n, self._compute = n_frames, compute
+        self._done: dict[int, Any] = {}
 
     def __len__(self) -> int:
         return self._n
 
-    def __getitem__(self, f):  # type: ignore[override]
+    def __getitem__(self, f: int | slice) -> Any:
         if isinstance(f, slice):
             return [self[k] for k in range(*f.indices(self._n))]
         if not -self._n <= f < self._n:
@@ -37,6 +41,27 @@ class LazyFrames(Sequence):
         if f not in self._done:
             self._done[f] = self._compute(f)
         return self._done[f]
+
+
+@dataclass
+class Joint3dChain(CloudChain):
+    """The cloud chain on cross-camera points, which knows the detections behind each point.
+
+    Attributes:
+        matched: Per frame, the cross-camera points the cloud holds.
+    """
+
+    matched: Sequence[CrossCameraPoints] = ()
+
+    def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
+        """``(F, N, C)`` detections behind the cross-camera point each marker took, -1 none."""
+        point_index = self.assemble(outcomes).point_index
+        n_cameras = self.matched[0].views.shape[1]
+        views = np.full(point_index.shape + (n_cameras,), -1)
+        for f, points in enumerate(self.matched):
+            took = np.flatnonzero(point_index[f] >= 0)
+            views[f, took] = points.views[point_index[f, took]]
+        return views
 
 
 def cross_camera_cloud(
@@ -57,11 +82,13 @@ def cross_camera_cloud(
             blocks[start] = match_frames(cameras, detections[start : start + block_frames], epipolar_px, max_reprojection_px)
         return blocks[start][f - start]
 
-    def resources(f: int):
+    def resources(f: int) -> Any:
         offsets = np.cumsum([0] + [len(d) for d in detections[f]])
         return matched[f].resources(offsets[:-1], int(offsets[-1]))
 
     n = len(detections)
     matched = LazyFrames(n, match)
     points = LazyFrames(n, lambda f: matched[f].points)
-    return UnlabeledCloud(points=points, rate=rate, resources=LazyFrames(n, resources)), matched
+    # The cloud only indexes, slices and counts its frames: lazy sequences serve as lists.
+    lazy_points, lazy_resources = cast(list[np.ndarray], points), cast(list[Any], LazyFrames(n, resources))
+    return UnlabeledCloud(points=lazy_points, rate=rate, resources=lazy_resources), matched

@@ -1,0 +1,119 @@
+"""The window loop every association shares: window after window, resumable, timed, certified.
+
+An association supplies only its per-window chain, as two steps in the style of cvxpy's
+reductions (``apply`` gives the reduced problem and the data its ``invert`` needs):
+
+    pose:    marker state, the window's frames  ->  WindowProblem, inverse data
+    invert:  WindowSolution, inverse data       ->  WindowLabels (labels, fill, next state)
+
+For the windows ``(t_k, l_k)`` of ``window_spans`` the loop carries the marker state
+``s_{k+1} = invert(solve(pose(s_k, t_k, l_k)))``, from ``s_0`` of the labeled first frame,
+or from a stored outcome's state when it resumes; that state is the whole of what one
+window hands the next, so a resumed run gives exactly what an uninterrupted one would.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeVar
+
+import numpy as np
+
+from formulations.errors import FormulationError
+from formulations.markers.state import MarkerState
+from formulations.methods.formulation import Formulation
+from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
+from service.errors import InputError
+from service.labeling.outcome import WindowOutcome
+from service.labeling.spans import window_spans
+from service.labeling.stats import WindowStats
+
+Inverse = TypeVar("Inverse")
+Progress = Callable[[int, int], None]  # (windows done, windows)
+Observer = Callable[[int, WindowProblem, WindowSolution], None]  # (template frame, problem, solution)
+
+
+@dataclass(frozen=True)
+class WindowLabels:
+    """What inverting one window's solution gives; ``WindowOutcome`` documents the shapes."""
+
+    state: MarkerState
+    point_index: np.ndarray
+    filled: np.ndarray
+    views: np.ndarray | None = None
+    positions: np.ndarray | None = None
+
+
+class WindowChain(Protocol[Inverse]):
+    """One association's per-window chain."""
+
+    def pose(self, state: MarkerState, template: int, last: int) -> tuple[WindowProblem, Inverse]:
+        """The window problem of frames ``template+1 .. last`` from ``state`` at ``template``."""
+        ...
+
+    def invert(self, solution: WindowSolution, inverse: Inverse) -> WindowLabels:
+        """The window's labels and the marker state at its last frame."""
+        ...
+
+
+def label_windows(
+    chain: WindowChain[Any], formulation: Formulation, first: MarkerState, n_frames: int, window: int,
+    after: WindowOutcome | None = None, progress: Progress | None = None, observer: Observer | None = None,
+) -> Iterator[WindowOutcome]:
+    """Each window's outcome as it is finished.
+
+    Args:
+        chain: The association's pose and invert steps.
+        formulation: Solves each posed window.
+        first: The marker state of the labeled first frame.
+        n_frames, window: Frames of the capture, and per window (template included).
+        after: The last finished window of an interrupted run: labeling resumes with the
+            next window from its marker state.
+        progress: Called with (windows done, windows) after each window.
+        observer: Called with (template frame, problem, solution) after each window.
+    """
+    spans = window_spans(n_frames, window)
+    state = first if after is None else after.state
+    for k in range(0 if after is None else after.index + 1, len(spans)):
+        template, last = spans[k]
+        began = time.perf_counter()
+        problem, inverse = chain.pose(state, template, last)
+        prepared = time.perf_counter() - began
+        solution = _solve(formulation, problem, template)
+        labels = chain.invert(solution, inverse)
+        stats = WindowStats.of(template, last, solution, prepared, time.perf_counter() - began)
+        if observer:
+            observer(template, problem, solution)
+        if progress:
+            progress(k + 1, len(spans))
+        state = labels.state
+        yield WindowOutcome(
+            index=k, point_index=labels.point_index, filled=labels.filled, stats=stats, state=state,
+            views=labels.views, positions=labels.positions,
+        )
+
+
+def first_marker_state(names: list[str], first_frame: np.ndarray) -> MarkerState:
+    """The marker state of the user's labeled first frame.
+
+    Raises:
+        InputError: Wrong shape, or a marker without a position.
+    """
+    first_frame = np.asarray(first_frame, dtype=float)
+    if first_frame.shape != (len(names), 3):
+        raise InputError(f"first frame must give (x, y, z) for each of the {len(names)} markers")
+    bad = np.flatnonzero(~np.isfinite(first_frame).all(axis=1))
+    if len(bad):
+        raise InputError(f"marker '{names[bad[0]]}' has no position in the first frame")
+    return MarkerState.from_first_frame(first_frame)
+
+
+def _solve(formulation: Formulation, problem: WindowProblem, template: int) -> WindowSolution:
+    """A formulation that cannot take this window is the user's choice to revisit: one line."""
+    try:
+        return formulation.solve(problem)
+    except FormulationError as error:
+        raise InputError(f"window from frame {template}: {error}") from None
