@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from windows import assert_feasible, brute_force, random_window
+from windows import assert_feasible, brute_force, objective, random_window
 
 from formulations.errors import FormulationError
 from formulations.methods.dp_extended import DpExtended
@@ -10,7 +10,6 @@ from formulations.methods.dp_sequential import DpSequential
 from formulations.methods.ilp import Ilp
 from formulations.methods.lp_l1 import LpL1
 from formulations.window.build import build_window
-from formulations.window.objective import path_cost
 from service.evaluation.jiang_instance import jiang_instance
 
 # (seed, objects, frames): 2-3 objects drawing 2 of 3 shared points per frame, so most
@@ -33,7 +32,7 @@ def test_exact_formulations_reach_the_brute_force_optimum(seed, n_objects, n_fra
         solution = formulation.solve(problem)
         assert_feasible(problem, solution.path)
         assert solution.cost == pytest.approx(optimum, abs=1e-6), formulation
-        assert solution.cost == pytest.approx(path_cost(problem, solution.path))
+        assert solution.cost == pytest.approx(objective(problem, solution.path))
         assert solution.integral and solution.status.startswith("Optimal")
         assert solution.lower_bound <= optimum + 1e-6
         assert solution.gap == pytest.approx(0.0, abs=1e-6)
@@ -59,7 +58,7 @@ def test_sequential_dp_is_feasible_and_never_below_the_optimum(seed, n_objects, 
     solution = DpSequential().solve(problem)
     assert_feasible(problem, solution.path)
     assert solution.cost >= optimum - 1e-9
-    assert solution.cost == pytest.approx(path_cost(problem, solution.path))
+    assert solution.cost == pytest.approx(objective(problem, solution.path))
     assert solution.lower_bound == -np.inf and not solution.integral
     assert ("layout term ignored" in solution.status) == (mu > 0)
 
@@ -100,5 +99,5 @@ def test_ilp_time_limit_returns_feasible_paths_with_an_honest_certificate():
     solution = Ilp(time_limit=0.01, decompose=False, lp_first=False).solve(problem)
     assert_feasible(problem, solution.path)
     assert not solution.integral and solution.status.startswith("Time limit reached")
-    assert solution.cost == pytest.approx(path_cost(problem, solution.path))
+    assert solution.cost == pytest.approx(objective(problem, solution.path))
     assert solution.lower_bound <= solution.cost and solution.gap > 0

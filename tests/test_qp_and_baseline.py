@@ -5,22 +5,13 @@ import dataclasses
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from windows import brute_force, random_window
+from windows import assert_feasible, brute_force, objective, random_window
 
 from formulations.errors import FormulationError
 from formulations.methods.lp_l1 import LpL1
 from formulations.methods.nn_hungarian import NnHungarian
 from formulations.methods.qp_l2 import QpL2, _layout_operator
-from formulations.window.objective import conflicts, path_cost
 from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE, WindowProblem
-
-
-def assert_feasible(problem, path):
-    """One node of the object's own block per frame, no conflict group used twice."""
-    assert path.shape == (problem.n_objects, problem.n_frames)
-    assert (problem.node_object[path] == np.arange(problem.n_objects)[:, None]).all()
-    assert (problem.node_frame[path] == np.arange(1, problem.n_frames + 1)).all()
-    assert len(conflicts(problem, path)) == 0
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -31,7 +22,7 @@ def test_qp_without_layout_is_the_lp(seed):
     assert qp.value == pytest.approx(LpL1(decompose=False).solve(problem).lower_bound, abs=1e-5)
     solution = QpL2(decompose=False).solve(problem)
     assert_feasible(problem, solution.path)
-    assert solution.cost == pytest.approx(path_cost(problem, solution.path))
+    assert solution.cost == pytest.approx(objective(problem, solution.path))
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -87,7 +78,7 @@ def test_baseline_is_feasible_and_proves_nothing(seed, mu):
     solution = NnHungarian().solve(problem)
     assert_feasible(problem, solution.path)
     assert solution.cost >= brute_force(problem)[0] - 1e-9
-    assert solution.cost == pytest.approx(path_cost(problem, solution.path))
+    assert solution.cost == pytest.approx(objective(problem, solution.path))
     assert solution.lower_bound == -np.inf and not solution.integral and solution.status == "baseline"
 
 

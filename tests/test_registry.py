@@ -1,15 +1,20 @@
 """Formulations are swapped by one argument: name, instance, or TOML table."""
 
 import dataclasses
+import re
+from pathlib import Path
 
 import pytest
 
 from formulations.errors import FormulationError
+from formulations.methods.formulation import Formulation
 from formulations.methods.lp_l1 import LpL1
-from formulations.methods.registry import describe, get_formulation, names
+from formulations.methods.registry import describe, formulation_class, get_formulation, names
 from service.capture.formulation_spec import formulation_from_spec
 from service.errors import InputError
 from service.evaluation.scenario import Scenario
+
+README = Path(__file__).resolve().parents[1] / "README.md"
 
 
 def test_every_formulation_lists_its_parameters_with_docs_and_defaults():
@@ -56,5 +61,15 @@ def test_toml_errors_are_one_line_input_errors(tmp_path):
         formulation_from_spec(str(tmp_path / "bogus.toml"))
 
 
-def test_all_documented_names_are_registered():
-    assert set(names()) == {"lp-l1", "lp-l1-cvxpy", "qp-l2", "ilp", "dp-sequential", "dp-extended", "nn-hungarian"}
+def test_every_registered_name_resolves_to_a_formulation_of_that_name():
+    assert [d.name for d in describe()] == names() and names()
+    for name in names():
+        cls = formulation_class(name)
+        assert issubclass(cls, Formulation) and cls.name == name
+        assert get_formulation(name) == cls()
+
+
+def test_the_readme_table_lists_exactly_the_registered_formulations():
+    section = README.read_text().split("## Formulations", 1)[1].split("\n## ", 1)[0]
+    documented = re.findall(r"^\| `([\w-]+)`", section, flags=re.MULTILINE)
+    assert sorted(documented) == names()

@@ -1,7 +1,7 @@
 """The window LP against exhaustive search and against a plain cvxpy model."""
 
 import pytest
-from windows import assert_feasible, brute_force, random_window
+from windows import assert_feasible, brute_force, objective, random_window
 
 from formulations.methods.lp_l1 import LpL1
 from formulations.methods.lp_l1_cvxpy import LpL1Cvxpy
@@ -20,7 +20,7 @@ def test_lp_bound_and_rounding_against_brute_force(seed, n_objects, per_object, 
     assert_feasible(problem, solution.path)
     assert solution.lower_bound <= optimum + 1e-6
     assert solution.cost >= optimum - 1e-6
-    assert solution.cost == pytest.approx(path_cost(problem, solution.path))
+    assert solution.cost == pytest.approx(objective(problem, solution.path))
     if solution.integral:
         assert solution.cost == pytest.approx(optimum, abs=1e-6)
         assert solution.gap == pytest.approx(0.0, abs=1e-9)

@@ -108,7 +108,8 @@ def _joint_states(first: np.ndarray, sizes: np.ndarray, groups: sp.csr_matrix) -
     usage = (chosen @ groups).tocoo()  # (S, G): how many of the state's nodes each group holds
     clash = np.zeros(s, dtype=bool)
     clash[usage.row[usage.data > 1]] = True
-    return nodes[~clash]
+    states: np.ndarray = nodes[~clash]
+    return states
 
 
 def _advance(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import ClassVar
 
 from formulations.errors import FormulationError
@@ -10,12 +11,13 @@ from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
 
 
+@dataclass(frozen=True)
 class Formulation(ABC):
     """Poses and solves one window.
 
     Subclasses are small frozen dataclasses whose fields are their parameters (with
     defaults, documented under ``Attributes``), and whose ``solve`` returns integral paths
-    with their objective evaluated by ``formulations.objective.path_cost``, so costs
+    with their objective evaluated by ``formulations.window.objective.path_cost``, so costs
     compare across formulations. ``lower_bound`` is a proven bound on the optimum (the
     optimum itself for exact methods, -inf when a method proves none); ``integral`` is True
     only when the returned paths are proven optimal. A parameter out of range, or a

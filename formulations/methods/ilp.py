@@ -22,14 +22,17 @@ from typing import ClassVar
 import numpy as np
 
 from formulations.methods.formulation import check_parameters
-from formulations.methods.lp_l1 import LpL1
+from formulations.relaxation.certify import Relaxation, round_and_certify
 from formulations.relaxation.decomposition import ComponentwiseFormulation
-from formulations.relaxation.lp_model import inflow_matrix, window_lp
-from formulations.relaxation.rounding import round_greedy
+from formulations.relaxation.lp_model import window_lp
+from formulations.relaxation.solve_lp import solve_window_lp
 from formulations.solvers import create_backend
-from formulations.window.objective import path_cost
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
+
+# HiGHS' incumbent is integral up to its feasibility tolerance (1e-6): any xi counts as
+# integral (no xi has min(xi, 1 - xi) > 0.5), the proof is branch and bound's own.
+INCUMBENT_INTEGRALITY = 0.5
 
 
 @dataclass(frozen=True)
@@ -44,8 +47,7 @@ class Ilp(ComponentwiseFormulation):
         time_limit: Seconds per MIP solve (per coupled component when decomposing; None:
             no limit). On expiry the best incumbent is returned, or the all-occlusion
             paths if there is none.
-        mip_gap: Relative gap (cost - bound) / |cost| at which HiGHS stops (its
-            ``mip_rel_gap``).
+        mip_gap: Relative gap (cost - bound) / |cost| at which HiGHS stops.
         decompose: Solve independent components apart (Viterbi where exact).
         lp_first: Solve the LP relaxation first and skip branch and bound when its
             optimum is integral (it is then the global optimum: Jiang's observation that
@@ -64,33 +66,28 @@ class Ilp(ComponentwiseFormulation):
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """The LP's optimum if integral, else one 0/1 program over the whole (sub-)window."""
         if self.lp_first:
-            relaxed = LpL1(decompose=False, time_limit=self.time_limit).solve_coupled(problem)
+            relaxed = round_and_certify(problem, solve_window_lp(problem, self.time_limit))
             if relaxed.integral:
                 relaxed.status = "Optimal (LP relaxation integral)"
                 return relaxed
-        return self._branch_and_bound(problem)
+        return round_and_certify(problem, self._branch_and_bound(problem), INCUMBENT_INTEGRALITY)
 
-    def _branch_and_bound(self, problem: WindowProblem) -> WindowSolution:
+    def _branch_and_bound(self, problem: WindowProblem) -> Relaxation:
+        """The 0/1 program's incumbent as xi, with the MIP dual bound."""
         start = time.perf_counter()
         model = window_lp(problem, integer=True)
         build = time.perf_counter() - start
-        backend = create_backend("highs", mip_rel_gap=self.mip_gap)
-        backend.set_model(model, self.time_limit)
+        backend = create_backend("highs")
+        backend.set_timeout(self.time_limit)
+        backend.set_relative_gap(self.mip_gap)
+        backend.set_model(model)
         result = backend.solve()
-        solve = time.perf_counter() - start - build
-        status = result.status
-        if len(result.x):
-            # The incumbent is integral up to HiGHS' tolerance; the greedy rounding of its
-            # node values returns exactly its nodes (largest y = the 1 in each block).
-            path = round_greedy(problem, inflow_matrix(problem) @ result.x[: problem.n_arcs])
-        else:
-            # No incumbent: occlusion nodes conflict with nothing, so this is always feasible.
-            path = problem.occlusion_nodes()
-            status += "; no incumbent, all-occlusion paths returned"
-        return WindowSolution(
-            path=path, cost=path_cost(problem, path),
-            lower_bound=-np.inf if np.isnan(result.bound) else float(result.bound),
-            integral=result.optimal, n_variables=len(model.cost), status=status,
-            build_seconds=build, solve_seconds=solve,
-            round_seconds=time.perf_counter() - start - build - solve,
+        has_incumbent = len(result.x) > 0
+        return Relaxation(
+            # No incumbent: zero arc values round to the all-occlusion paths (ties go to the
+            # occlusion node), which conflict with nothing and so are always feasible.
+            xi=result.x[: problem.n_arcs] if has_incumbent else np.zeros(problem.n_arcs),
+            bound=-np.inf if np.isnan(result.bound) else float(result.bound), optimal=result.optimal,
+            status=result.status if has_incumbent else f"{result.status}; no incumbent, all-occlusion paths returned",
+            n_variables=len(model.cost), build_seconds=build, solve_seconds=time.perf_counter() - start - build,
         )

@@ -17,8 +17,7 @@ import scipy.sparse as sp
 
 from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
-from formulations.relaxation.rounding import round_greedy
-from formulations.window.objective import path_cost
+from formulations.relaxation.certify import Relaxation, round_and_certify
 from formulations.window.problem import SOURCE, WindowProblem
 from formulations.window.solution import WindowSolution
 
@@ -36,7 +35,7 @@ class LpL1Cvxpy(Formulation):
 
     def __post_init__(self) -> None:
         # A typo must fail when the formulation is chosen, not inside the first window.
-        installed = cp.installed_solvers()
+        installed = cp.installed_solvers()  # type: ignore[no-untyped-call]  # cvxpy is unannotated
         if self.solver not in installed:
             raise FormulationError(
                 f"{self.name}: parameter 'solver' must be an installed cvxpy solver ({', '.join(installed)}), "
@@ -47,18 +46,15 @@ class LpL1Cvxpy(Formulation):
         start = time.perf_counter()
         xi, lp = self.model(problem)
         build = time.perf_counter() - start
-        lp.solve(solver=self.solver)
-        solve = time.perf_counter() - start - build
-        values = np.clip(np.asarray(xi.value, dtype=float), 0.0, 1.0)
-        inflow = np.bincount(problem.arc_head, weights=values, minlength=problem.n_nodes)
-        path = round_greedy(problem, inflow)
-        fractional = int(np.sum(np.minimum(values, 1 - values) > 1e-6))
-        return WindowSolution(
-            path=path, cost=path_cost(problem, path), lower_bound=float(lp.value),
-            integral=fractional == 0, n_fractional=fractional, n_variables=lp.size_metrics.num_scalar_variables,
-            status=lp.status, build_seconds=build, solve_seconds=solve,
-            round_seconds=time.perf_counter() - start - build - solve,
+        lp.solve(solver=self.solver)  # type: ignore[no-untyped-call]  # cvxpy is unannotated
+        optimal = lp.status == cp.OPTIMAL
+        relaxation = Relaxation(
+            xi=np.zeros(problem.n_arcs) if xi.value is None else np.clip(np.asarray(xi.value, dtype=float), 0.0, 1.0),
+            bound=float(lp.value) if optimal else -np.inf, optimal=optimal, status=lp.status,
+            n_variables=lp.size_metrics.num_scalar_variables, build_seconds=build,
+            solve_seconds=time.perf_counter() - start - build,
         )
+        return round_and_certify(problem, relaxation)
 
     @staticmethod
     def model(problem: WindowProblem) -> tuple[cp.Variable, cp.Problem]:

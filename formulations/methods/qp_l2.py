@@ -14,16 +14,14 @@ import scipy.sparse as sp
 
 from formulations.errors import FormulationError
 from formulations.methods.formulation import check_parameters
-from formulations.methods.lp_l1 import LpL1
+from formulations.relaxation.certify import Relaxation, round_and_certify
 from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.relaxation.lp_model import inflow_matrix
-from formulations.relaxation.rounding import round_greedy
-from formulations.window.objective import path_cost
+from formulations.relaxation.solve_lp import solve_window_lp
 from formulations.window.problem import SOURCE, WindowProblem
 from formulations.window.solution import WindowSolution
 
 BOUNDS = ("arc-lp", "l1-lp")
-CERTIFIED = 1e-9  # relative cost - bound under which the rounded paths count as proven optimal
 
 
 @dataclass(frozen=True)
@@ -79,22 +77,17 @@ class QpL2(ComponentwiseFormulation):
         qp_seconds = time.perf_counter() - start
         # cvxpy compiles inside solve(): all but Clarabel's own time counts as building.
         clarabel = (qp.solver_stats.solve_time or 0.0) if qp.solver_stats else 0.0
-        no_layout = {"layout_pairs": problem.layout_pairs[:0], "layout_weight": problem.layout_weight[:0]}
-        bounded = problem if self.bound == "l1-lp" else dataclasses.replace(problem, **no_layout)
-        lp = LpL1(decompose=False).solve_coupled(bounded)
-        rounding = time.perf_counter()
-        path = round_greedy(problem, inflow_matrix(problem) @ xi)
-        cost = path_cost(problem, path)
-        fractional = int(np.sum(np.minimum(xi, 1.0 - xi) > self.integrality_tolerance))
+        no_layout = dataclasses.replace(problem, layout_pairs=problem.layout_pairs[:0], layout_weight=problem.layout_weight[:0])
+        lp = solve_window_lp(problem if self.bound == "l1-lp" else no_layout)
         qp_status = "Optimal" if qp.status == cp.OPTIMAL else f"qp {qp.status}"
-        return WindowSolution(
-            path=path, cost=cost, lower_bound=lp.lower_bound,
-            integral=cost - lp.lower_bound <= CERTIFIED * max(1.0, abs(cost)), n_fractional=fractional,
-            n_variables=qp.size_metrics.num_scalar_variables + lp.n_variables,
+        relaxation = Relaxation(
+            xi=xi, bound=lp.bound, optimal=lp.optimal,
             status=qp_status if lp.status == "Optimal" else f"{qp_status}; bound {lp.status}",
-            build_seconds=qp_seconds - clarabel + lp.build_seconds,
-            solve_seconds=clarabel + lp.solve_seconds, round_seconds=time.perf_counter() - rounding,
+            n_variables=qp.size_metrics.num_scalar_variables + lp.n_variables,
+            build_seconds=qp_seconds - clarabel + lp.build_seconds, solve_seconds=clarabel + lp.solve_seconds,
+            xi_is_bounding=False,  # the QP's xi: only cost = bound certifies the L1 objective
         )
+        return round_and_certify(problem, relaxation, self.integrality_tolerance)
 
     @staticmethod
     def relax(problem: WindowProblem) -> tuple[np.ndarray, cp.Problem]:
@@ -122,7 +115,7 @@ class QpL2(ComponentwiseFormulation):
         if layout.shape[0]:
             objective = objective + cp.sum_squares(layout @ y)
         qp = cp.Problem(cp.Minimize(objective), constraints)
-        qp.solve(solver="CLARABEL")
+        qp.solve(solver="CLARABEL")  # type: ignore[no-untyped-call]  # cvxpy's solve is unannotated
         return (np.zeros(a) if xi.value is None else np.clip(xi.value, 0.0, 1.0)), qp
 
 

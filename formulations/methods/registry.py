@@ -55,7 +55,8 @@ def formulation_class(name: str) -> type[Formulation]:
     if name not in _FORMULATIONS:
         raise FormulationError(f"unknown formulation '{name}'; known: {', '.join(names())}")
     module, cls = _FORMULATIONS[name].split(":")
-    return getattr(import_module(module), cls)
+    formulation: type[Formulation] = getattr(import_module(module), cls)
+    return formulation
 
 
 def get_formulation(spec: str | Formulation, **parameters: Any) -> Formulation:
@@ -82,13 +83,17 @@ def describe() -> list[Description]:
     for name in names():
         cls = formulation_class(name)
         docs = _attribute_docs(cls)
-        parameters = tuple(
-            Parameter(f.name, f.default if f.default is not dataclasses.MISSING else f.default_factory(), docs.get(f.name, ""))
-            for f in dataclasses.fields(cls)
-        )
+        parameters = tuple(Parameter(f.name, _default(f), docs.get(f.name, "")) for f in dataclasses.fields(cls))
         summary = (inspect.getdoc(cls) or "").splitlines()[0]
         result.append(Description(name=name, doc=summary, parameters=parameters))
     return result
+
+
+def _default(field: dataclasses.Field[Any]) -> Any:
+    """A parameter's default (every parameter has one: ``get_formulation(name)`` needs none)."""
+    if field.default_factory is not dataclasses.MISSING:
+        return field.default_factory()
+    return field.default
 
 
 def _attribute_docs(cls: type) -> dict[str, str]:

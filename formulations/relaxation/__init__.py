@@ -1,1 +1,2 @@
-"""What relaxed formulations share: the window LP as sparse matrices, column pricing, components, Viterbi, rounding and certifying."""
+"""What relaxed formulations share: the window LP as sparse matrices, column pricing,
+components, Viterbi, rounding and certifying."""

@@ -27,7 +27,8 @@ def coupled_components(problem: WindowProblem) -> np.ndarray:
     rows = np.concatenate([adjacency.row, pairs[:, 0]])
     cols = np.concatenate([adjacency.col, pairs[:, 1]])
     graph = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    return connected_components(graph, directed=False)[1]
+    labels: np.ndarray = connected_components(graph, directed=False)[1]
+    return labels
 
 
 def restrict(problem: WindowProblem, objects: np.ndarray) -> tuple[WindowProblem, np.ndarray]:

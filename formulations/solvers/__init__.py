@@ -1,6 +1,7 @@
 """Solver backends: a small contract (pass a model, solve, add columns, re-solve).
 
 Backends are imported lazily so that ``formulations`` loads without every solver.
+Options are set through the backend's typed setters (``set_timeout``, ...).
 """
 
 from __future__ import annotations
@@ -12,17 +13,13 @@ from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 _BACKENDS = {"highs": "formulations.solvers.highs:HighsBackend"}
 
 
-def create_backend(name: str = "highs", **options: object) -> SolverBackend:
-    """A fresh backend instance by name (imports the solver on first use).
-
-    Args:
-        name: Backend name.
-        **options: Solver options passed through unchanged (e.g. HiGHS option names).
-    """
+def create_backend(name: str = "highs") -> SolverBackend:
+    """A fresh backend instance by name (imports the solver on first use), solver defaults set."""
     if name not in _BACKENDS:
         raise ValueError(f"unknown solver backend '{name}'; known: {', '.join(sorted(_BACKENDS))}")
     module, cls = _BACKENDS[name].split(":")
-    return getattr(import_module(module), cls)(**options)
+    backend: type[SolverBackend] = getattr(import_module(module), cls)
+    return backend()
 
 
 __all__ = ["LinearModel", "SolveResult", "SolverBackend", "create_backend"]

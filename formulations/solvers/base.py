@@ -54,10 +54,31 @@ class SolveResult:
 
 
 class SolverBackend(ABC):
-    """Initialise with a model, solve, optionally add columns and solve again warm."""
+    """Initialise with a model, solve, optionally add columns and solve again warm.
+
+    Options go through the typed setters below (each backend maps them onto its own
+    option names), so no caller names a solver-specific option. Unset options keep the
+    solver's defaults; a setter holds for every later ``solve``, across ``set_model``.
+    """
 
     @abstractmethod
-    def set_model(self, model: LinearModel, time_limit: float | None = None) -> None:
+    def set_timeout(self, seconds: float | None) -> None:
+        """Stop each ``solve`` after this many seconds (None: no limit)."""
+
+    @abstractmethod
+    def set_relative_gap(self, gap: float) -> None:
+        """Stop branch and bound once (incumbent - bound) / |incumbent| <= ``gap``."""
+
+    @abstractmethod
+    def set_primal_simplex(self) -> None:
+        """Solve LPs by primal simplex.
+
+        Columns added by ``add_columns`` leave the current basis primal feasible, so a
+        primal re-solve starts warm where a dual one would not.
+        """
+
+    @abstractmethod
+    def set_model(self, model: LinearModel) -> None:
         """Load the model (replacing any previous one)."""
 
     @abstractmethod

@@ -10,22 +10,34 @@ import scipy.sparse as sp
 
 from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 
+PRIMAL_SIMPLEX = 4  # HiGHS simplex_strategy: primal
+
 
 class HighsBackend(SolverBackend):
     """Dual simplex for LPs (warm-startable after adding columns), branch and bound for MIPs."""
 
-    def __init__(self, **options: object) -> None:
-        self._highs = highspy.Highs()
-        self._highs.setOptionValue("output_flag", False)
+    def __init__(self) -> None:
+        self._highs = highspy.Highs()  # type: ignore[no-untyped-call]  # highspy leaves Highs.__init__ unannotated
+        self._set("output_flag", False)
         # One thread: windows are solved many at a time by the caller; HiGHS' parallel
         # simplex only adds overhead on problems this small.
-        self._highs.setOptionValue("threads", 1)
-        for name, value in options.items():
-            if self._highs.setOptionValue(name, value) != highspy.HighsStatus.kOk:
-                raise ValueError(f"HiGHS rejected option {name}={value!r}")
+        self._set("threads", 1)
         self._is_mip = False
 
-    def set_model(self, model: LinearModel, time_limit: float | None = None) -> None:
+    def set_timeout(self, seconds: float | None) -> None:
+        self._set("time_limit", float(seconds) if seconds else highspy.kHighsInf)
+
+    def set_relative_gap(self, gap: float) -> None:
+        self._set("mip_rel_gap", float(gap))
+
+    def set_primal_simplex(self) -> None:
+        self._set("simplex_strategy", PRIMAL_SIMPLEX)
+
+    def _set(self, name: str, value: bool | int | float) -> None:
+        if self._highs.setOptionValue(name, value) != highspy.HighsStatus.kOk:
+            raise ValueError(f"HiGHS rejected option {name}={value!r}")
+
+    def set_model(self, model: LinearModel) -> None:
         a = sp.csc_matrix(model.matrix)
         a.sort_indices()
         lp = highspy.HighsLp()
@@ -39,14 +51,13 @@ class HighsBackend(SolverBackend):
         lp.a_matrix_.start_ = a.indptr.astype(np.int32)
         lp.a_matrix_.index_ = a.indices.astype(np.int32)
         lp.a_matrix_.value_ = a.data.astype(float)
-        self._is_mip = model.integer is not None and bool(np.any(model.integer))
+        integer = model.integer if model.integer is not None else np.zeros(0, dtype=bool)
+        self._is_mip = bool(np.any(integer))
         if self._is_mip:
             lp.integrality_ = [
-                highspy.HighsVarType.kInteger if flag else highspy.HighsVarType.kContinuous
-                for flag in model.integer
+                highspy.HighsVarType.kInteger if flag else highspy.HighsVarType.kContinuous for flag in integer
             ]
         self._highs.clearModel()
-        self._highs.setOptionValue("time_limit", float(time_limit) if time_limit else highspy.kHighsInf)
         self._highs.passModel(lp)
 
     def add_columns(self, cost: np.ndarray, lower: np.ndarray, upper: np.ndarray, columns: sp.csc_matrix) -> None:

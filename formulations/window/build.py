@@ -116,7 +116,8 @@ def _node_appearance(candidates: WindowCandidates, order: np.ndarray) -> np.ndar
     h = candidates.appearance.shape[1]
     filler = np.zeros((n * m + n, h))
     stacked = np.concatenate([candidates.template_appearance, candidates.appearance, filler])
-    return stacked[order]
+    node_appearance: np.ndarray = stacked[order]
+    return node_appearance
 
 
 def _node_resources(resources: sp.csr_matrix, candidate_of: np.ndarray) -> sp.csr_matrix:

@@ -47,7 +47,7 @@ class WindowCandidates:
 
     @property
     def n_objects(self) -> int:
-        return self.template_location.shape[0]
+        return int(self.template_location.shape[0])
 
     def __post_init__(self) -> None:
         n, m, c = self.n_objects, self.n_frames, len(self.object)

@@ -21,7 +21,7 @@ def arc_index(problem: WindowProblem, tail: np.ndarray, head: np.ndarray) -> np.
     wanted = np.asarray(tail, np.int64) * problem.n_nodes + np.asarray(head)
     pos = np.searchsorted(keys, wanted, sorter=order)
     pos = np.minimum(pos, len(keys) - 1)
-    found = order[pos]
+    found: np.ndarray = order[pos]
     if not np.array_equal(keys[found], wanted):
         raise ValueError("path uses a node pair that is not an arc of the window")
     return found

@@ -64,7 +64,7 @@ class WindowProblem:
 
     @property
     def dimension(self) -> int:
-        return self.node_location.shape[1]
+        return int(self.node_location.shape[1])
 
     @cached_property
     def conflict_groups(self) -> sp.csr_matrix:

@@ -1,0 +1,49 @@
+"""Solve the window LP of a (sub-)window: the relaxation behind lp-l1, ilp's LP-first
+step and qp-l2's bound.
+
+The LP (``window_lp``) is solved by HiGHS, with all columns on a small window and by
+column generation (``solve_with_pricing``) once the window has more than
+``pricing_min_arcs`` arcs. Its optimal value is a proven lower bound on min E, since
+every feasible set of paths is an integral point of the LP with value E.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from formulations.relaxation.certify import Relaxation
+from formulations.relaxation.lp_model import window_lp
+from formulations.relaxation.pricing import PRICING_MIN_ARCS, PRICING_SUCCESSORS, initial_columns, solve_with_pricing
+from formulations.solvers import create_backend
+from formulations.window.problem import WindowProblem
+
+
+def solve_window_lp(
+    problem: WindowProblem, time_limit: float | None = None, pricing_min_arcs: int = PRICING_MIN_ARCS,
+    pricing_successors: int = PRICING_SUCCESSORS,
+) -> Relaxation:
+    """The LP optimum xi of a window and its value as the bound (-inf unless proven optimal).
+
+    Args:
+        problem: The (sub-)window.
+        time_limit: Seconds per LP solve (None: no limit).
+        pricing_min_arcs: Use column generation when the window has more arcs.
+        pricing_successors: Cheapest out-arcs per node in the first restricted LP.
+    """
+    start = time.perf_counter()
+    model = window_lp(problem)
+    build = time.perf_counter() - start
+    backend = create_backend("highs")
+    backend.set_timeout(time_limit)
+    if problem.n_arcs > pricing_min_arcs:
+        result, _ = solve_with_pricing(model, backend, initial_columns(problem, len(model.cost), pricing_successors))
+    else:
+        backend.set_model(model)
+        result = backend.solve()
+    return Relaxation(
+        xi=result.x[: problem.n_arcs] if len(result.x) else np.zeros(problem.n_arcs),
+        bound=result.bound if result.optimal else -np.inf, optimal=result.optimal, status=result.status,
+        n_variables=len(model.cost), build_seconds=build, solve_seconds=time.perf_counter() - start - build,
+    )
