@@ -168,6 +168,9 @@ def test_dispatch_by_suffix(tmp_path: Path) -> None:
     write_labeled(tmp_path / "a.csv", traj)
     assert read_c3d(tmp_path / "a.c3d").n_frames == 20
     assert read_csv_labeled(tmp_path / "a.csv").n_frames == 20
+    relabel = read_labeled(tmp_path / "a.csv")  # a CSV markerflow wrote is a labeled input too
+    assert relabel.names == traj.names and relabel.rate == pytest.approx(traj.rate, rel=1e-12)
+    _assert_matches(relabel.positions, traj, atol=0.0)
 
 
 def _cut(src: Path, dst: Path, n_bytes: int) -> Path:

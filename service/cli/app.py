@@ -36,7 +36,7 @@ def demo(
 @app.command()
 def track(
     input: Annotated[Path, typer.Argument(
-        help="Capture .json (see docs/capture-json.md), or a labeled .c3d/.trc whose first frame names the markers."
+        help="Capture .json (see docs/capture-json.md), or a labeled .c3d/.trc/.csv whose first frame names the markers."
     )],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d or .csv.")],
     formulation: FormulationOption = None,
@@ -54,7 +54,7 @@ def track(
 
 @app.command("eval")
 def evaluate(
-    trajectories: Annotated[Path, typer.Argument(help="Labeled .c3d/.trc ground truth.")],
+    trajectories: Annotated[Path, typer.Argument(help="Labeled .c3d/.trc/.csv ground truth.")],
     scenario: Annotated[Path, typer.Option(help="Scenario TOML (see configs/scenarios/README.md).")],
     formulation: FormulationOption = None,
     window: WindowOption = None,

@@ -18,7 +18,7 @@ from service.labeling.capture_labeling import CaptureLabeling
 
 
 def run_track(input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool) -> None:
-    """Label ``input`` (capture .json, or labeled .c3d/.trc) and write ``output``.
+    """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
 
     ``formulation`` and ``window`` override a JSON document's own options when given.
     """

@@ -8,16 +8,23 @@ from typing import Any
 
 from service.errors import InputError
 from service.io.formats.c3d import read_c3d, write_c3d
-from service.io.formats.csv import write_csv
+from service.io.formats.csv import read_csv_labeled, write_csv
 from service.io.formats.trc import read_trc
 from service.io.recording import LabeledTrajectories, Recording
 
-_READERS = {".c3d": read_c3d, ".trc": read_trc}
+
+def _read_csv(path: str | Path) -> Recording:
+    """A table markerflow wrote, read back as labeled trajectories (to check or relabel it)."""
+    labels = read_csv_labeled(path)
+    return Recording(labels.names, labels.positions, labels.rate)
+
+
+_READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": _read_csv}
 _WRITERS = {".c3d": write_c3d, ".csv": write_csv}
 
 
 def read_labeled(path: str | Path) -> Recording:
-    """Read labeled trajectories from a .c3d or .trc file (millimetres, NaN gaps).
+    """Read labeled trajectories from a .c3d, .trc or markerflow .csv file (millimetres, NaN gaps).
 
     Raises:
         InputError: unsupported suffix, or a missing or malformed file.
