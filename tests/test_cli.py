@@ -223,7 +223,7 @@ BAD_INPUT: dict[str, Case] = {
     "unsupported suffix": lambda t: (track(t, wrong_suffix(t)), ["markers.xyz", ".xyz"]),
     "track window 1": lambda t: (track(t, CMU, "--window", "1"), ["window", "got 1"]),
     "track window 0": lambda t: (track(t, CMU, "--window", "0"), ["window", "got 0"]),
-    "eval window 1": lambda t: (evaluate(t, CMU, "--window", "1"), ["window", "got 1"]),
+    "eval window 1": lambda t: (evaluate(t, CMU, "--window", "1"), ["--window", "got 1"]),
     "track formulation": lambda t: (track(t, CMU, "--formulation", "nope"), ["'nope'"]),
     "eval formulation": lambda t: (evaluate(t, CMU, "-f", "nope"), ["'nope'"]),
     "unknown scenario key": lambda t: (
@@ -235,6 +235,7 @@ BAD_INPUT: dict[str, Case] = {
     "c3d with blank labels": lambda t: (track(t, blank_labels_c3d(t)), ["blank.c3d", "no point labels"]),
     "track out folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.c3d"], ["nowhere", "cannot write"]),
     "track csv folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.csv"], ["nowhere", "cannot write"]),
+    "track out folder unwritable": lambda t: (["track", CMU, "-o", "/proc/x.c3d"], ["/proc", "cannot write"]),
     "demo out is a file": lambda t: (["demo", "--out", existing_file(t), "--frames", "20"], ["taken", "folder"]),
 }
 
@@ -243,3 +244,69 @@ BAD_INPUT: dict[str, Case] = {
 def test_bad_input_is_one_line_and_exit_code_2(case: Case, tmp_path: Path) -> None:
     args, words = case(tmp_path)
     assert_input_error(run_cli(*args), *words)
+
+
+# -- scripts, help texts and papercuts ----------------------------------------------------
+
+
+def test_track_labels_a_take_whose_subject_leaves_the_volume(tmp_path: Path) -> None:
+    """Qualisys.c3d with frames 115-134 emptied crashed (IndexError, rc 1, nothing written)."""
+    qualisys = DATA / "c3d_ezc3d_testfiles" / "Qualisys.c3d"
+    labels, points = list(ezc3d.c3d(str(qualisys))["parameters"]["POINT"]["LABELS"]["value"]), read_c3d(qualisys)[1]
+    points[:, :, 115:135] = np.nan
+    result = run_cli("track", write_c3d(tmp_path / "away.c3d", labels, points, rate=200.0), "--out", tmp_path / "x.c3d")
+    assert result.returncode == 0, result.stderr
+    _, labeled = read_c3d(tmp_path / "x.c3d")
+    assert labeled.shape == points.shape and np.isnan(labeled[:, :, 115:135]).all()
+    assert np.isfinite(labeled[:, :, 140:]).mean() >= 0.9
+
+
+def test_piped_track_prints_progress_lines_one_summary_line_and_json(tmp_path: Path) -> None:
+    result = run_cli("track", CMU, "--out", tmp_path / "x.c3d", "--window", "20")
+    assert result.returncode == 0, result.stderr
+    progress = result.stderr.splitlines()
+    assert progress and all(line.startswith("labeling 85_02.c3d: ") for line in progress), result.stderr
+    assert progress[-1].startswith("labeling 85_02.c3d: 43/43 windows, ")
+    assert len(result.stdout.splitlines()) == 1 and "41 markers x 810 frames" in result.stdout  # COLUMNS=50
+    quiet = run_cli("--quiet", "track", CMU, "--out", tmp_path / "y.csv", "--json")
+    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
+    summary = json.loads(quiet.stdout)
+    assert (summary["frames"], summary["markers"], summary["formulation"]) == (810, 41, "lp-l1")
+    assert summary["output"] == str(tmp_path / "y.csv") and (tmp_path / "y.csv").exists()
+    assert summary["occluded_fraction"] == 0.0 and summary["integral_window_fraction"] == 1.0
+    assert 0.0 <= summary["gap_median"] <= summary["gap_max"] < 1e-9 and summary["seconds"] > 0
+
+
+def test_help_texts_show_bracketed_words_and_cite_what_exists() -> None:
+    def wide_help(command: str) -> str:
+        env = {**os.environ, "COLUMNS": "250"}
+        return subprocess.run([sys.executable, "-m", "service.cli", command, "--help"], cwd=REPO, env=env,
+                              capture_output=True, text=True, timeout=60).stdout
+
+    help_text = wide_help("track")
+    assert "TOML file with a [formulation] table" in help_text
+    assert 'see "Capture JSON" in README.md' in help_text and "## Capture JSON" in (REPO / "README.md").read_text()
+    assert "TOML with a [formulation] table" in wide_help("integrality")
+
+
+def test_serve_db_takes_a_plain_path() -> None:
+    from service.cli.serve import database_url
+    from service.server.settings import load_settings
+
+    assert database_url("markerflow.db") == "sqlite:///markerflow.db"
+    assert database_url("postgresql://u@h/db") == "postgresql://u@h/db" and database_url(None) is None
+    settings = load_settings(None, db=database_url("jobs/markerflow.db"))
+    assert settings.db == f"sqlite:///{Path('jobs/markerflow.db').resolve()}"
+
+
+def test_c3d_errors_do_not_advise_an_ezc3d_option(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from service.errors import InputError
+    from service.io.formats import c3d
+
+    def refuse(path: str) -> None:
+        raise RuntimeError("The format is not standard. If you want to ignore this error, set ignoreBadFormatting to true")
+
+    monkeypatch.setattr(c3d.ezc3d, "c3d", refuse)
+    with pytest.raises(InputError) as error:
+        c3d.read_c3d(CMU)
+    assert "The format is not standard" in str(error.value) and "ignoreBadFormatting" not in str(error.value)

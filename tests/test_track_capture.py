@@ -34,7 +34,7 @@ def test_track_options_on_the_command_line_override_the_document(tmp_path):
     assert run_cli("track", source, "--out", tmp_path / "a.csv").returncode == 0
     bad = run_cli("track", source, "--out", tmp_path / "b.csv", "--window", "1")
     assert bad.returncode == 2
-    assert bad.stderr.strip() == "error: window must be at least 2 frames (a template and one new frame), got 1"
+    assert bad.stderr.strip() == "error: --window must be at least 2 frames (a template and one new frame), got 1"
 
 
 def test_track_reports_a_bad_capture_in_one_line(tmp_path):

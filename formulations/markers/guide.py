@@ -16,6 +16,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from formulations.markers.reacquire import REACQUISITION, Reacquisition, realign_lost, refine_by_segment
 from formulations.markers.state import MarkerState
 
 
@@ -53,19 +54,27 @@ class GuideTrack:
 
 
 def guide_track(
-    state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate(), trust_after: int = 3
+    state: MarkerState, frames: list[np.ndarray], gate: Gate = Gate(), trust_after: int = 3,
+    reacquisition: Reacquisition = REACQUISITION,
 ) -> GuideTrack:
     """Run the nearest-neighbour tracker over ``frames`` from ``state``.
 
     A marker counts as tracked once seen ``trust_after`` frames in a row: a marker just
     re-acquired may have been re-acquired wrongly, and others should not lean on it.
+    Markers lost together are looked for where their group registers to the cloud
+    (``realign_lost``).
     """
     m, n = len(frames), len(state.position)
     predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
     radius, tracked = np.empty((m, n)), np.empty((m, n), bool)
     unseen = np.empty((m, n), dtype=int)
     for f, points in enumerate(frames):
-        predicted[f], tracked[f], unseen[f] = state.predict(), state.streak >= trust_after, state.unseen
+        lost = state.stranded(reacquisition.lost_after)
+        guess = state.predict()
+        if lost.any():
+            guess = realign_lost(guess, lost, state.visible, points, reacquisition)
+            guess = refine_by_segment(guess, lost, state.neighbours, state.distance_var, points, reacquisition)
+        predicted[f], tracked[f], unseen[f] = guess, state.streak >= trust_after, state.unseen
         # Predicted displacement: a marker's own velocity while seen, its neighbours'
         # motion while occluded; unknown only right after the labeled first frame.
         unknown = state.visible & ~state.velocity_known

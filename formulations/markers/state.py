@@ -99,6 +99,17 @@ class MarkerState:
         """``(N, 3)`` predicted position one frame ahead (see ``_predict``)."""
         return self._predict()[0]
 
+    def stranded(self, after: int) -> np.ndarray:
+        """``(N,)`` unseen for ``after`` frames or more with no seen neighbour to follow:
+        nothing carries these markers but a damped stale velocity."""
+        stranded: np.ndarray = (self.unseen >= after) & ~self._followable().any(axis=1)
+        return stranded
+
+    def _followable(self) -> np.ndarray:
+        """``(N, K)`` neighbours seen both at the marker's anchor frame and now."""
+        usable: np.ndarray = self.anchor_valid & self.visible[self.neighbours]
+        return usable
+
     def _predict(self) -> tuple[np.ndarray, np.ndarray]:
         """Predicted positions, and which markers followed their neighbours.
 
@@ -109,7 +120,7 @@ class MarkerState:
         velocity when none does.
         """
         ahead = self.position + self.velocity
-        usable = self.anchor_valid & self.visible[self.neighbours]
+        usable = self._followable()
         weight = usable / (self.distance_var + 1.0)
         followed = ~self.visible & usable.any(axis=1)
         follow = np.flatnonzero(followed)

@@ -72,6 +72,23 @@ def build_window(
     return problem, candidate_of
 
 
+def taken_candidates(node_candidate: np.ndarray, path: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """``index[c]`` of the candidate c on each path node, -1 at source, occlusion and sink nodes.
+
+    Args:
+        node_candidate: Candidate of each node (``build_window``), -1 for the others.
+        path: Node per object and frame (``WindowSolution.path``).
+        index: Per candidate, what it stands for (a point or detection index).
+
+    A window may have no candidate at all (every frame after its template empty: the
+    subject left the volume); every path then runs through occlusion nodes and ``index``
+    is empty. The -1 appended to ``index`` is what ``node_candidate == -1`` selects, so
+    no candidate is ever looked up that does not exist.
+    """
+    taken: np.ndarray = np.append(index, -1)[node_candidate[path]]
+    return taken
+
+
 def _layer_arcs(node_object: np.ndarray, node_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """All arcs from each (object, frame) block to the next block of the same object.
 

@@ -13,12 +13,26 @@ from service.errors import InputError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="Name every marker in every frame.")
 err = Console(stderr=True)
+# Help texts are Rich markup: a literal "[formulation]" must be written escaped, or it vanishes.
+FORMULATION_TABLE = escape("[formulation]")
 
 FormulationOption = Annotated[str | None, typer.Option(
     "--formulation", "-f",
-    help="Formulation name (see `markerflow formulations`) or a TOML file with a [formulation] table.",
+    help=f"Formulation name (see `markerflow formulations`) or a TOML file with a {FORMULATION_TABLE} table.",
 )]
 WindowOption = Annotated[int | None, typer.Option("--window", "-w", help="Frames per window, template included.")]
+
+
+@app.callback()
+def main(
+    quiet: Annotated[bool, typer.Option(
+        "--quiet", "-q", help="No progress on stderr (before the command: markerflow -q track ...); results still print.",
+    )] = False,
+) -> None:
+    """Name every marker in every frame."""
+    from service.cli import report
+
+    report.quiet = quiet
 
 
 @app.command()
@@ -36,12 +50,13 @@ def demo(
 @app.command()
 def track(
     input: Annotated[Path, typer.Argument(
-        help="Capture .json (see docs/capture-json.md), or a labeled .c3d/.trc/.csv whose first frame names the markers."
+        help="Capture .json (see \"Capture JSON\" in README.md), or a labeled .c3d/.trc/.csv whose first frame names the markers."
     )],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d or .csv.")],
     formulation: FormulationOption = None,
     window: WindowOption = None,
     shuffle: Annotated[bool, typer.Option(help="C3D/TRC input: shuffle each frame's points before labeling.")] = True,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object of the figures on stdout.")] = False,
 ) -> None:
     """Label INPUT and write the named trajectories.
 
@@ -49,7 +64,7 @@ def track(
     """
     from service.cli.track import run_track
 
-    _guard(lambda: run_track(input, out, formulation, window, shuffle))
+    _guard(lambda: run_track(input, out, formulation, _window(window), shuffle, as_json))
 
 
 @app.command("eval")
@@ -63,7 +78,7 @@ def evaluate(
     """Run a scenario on labeled trajectories and print the scores."""
     from service.cli.evaluate import run_eval
 
-    _guard(lambda: run_eval(trajectories, scenario, formulation, window, as_json))
+    _guard(lambda: run_eval(trajectories, scenario, formulation, _window(window), as_json))
 
 
 @app.command("formulations")
@@ -76,7 +91,9 @@ def list_formulations() -> None:
 
 @app.command()
 def integrality(
-    formulation: Annotated[str, typer.Option("--formulation", "-f", help="Name or TOML with a [formulation] table.")] = "lp-l1",
+    formulation: Annotated[str, typer.Option(
+        "--formulation", "-f", help=f"Name or TOML with a {FORMULATION_TABLE} table.",
+    )] = "lp-l1",
     corpus: Annotated[Path | None, typer.Option(help="Corpus folder (default: the repo's tests/fixtures/integrality).")] = None,
 ) -> None:
     """Integral windows, gaps and agreement with the ILP optimum on the window corpus."""
@@ -90,7 +107,7 @@ def serve(
     host: Annotated[str | None, typer.Option(help="Address to bind (default 127.0.0.1; another needs tokens).")] = None,
     port: Annotated[int | None, typer.Option(help="Port (default 8000; 0 picks a free one).")] = None,
     db: Annotated[str | None, typer.Option(
-        help="SQLAlchemy URL of the job store (default sqlite:///markerflow.db in the working folder)."
+        help="Job store: a SQLite file path, or an SQLAlchemy URL (default sqlite:///markerflow.db in the working folder)."
     )] = None,
     dask: Annotated[str | None, typer.Option(help="Dask scheduler address (tcp://...): run jobs there.")] = None,
     config: Annotated[Path | None, typer.Option(help="Service TOML (see configs/service.toml).")] = None,
@@ -99,6 +116,13 @@ def serve(
     from service.cli.serve import run_serve
 
     _guard(lambda: run_serve(host, port, db, dask, config))
+
+
+def _window(window: int | None) -> int | None:
+    """Checked here, inside ``_guard``, so the message names the option, not a scenario key."""
+    if window is not None and window < 2:
+        raise InputError(f"--window must be at least 2 frames (a template and one new frame), got {window}")
+    return window
 
 
 def _guard(action) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from service.capture.document import CaptureDocument
+from service.cli.output import check_writable_folder
 from service.cli.report import out, print_summary, window_progress
 from service.errors import InputError
 from service.evaluation.cloud import evaluate
@@ -49,3 +50,4 @@ def _make_folder(folder: Path) -> None:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:  # e.g. a file of that name, or no permission
         raise InputError(f"{folder}: cannot create the output folder ({exc.strerror})") from None
+    check_writable_folder(folder)

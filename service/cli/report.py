@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
@@ -10,9 +11,13 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-# Piped output (files, CI logs) has no width to detect: give tables room rather than 80 columns.
-out = Console() if sys.stdout.isatty() else Console(width=120)
+# Piped output (files, CI logs) has no width to detect: give tables room rather than 80
+# columns, and never break a line of text (a script reads the summary as one line).
+out = Console() if sys.stdout.isatty() else Console(width=120, soft_wrap=True)
 err = Console(stderr=True)
+quiet = False  # ``markerflow --quiet``: no progress; results are still printed
+PLAIN_EVERY_SECONDS = 10.0  # piped progress: a line at least this often,
+PLAIN_LINES = 10  # and about this many lines per run
 
 LABELS = {
     "label_accuracy": ("label accuracy", "{:.4%}"),
@@ -48,10 +53,18 @@ def print_summary(summary: dict, title: str) -> None:
 
 @contextmanager
 def window_progress(description: str) -> Iterator[Callable[[int, int], None] | None]:
-    """A progress bar over windows on stderr (nothing when stderr is not a terminal)."""
-    if not err.is_terminal:
+    """Progress over windows on stderr: a bar on a terminal, plain lines when piped, none if quiet."""
+    if quiet:
         yield None
-        return
+    elif err.is_terminal:
+        with _bar(description) as advance:
+            yield advance
+    else:
+        yield _plain_lines(description)
+
+
+@contextmanager
+def _bar(description: str) -> Iterator[Callable[[int, int], None]]:
     columns = (TextColumn(description), BarColumn(), MofNCompleteColumn(), TextColumn("windows"), TimeRemainingColumn())
     with Progress(*columns, console=err, transient=True) as progress:
         task = progress.add_task(description, total=None)
@@ -60,3 +73,20 @@ def window_progress(description: str) -> Iterator[Callable[[int, int], None] | N
             progress.update(task, completed=done, total=total)
 
         yield advance
+
+
+def _plain_lines(description: str) -> Callable[[int, int], None]:
+    """``description: 40/180 windows, 12 s`` after every tenth of the windows, every
+    ``PLAIN_EVERY_SECONDS`` and the last window, flushed: a log shows it as it happens."""
+    began = time.monotonic()
+    last = (began, 0)
+
+    def advance(done: int, total: int) -> None:
+        nonlocal last
+        now = time.monotonic()
+        step = max(1, -(-total // PLAIN_LINES))
+        if done == total or done - last[1] >= step or now - last[0] >= PLAIN_EVERY_SECONDS:
+            print(f"{description}: {done}/{total} windows, {now - began:.0f} s", file=sys.stderr, flush=True)
+            last = (now, done)
+
+    return advance

@@ -13,7 +13,14 @@ def run_serve(host: str | None, port: int | None, db: str | None, dask: str | No
 
     from service.server.app import create_app
 
-    settings = load_settings(config, host=host, port=port, db=db, dask=dask)
+    settings = load_settings(config, host=host, port=port, db=database_url(db), dask=dask)
     app = create_app(settings)
     # A bounded graceful shutdown: open event streams must not hold a restart forever.
     uvicorn.run(app, host=settings.host, port=settings.port, timeout_graceful_shutdown=5, log_level="info")
+
+
+def database_url(db: str | None) -> str | None:
+    """``--db``: a URL as given; a plain path (no ``scheme://``) is a SQLite file there."""
+    if db is None or "://" in db:
+        return db
+    return f"sqlite:///{db}"

@@ -17,7 +17,7 @@ from formulations.markers.cloud_candidates import CloudGating, CloudWindow, clou
 from formulations.markers.guide import assign_nearest
 from formulations.markers.state import MarkerState
 from formulations.relaxation.components import coupled_components
-from formulations.window.build import build_window
+from formulations.window.build import build_window, taken_candidates
 from formulations.window.costs import ArcCostWeights
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
@@ -76,7 +76,7 @@ class CloudChain:
         return problem, CloudInverse(state, frames, gated, node_candidate)
 
     def invert(self, solution: WindowSolution, inverse: CloudInverse) -> WindowLabels:
-        taken = _taken_points(inverse.gated, inverse.node_candidate, solution)
+        taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N, M), -1 occluded
         state, filled = _advance(inverse.state, inverse.frames, taken)
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
@@ -99,12 +99,6 @@ class CloudChain:
         """The first frame's point of each labeled marker (the user labeled frame 0)."""
         radius = self.gating.gate.radius_mm
         return assign_nearest(positions, points, np.full(len(positions), radius), miss_cost=radius)
-
-
-def _taken_points(gated: CloudWindow, node_candidate: np.ndarray, solution: WindowSolution) -> np.ndarray:
-    """``(N, M)`` point index taken by each marker in each window frame, -1 if occluded."""
-    candidate = node_candidate[solution.path]
-    return np.where(candidate >= 0, gated.point[np.maximum(candidate, 0)], -1)
 
 
 def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> tuple[MarkerState, np.ndarray]:

@@ -31,6 +31,7 @@ from formulations.cameras.per_camera.guide import PerCameraGuide
 from formulations.cameras.per_camera.locate import FrameViews
 from formulations.cameras.rig import Rig
 from formulations.markers.state import MarkerState
+from formulations.window.build import taken_candidates
 from formulations.window.candidates import WindowCandidates
 
 
@@ -57,8 +58,7 @@ class PerCameraWindow:
             node_candidate: Candidate of each node (``build_window``), -1 for the others.
             path: ``(N C, M)`` node per object and frame (``WindowSolution.path``).
         """
-        candidate = node_candidate[path]
-        taken = np.where(candidate >= 0, self.detection[np.maximum(candidate, 0)], -1)
+        taken = taken_candidates(node_candidate, path, self.detection)
         return taken.reshape(self.n_cameras, -1, path.shape[1]).transpose(2, 1, 0)
 
 
