@@ -1,7 +1,7 @@
 """Scores of a labeling against the truth of a simulated capture."""
 
 from dataclasses import dataclass
-from typing import TypedDict
+from typing import NamedTuple, TypedDict
 
 import numpy as np
 
@@ -52,13 +52,7 @@ def label_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> Labe
         ValueError: If ``point_index`` is not ``(frames, markers)`` or names a point that
             the frame does not have.
     """
-    marker, frame, offsets = _flatten(capture.point_marker)
-    taken = _checked_point_index(capture, result, offsets)
-    # Frame 0 is given by the user, so nothing in it is scored.
-    scored = np.arange(taken.shape[0]) >= 1
-    true_index = _true_index(marker, frame, offsets, taken.shape)
-    visible = (true_index >= 0) & scored[:, None]
-    correct = visible & (taken == true_index)
+    marker, frame, offsets, taken, scored, visible, correct = _marked(capture, result)
     rows, cols = np.nonzero((taken >= 0) & scored[:, None])
     flat_taken = offsets[rows] + taken[rows, cols]
     held = np.full(taken.shape, -2)  # -2: holds no point, -1: holds a ghost
@@ -72,6 +66,57 @@ def label_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> Labe
         missed=int(np.sum(visible & (taken < 0))),
         took_ghost=int(np.sum(held == -1)),
     )
+
+
+def block_counts(
+    capture: SimulatedCapture, result: LabeledTrajectories, block_frames: int = 1000
+) -> list[tuple[int, int]]:
+    """``(marker_frames, correct)`` per block of ``block_frames`` consecutive frames.
+
+    Block ``k`` holds frames ``[k B, (k + 1) B)`` with ``B = block_frames``; a tail
+    shorter than ``B / 2`` joins the block before it, so no block is a noisy sliver.
+    Counts are those of ``label_scores`` (frame 0 unscored), so summed over the blocks
+    they give its ``marker_frames`` and ``correct``; block accuracy is ``correct /
+    marker_frames``.
+
+    Raises:
+        ValueError: As ``label_scores``, or if ``block_frames < 1``.
+    """
+    if block_frames < 1:
+        raise ValueError(f"block_frames must be >= 1, got {block_frames}")
+    *_, visible, correct = _marked(capture, result)
+    n_frames = visible.shape[0]
+    starts = list(range(0, n_frames, block_frames)) or [0]
+    if len(starts) > 1 and n_frames - starts[-1] < block_frames / 2:
+        starts.pop()
+    bounds = [*starts, n_frames]
+    return [(int(visible[a:b].sum()), int(correct[a:b].sum())) for a, b in zip(bounds, bounds[1:])]
+
+
+class _Marked(NamedTuple):
+    marker: np.ndarray
+    frame: np.ndarray
+    offsets: np.ndarray
+    taken: np.ndarray
+    scored: np.ndarray
+    visible: np.ndarray
+    correct: np.ndarray
+
+
+def _marked(capture: SimulatedCapture, result: LabeledTrajectories) -> _Marked:
+    """The flat points (``_flatten``), the labeling, and per marker-frame masks.
+
+    ``scored[f]``: frame ``f >= 1``; ``visible[f, n]``: scored and ``n`` has a point;
+    ``correct[f, n]``: visible and ``n`` took its own point.
+    """
+    marker, frame, offsets = _flatten(capture.point_marker)
+    taken = _checked_point_index(capture, result, offsets)
+    # Frame 0 is given by the user, so nothing in it is scored.
+    scored = np.arange(taken.shape[0]) >= 1
+    true_index = _true_index(marker, frame, offsets, taken.shape)
+    visible = (true_index >= 0) & scored[:, None]
+    correct = visible & (taken == true_index)
+    return _Marked(marker, frame, offsets, taken, scored, visible, correct)
 
 
 def _flatten(point_marker: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
