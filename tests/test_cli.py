@@ -85,9 +85,11 @@ def test_demo_prints_scores_and_writes_c3d_and_plot(tmp_path: Path) -> None:
     assert len(labels) == 39 and len(set(labels)) == 39
     assert points.shape == (3, 39, 150)
     assert (tmp_path / "demo_trajectories.png").read_bytes().startswith(PNG_MAGIC)
-    relabeled = run_cli("track", tmp_path / "demo_capture.json", "--out", tmp_path / "relabeled.c3d")
+    relabeled = run_cli("track", tmp_path / "demo_capture.json", "--out", tmp_path / "relabeled.c3d", "--json")
     assert relabeled.returncode == 0, relabeled.stderr
     assert read_c3d(tmp_path / "relabeled.c3d")[0] == labels
+    # The demo capture carries 1 mm of noise; track reads it back from the labels.
+    assert json.loads(relabeled.stdout)["noise_mm"] == pytest.approx(1.0, rel=0.1)
 
 
 def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""Rigid alignment, marker prediction through occlusion, gated assignment."""
+"""Rigid alignment, marker prediction through occlusion, gated assignment, the take's noise."""
 
 import itertools
 
@@ -7,6 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from formulations.markers.guide import assign_nearest
+from formulations.markers.noise import TakeNoise, measurement_noise
 from formulations.markers.rigid import rigid_transform
 from formulations.markers.state import MarkerState
 
@@ -95,3 +96,44 @@ def test_assign_nearest_is_the_optimal_gated_assignment(seed):
         and all(x < 0 or distance[n, x] <= radius[n] for n, x in enumerate(c))
     ]
     assert cost(found) == pytest.approx(min(cost(c) for c in feasible))
+
+
+def _smooth_takes(frames: int = 1200, markers: int = 20, seed: int = 0) -> np.ndarray:
+    """Limb-like tracks at 120 Hz: sums of 0.3-2 Hz sinusoids of 20-250 mm, (frames, markers, 3) mm."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(frames)[:, None, None, None] / 120.0
+    amplitude = rng.uniform(20, 250, (1, markers, 3, 4))
+    frequency = rng.uniform(0.3, 2.0, (1, markers, 3, 4))
+    phase = rng.uniform(0, 2 * np.pi, (1, markers, 3, 4))
+    return (amplitude * np.sin(2 * np.pi * frequency * t + phase)).sum(axis=3)
+
+
+@pytest.mark.parametrize("sigma", [0.5, 1.5, 4.0])
+def test_measurement_noise_recovers_a_known_sigma(sigma):
+    rng = np.random.default_rng(1)
+    positions = _smooth_takes() + rng.normal(0.0, sigma, (1200, 20, 3))
+    positions[rng.random((1200, 20)) < 0.2] = np.nan  # gaps: only runs of 4 frames count
+    found = measurement_noise(positions)
+    assert found == pytest.approx(np.full(3, sigma), rel=0.10)
+
+
+def test_take_noise_separates_acceleration_from_measurement():
+    """q is D^2 x's scale less the noise's 6 sigma^2."""
+    rng = np.random.default_rng(2)
+    clean = _smooth_takes()
+    noise = TakeNoise.of(clean + rng.normal(0.0, 1.5, clean.shape))
+    truth = 1.4826 * np.median(np.abs(np.diff(clean, n=2, axis=0)).reshape(-1, 3), axis=0)
+    assert noise.acceleration_mm == pytest.approx(truth, rel=0.15)
+
+
+def test_prediction_sigma_matches_simulated_constant_velocity_extrapolation():
+    """Tracks with white accelerations (q) seen with noise (sigma), extrapolated k frames."""
+    rng = np.random.default_rng(3)
+    sigma, q, k = 1.5, 0.8, np.array([0, 1, 10, 36])
+    track = np.cumsum(np.cumsum(rng.normal(0.0, q, (20000, 39, 3)), axis=1), axis=1)
+    seen = track + rng.normal(0.0, sigma, track.shape)
+    h = k + 1  # last seen in frame 1, unseen for k frames, predicted into frame 2 + k
+    extrapolated = seen[:, 1, None] + h[None, :, None] * (seen[:, 1] - seen[:, 0])[:, None]
+    error = seen[:, 1 + h] - extrapolated  # (tracks, len(k), 3), the candidate's own noise included
+    expected = TakeNoise(np.full(3, sigma), np.full(3, q)).prediction_sigma_mm(k)
+    assert error.std(axis=0) == pytest.approx(expected, rel=0.03)

@@ -7,6 +7,9 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
+from formulations.markers.noise import TakeNoise
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import read_capture_document
 from service.capture.formulation_spec import formulation_table
@@ -17,7 +20,7 @@ from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.stats import WindowStats, certificate_figures
+from service.labeling.stats import WindowStats, certificate_figures, finite_or_none
 
 
 def run_track(
@@ -46,7 +49,7 @@ def run_track(
     out.print(
         f"{input.name}: {summary['markers']} markers x {summary['frames']} frames ({capture.mode}) -> {output} "
         f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows integral, "
-        f"max gap {max((w.gap for w in windows), default=0.0):.1e})",
+        f"max gap {max((w.gap for w in windows), default=0.0):.1e}, noise {_mm(summary['noise_mm'])})",
         highlight=False,
     )
 
@@ -55,17 +58,33 @@ def track_summary(
     capture: Capture, result: LabeledTrajectories, windows: list[WindowStats], formulation: str, seconds: float,
     output: Path,
 ) -> dict[str, float | int | str | None]:
-    """The figures ``markerflow track --json`` prints: size, occluded share, certificate, time."""
+    """The figures ``markerflow track --json`` prints: size, occluded share, certificate, noise, time.
+
+    ``noise_mm`` is the take's measurement noise read back from the labeled positions
+    (``TakeNoise``: the robust scale of the constant-acceleration residual, mean over the
+    axes); None when too little was seen to say.
+    """
+    noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {
         "frames": capture.n_frames,
         "markers": len(capture.names),
         "mode": capture.mode,
         "occluded_fraction": float(result.occluded.mean()),
+        "noise_mm": None if noise is None else finite_or_none(float(noise.measurement_mm.mean())),
         **certificate_figures(windows),
         "seconds": seconds,
         "formulation": formulation,
         "output": str(output),
     }
+
+
+def _has_runs(positions: np.ndarray, order: int = 3) -> bool:
+    """Some marker was seen ``order + 1`` frames in a row: the noise has a residual to be read from."""
+    return bool(np.isfinite(np.diff(positions, n=order, axis=0)).any())
+
+
+def _mm(value: object) -> str:
+    return "unknown" if value is None else f"{value:.2f} mm"
 
 
 def _read_input(input: Path, shuffle: bool) -> tuple[Capture, LabelingOptions]:
