@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -23,6 +24,8 @@ from service.server.app import create_app
 from service.server.settings import Settings
 
 REPO = Path(__file__).resolve().parents[1]
+RELIABILITY = REPO.parent / "shared" / "reliability"  # one-byte reproducers of issue 15 (see its README)
+FUZZ_C3D = REPO.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)
 
 
@@ -73,14 +76,15 @@ def nan_array(values) -> np.ndarray:
 
 
 class ServerProcess:
-    """``markerflow serve`` in a subprocess (``python -m service.cli``), for tests that kill it."""
+    """``markerflow serve`` in a subprocess (``python -m service.cli``), for tests that kill it;
+    ``env`` adds ``MARKERFLOW_*`` settings."""
 
-    def __init__(self, db: str, log: Path) -> None:
+    def __init__(self, db: str, log: Path, env: dict[str, str] | None = None) -> None:
         self.log = log
         with log.open("w") as out:
             self.process = subprocess.Popen(
                 [sys.executable, "-m", "service.cli", "serve", "--port", "0", "--db", db],
-                cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
+                cwd=REPO, stdout=out, stderr=subprocess.STDOUT, env={**os.environ, **(env or {})},
             )
         self.url = self._wait_for_url()
 
@@ -98,3 +102,45 @@ class ServerProcess:
         if self.process.poll() is None:
             self.process.terminate()
             self.process.wait(15)
+
+    def peak_rss_mib(self) -> float:
+        """The server process's peak resident memory so far (VmHWM; its reader children not included)."""
+        status = Path(f"/proc/{self.process.pid}/status").read_text()
+        peak = re.search(r"VmHWM:\s+(\d+) kB", status)
+        assert peak is not None, status
+        return int(peak.group(1)) / 1024
+
+
+def mutations(data: bytes, count: int, seed: int) -> list[tuple[str, bytes]]:
+    """``count`` copies of ``data`` with 1 to 4 random bytes changed, half of them inside the
+    header and parameter section (where a reader is steered), half anywhere."""
+    rng = np.random.default_rng(seed)
+    parameters_end = (data[0] - 1 + data[(data[0] - 1) * 512 + 2]) * 512
+    mutated = []
+    for i in range(count):
+        copy = bytearray(data)
+        end = parameters_end if i % 2 == 0 else len(data)
+        offsets = rng.integers(0, end, size=1 if i % 3 else rng.integers(2, 5))
+        for offset in offsets:
+            copy[offset] = int(rng.integers(0, 256))
+        mutated.append((",".join(f"{o}={copy[o]:#04x}" for o in offsets), bytes(copy)))
+    return mutated
+
+
+def upload_fuzz(url: str, uploads: list[tuple[str, str, bytes]]) -> dict[str, tuple[int, str]]:
+    """POST each ``(label, filename, content)`` to ``/v1/jobs``: label -> (status, message); 0 for no answer."""
+    answers = {}
+    with httpx.Client(base_url=url, timeout=120) as client:
+        for label, filename, content in uploads:
+            try:
+                answer = client.post("/v1/jobs", files={"file": (filename, content)}, data={"window": "50"})
+                answers[label] = (answer.status_code, answer.json().get("message", ""))
+            except (httpx.HTTPError, ValueError) as error:
+                answers[label] = (0, f"{type(error).__name__}: {error}")
+    return answers
+
+
+def fuzz_uploads(count: int, seed: int) -> list[tuple[str, str, bytes]]:
+    """The issue's three C3D reproducers, then ``count`` fresh mutations of ``FUZZ_C3D``."""
+    reproducers = [(path.name, path.name, path.read_bytes()) for path in sorted(RELIABILITY.glob("*.c3d"))]
+    return reproducers + [(label, "take.c3d", data) for label, data in mutations(FUZZ_C3D.read_bytes(), count, seed)]

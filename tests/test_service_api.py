@@ -278,16 +278,15 @@ def test_formulations_health_and_metrics(client, capture):
     job = wait_for(client, _submit(client, document_json(capture, OPTIONS))["id"])
     for listed in client.get("/v1/jobs", params={"limit": 500}).json()["jobs"]:
         wait_for(client, listed["id"])
-    health = client.get("/healthz").json()
+    assert client.get("/healthz").json() == {"status": "ok"}
     states = [j["state"] for j in client.get("/v1/jobs", params={"limit": 500}).json()["jobs"]]
-    assert health["status"] == "ok" and health["jobs"] == {s: states.count(s) for s in health["jobs"]}
     metrics = client.get("/metrics").text
     done = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith('markerflow_jobs{state="done"}')))
     solved = float(next(line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_windows_solved_total")))
     count = float(next(
         line.split()[-1] for line in metrics.splitlines() if line.startswith("markerflow_window_solve_seconds_count")
     ))
-    assert done == health["jobs"]["done"] and solved == count >= job["windows_total"]
+    assert done == states.count("done") and solved == count >= job["windows_total"]
 
 
 def test_openapi_documents_every_route_with_examples(client):

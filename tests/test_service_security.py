@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+import socket
 import subprocess
 import sys
 
+import httpx
 import pytest
 from capture_fixtures import camera_capture
 from service_fixtures import REPO, document_json, serving, wait_for
@@ -60,6 +62,33 @@ def test_a_token_sees_and_cancels_only_its_own_jobs(guarded):
     assert job_id in [j["id"] for j in guarded.get("/v1/jobs", headers=as_(ALICE)).json()["jobs"]]
     # The 404 for another's job reads exactly like the 404 for no job at all.
     assert guarded.get(f"/v1/jobs/{job_id}", headers=as_(BOB)).json() == {"message": f"no job {job_id}"}
+
+
+def test_a_body_without_a_token_is_refused_before_it_is_read(guarded):
+    """Headers declaring 50 MB and no body sent: the 401 comes at once, not after a read."""
+    port = guarded.base_url.port
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as raw:
+        raw.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                    b"Content-Length: 50000000\r\nAuthorization: Bearer not-a-token-at-all\r\n\r\n{")
+        answer = b""
+        while chunk := raw.recv(4096):  # the server closes the connection after its answer
+            answer += chunk
+    head = answer.decode()
+    assert head.startswith("HTTP/1.1 401") and "www-authenticate: Bearer" in head and "unknown bearer token" in head
+
+
+def test_metrics_need_a_token_and_name_no_owner(guarded):
+    assert httpx.get(guarded.base_url.join("/metrics")).status_code == 401  # guarded may carry a token by now
+    assert guarded.post("/v1/jobs", content=json.dumps(small_document()), headers={**JSON, **as_(BOB)}).status_code == 202
+    text = guarded.get("/metrics", headers=as_(BOB)).text
+    assert "markerflow_jobs{" in text and not any(name in text for name in ("alice", "bob", ALICE, BOB, "owner"))
+    assert guarded.get("/healthz").json() == {"status": "ok"}
+
+
+def test_api_docs_follow_the_setting(tmp_path):
+    with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}", api_docs=False)) as client:
+        assert [client.get(path).status_code for path in ("/docs", "/redoc", "/openapi.json")] == [404, 404, 404]
+        assert client.get("/healthz").status_code == 200
 
 
 def test_a_non_loopback_bind_without_tokens_refuses_to_start(tmp_path):

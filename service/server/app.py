@@ -36,13 +36,16 @@ def create_app(settings: Settings) -> FastAPI:
         InputError: A non-loopback host without tokens.
     """
     settings.check_exposure()
+    docs = settings.api_docs  # False: no /docs, /redoc or /openapi.json
     app = FastAPI(
         title="markerflow", version="1", lifespan=_lifespan,
         description="Label optical motion-capture markers as durable jobs: submit, follow, fetch.",
+        docs_url="/docs" if docs else None, redoc_url="/redoc" if docs else None,
+        openapi_url="/openapi.json" if docs else None,
     )
     app.state.settings = settings
     app.state.owners = settings.owners()
-    app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes)
+    app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes, owners=app.state.owners)
     for router in (routes_jobs.router, routes_solve.router, routes_info.router):
         app.include_router(router)
     # Starlette types every handler as taking any Exception; each of these gets only its own class.

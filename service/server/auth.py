@@ -22,13 +22,27 @@ def caller(request: Request, credentials: HTTPAuthorizationCredentials | None = 
     Raises:
         HTTPException: 401 for a missing or unknown token.
     """
-    owners: dict[str, str] = request.app.state.owners
+    return owner_of(request.app.state.owners, credentials.credentials if credentials else None)
+
+
+def bearer_token(authorization: str) -> str | None:
+    """The token of an ``Authorization: Bearer <token>`` header value, as ``HTTPBearer`` reads it."""
+    scheme, _, token = authorization.partition(" ")
+    return token.strip() or None if scheme.lower() == "bearer" else None
+
+
+def owner_of(owners: dict[str, str], token: str | None) -> str:
+    """The owner of ``token`` among ``owners`` (secret -> owner); the local owner if there are none.
+
+    Raises:
+        HTTPException: 401 for a missing or unknown token.
+    """
     if not owners:
         return LOCAL_OWNER
-    if credentials is None:
+    if token is None:
         raise HTTPException(401, "a bearer token is required (Authorization: Bearer <token>)",
                             headers={"WWW-Authenticate": "Bearer"})
-    presented = credentials.credentials.encode()
+    presented = token.encode()
     # Compare against every secret in constant time: no early exit reveals a prefix match.
     matches = [name for secret, name in owners.items() if hmac.compare_digest(secret.encode(), presented)]
     if not matches:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from fastapi import HTTPException, Request
 from starlette.concurrency import run_in_threadpool
 
+from service.server.limits import check_body_limits
 from service.server.settings import Limits
 from service.server.submission import UPLOAD_FIELDS, Submission, document_submission, upload_submission
 
@@ -50,13 +51,19 @@ async def read_submission(request: Request, limits: Limits, upload: bool) -> Sub
 
     Raises:
         HTTPException: 415 for another media type.
-        InputError: Anything wrong with the capture, named by field.
+        InputError: Anything wrong with the capture, named by field; a JSON body over a
+            limit is refused from its bytes, before it is parsed.
     """
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media == "application/json":
-        return await run_in_threadpool(document_submission, await request.body(), limits)
+        return await run_in_threadpool(_document, await request.body(), limits)
     if upload and media == "multipart/form-data":
         async with request.form(max_files=1, max_fields=len(UPLOAD_FIELDS)) as form:
             return await run_in_threadpool(upload_submission, form, limits)
     accepted = "application/json or multipart/form-data" if upload else "application/json"
     raise HTTPException(415, f"content-type: send {accepted}, not {media or 'nothing'}")
+
+
+def _document(body: bytes, limits: Limits) -> Submission:
+    check_body_limits(body, limits)  # from the bytes, before the parse builds the document
+    return document_submission(body, limits)

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any, Literal
 
-from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
+from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request, Response
 from fastapi.responses import StreamingResponse
 from starlette.concurrency import run_in_threadpool
 
@@ -17,6 +18,7 @@ from service.server.store import ACTIVE, Job, JobStore
 
 ERRORS: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorBody}, 404: {"model": ErrorBody, "description": "No such job for this caller."}}
+JOB_ID = re.compile(r"[0-9a-f]{32}")
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses={401: {"model": ErrorBody}})
 
 
@@ -25,8 +27,12 @@ def _store(request: Request) -> JobStore:
 
 
 async def _job(request: Request, job_id: str, owner: str) -> Job:
-    """The caller's job; another owner's job is 404 too, so its existence is not revealed."""
-    job = await run_in_threadpool(_store(request).get, job_id, owner)
+    """The caller's job; another owner's job is 404 too, so its existence is not revealed.
+
+    An id that is not 32 hex digits (what ``JobStore.add`` makes) is no job: the store
+    never sees it (PostgreSQL refuses text with a NUL byte).
+    """
+    job = await run_in_threadpool(_store(request).get, job_id, owner) if JOB_ID.fullmatch(job_id) else None
     if job is None:
         raise HTTPException(404, f"no job {job_id}")
     return job
@@ -40,13 +46,33 @@ async def _status(request: Request, job: Job) -> JobStatus:
 @router.post(
     "", status_code=202, response_model=JobAccepted, openapi_extra=request_body(
         "A capture document (JSON), or a labeled .c3d/.trc upload relabeled from its first frame.", upload=True),
-    responses={413: {"model": ErrorBody}, 415: {"model": ErrorBody}, 422: {"model": ErrorBody}},
+    responses={413: {"model": ErrorBody}, 415: {"model": ErrorBody}, 422: {"model": ErrorBody},
+               429: {"model": ErrorBody, "description": "The queue is full; retry after the Retry-After seconds."}},
 )
-async def submit_job(request: Request, response: Response, owner: str = Depends(caller)) -> JobAccepted:
+async def submit_job(
+    request: Request, response: Response, owner: str = Depends(caller),
+    idempotency_key: str | None = Header(
+        None, alias="Idempotency-Key", pattern=r"^[!-~]{1,200}$",
+        description="Any printable ASCII up to 200 characters, new for each capture: a retried POST with the "
+                    "same key (and token) gets the job the first one made, not a second job."),
+) -> JobAccepted:
     """Queue a capture for labeling; answered once the job and its input are committed."""
-    submission = await read_submission(request, request.app.state.settings.limits, upload=True)
-    job = await run_in_threadpool(_store(request).add, owner, submission.source, submission.stored(), submission.n_windows)
-    await run_in_threadpool(request.app.state.executor.submit, job.id)
+    store, settings = _store(request), request.app.state.settings
+    earlier, queued = await run_in_threadpool(store.intake, owner, idempotency_key)  # one thread hop
+    if earlier is not None:
+        return _accepted(response, earlier)
+    if queued >= settings.max_queued_jobs:
+        raise HTTPException(429, f"{queued} jobs are queued, the limit (max_queued_jobs); retry later",
+                            headers={"Retry-After": str(settings.retry_after_seconds)})
+    submission = await read_submission(request, settings.limits, upload=True)
+    job, new = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows,
+                                       idempotency_key)
+    if new:
+        await run_in_threadpool(request.app.state.executor.submit, job.id)
+    return _accepted(response, job)
+
+
+def _accepted(response: Response, job: Job) -> JobAccepted:
     base = f"/v1/jobs/{job.id}"
     response.headers["Location"] = base
     return JobAccepted(**JobSummary.of(job).model_dump(),

@@ -107,4 +107,3 @@ class FormulationInfo(BaseModel):
 
 class Health(BaseModel):
     status: Literal["ok"]
-    jobs: dict[str, int] = Field(description="Jobs in the store by state.")

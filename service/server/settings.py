@@ -36,6 +36,8 @@ class Limits(BaseModel):
     max_detections_per_camera: int = Field(default=2_000, gt=0)
     max_cameras: int = Field(default=64, gt=0)
     max_solve_frames: int = Field(default=200, ge=2)
+    reader_memory_bytes: int = Field(default=2 * 2**30, gt=0)
+    reader_seconds: float = Field(default=60.0, gt=0)
 
 
 class Settings(BaseSettings):
@@ -48,6 +50,9 @@ class Settings(BaseSettings):
     dask: str | None = None
     max_parallel_jobs: int = Field(default=2, gt=0)
     events_poll_seconds: float = Field(default=0.2, gt=0)
+    max_queued_jobs: int = Field(default=1000, gt=0)
+    retry_after_seconds: int = Field(default=10, gt=0)
+    api_docs: bool = True
     tokens: dict[str, str] | list[str] = Field(default_factory=dict, repr=False)  # secrets stay out of logs
     limits: Limits = Field(default_factory=Limits)
 

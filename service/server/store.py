@@ -84,13 +84,38 @@ class JobStore:
         self.engine = engine_for(url)
         self.session = sessionmaker(self.engine, expire_on_commit=False)
 
-    def add(self, owner: str, source: str, document: bytes, windows_total: int) -> Job:
+    def add(self, owner: str, source: str, document: bytes, windows_total: int,
+            key: str | None = None) -> tuple[Job, bool]:
+        """A new queued job and True; with an idempotency ``key`` the owner already used, that job and False."""
         now = _now()
-        row = JobRow(id=uuid.uuid4().hex, owner=owner, state="queued", source=source, created_at=now,
-                     updated_at=now, windows_total=windows_total, windows_done=0, input=document)
-        with self.session.begin() as session:
-            session.add(row)
-        return Job.of(row)
+        row = JobRow(id=uuid.uuid4().hex, owner=owner, state="queued", source=source[:300], created_at=now,
+                     updated_at=now, windows_total=windows_total, windows_done=0, input=document,
+                     idempotency_key=key)
+        try:
+            with self.session.begin() as session:
+                session.add(row)
+        except IntegrityError:
+            earlier = self.by_key(owner, key) if key is not None else None
+            if earlier is None:  # not the key's unique index: a real conflict
+                raise
+            return earlier, False
+        return Job.of(row), True
+
+    def by_key(self, owner: str, key: str) -> Job | None:
+        """The owner's job submitted with Idempotency-Key ``key``, if any."""
+        with self.session() as session:
+            row = session.scalars(select(JobRow).where(JobRow.owner == owner, JobRow.idempotency_key == key)).first()
+            return Job.of(row) if row else None
+
+    def queued(self) -> int:
+        """Jobs waiting for a runner, over all owners."""
+        with self.session() as session:
+            return session.execute(select(func.count()).select_from(JobRow).where(JobRow.state == "queued")).scalar_one()
+
+    def intake(self, owner: str, key: str | None) -> tuple[Job | None, int]:
+        """What a submission needs to know first, in one call: the job the owner already made
+        with ``key`` (None if none, or no key), and how many jobs are queued."""
+        return self.by_key(owner, key) if key is not None else None, self.queued()
 
     def get(self, job_id: str, owner: str | None = None) -> Job | None:
         """The job, or None if it does not exist or belongs to another owner."""

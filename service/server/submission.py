@@ -10,7 +10,7 @@ message starts with the field path.
 from __future__ import annotations
 
 import json
-import tempfile
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,11 +24,12 @@ from service.capture.document import CaptureDocument, describe_validation_error
 from service.capture.formulation_spec import formulation_from_table
 from service.capture.from_recording import capture_from_recording
 from service.errors import InputError
-from service.io.formats import read_labeled
+from service.io.isolated import ReaderBounds, read_isolated
 from service.io.recording import Recording
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.spans import window_spans
 from service.server.limits import check_limits
+from service.server.prescan import check_depth
 from service.server.settings import Limits
 
 UPLOAD_FIELDS = ("file", "formulation", "window")
@@ -68,7 +69,7 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
     if filename.suffix.lower() not in UPLOAD_SUFFIXES:
         raise InputError(f"file: {filename.name or 'the upload'} is not a .c3d or .trc file")
     options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
-    recording = _read_upload(upload, filename)
+    recording = _read_upload(upload, filename, limits)
     absent = np.flatnonzero(recording.missing()[0])
     if len(absent):
         raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame")
@@ -113,6 +114,7 @@ def _formulation_field(value: str | UploadFile | None) -> str | dict:
         raise InputError("formulation: give a name or a JSON object, not a file")
     if not value.lstrip().startswith("{"):
         return value
+    check_depth(value.encode(), "formulation")
     try:
         table = json.loads(value)
     except json.JSONDecodeError as error:
@@ -125,18 +127,17 @@ def _formulation_field(value: str | UploadFile | None) -> str | dict:
 def _window_field(value: str | UploadFile | None) -> int:
     if value is None:
         return LabelingOptions().window
-    if not isinstance(value, str) or not value.strip().lstrip("-").isdigit():
+    # ASCII digits only: str.isdigit() takes '²', which int() refuses; 9 digits keep int() cheap.
+    if not isinstance(value, str) or not re.fullmatch(r"\s*-?[0-9]{1,9}\s*", value):
         raise InputError(f"window: expected a whole number of frames, got {value!r}")
     return int(value)
 
 
-def _read_upload(upload: UploadFile, filename: Path) -> Recording:
-    """The upload read by the file readers, which take a path: a temp file with its suffix."""
-    with tempfile.TemporaryDirectory(prefix="markerflow-upload-") as folder:
-        path = Path(folder) / f"upload{filename.suffix.lower()}"
-        upload.file.seek(0)
-        path.write_bytes(upload.file.read())
-        try:
-            return read_labeled(path)
-        except InputError as error:  # name the upload, not the temp file
-            raise InputError(f"file: {str(error).replace(str(path), filename.name)}") from None
+def _read_upload(upload: UploadFile, filename: Path, limits: Limits) -> Recording:
+    """The upload read in a bounded child process (``read_isolated``), never in the server."""
+    bounds = ReaderBounds(limits.reader_memory_bytes, limits.reader_seconds, limits.max_markers, limits.max_frames)
+    upload.file.seek(0)
+    try:
+        return read_isolated(upload.file.read(), filename.suffix.lower(), bounds)
+    except InputError as error:
+        raise InputError(f"file: {filename.name}: {error}") from None

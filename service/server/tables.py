@@ -5,8 +5,9 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Literal
 
-from sqlalchemy import ForeignKey, LargeBinary, String, Text, create_engine, event
+from sqlalchemy import ForeignKey, Index, LargeBinary, String, Text, create_engine, event, inspect, text
 from sqlalchemy.engine import Engine
+from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import DeclarativeBase, Mapped, deferred, mapped_column
 
 JobState = Literal["queued", "running", "done", "failed", "cancelled"]
@@ -30,6 +31,11 @@ class JobRow(Base):
     error: Mapped[str | None] = mapped_column(Text)
     input: Mapped[bytes] = deferred(mapped_column(LargeBinary))  # the validated capture document JSON
     result: Mapped[bytes | None] = deferred(mapped_column(LargeBinary))  # LabeledTrajectories npz
+    idempotency_key: Mapped[str | None] = mapped_column(String(200))  # the client's Idempotency-Key header
+
+
+# One job per owner and key (rows without a key are not constrained: unique indexes allow many nulls).
+IDEMPOTENCY_INDEX = Index("ix_jobs_owner_idempotency_key", JobRow.owner, JobRow.idempotency_key, unique=True)
 
 
 class WindowRow(Base):
@@ -64,4 +70,26 @@ def engine_for(url: str) -> Engine:
     if engine.dialect.name == "sqlite":
         event.listen(engine, "connect", _sqlite_pragmas)
     Base.metadata.create_all(engine)
+    _add_idempotency_key(engine)
     return engine
+
+
+def _add_idempotency_key(engine: Engine) -> None:
+    """A store made before ``jobs.idempotency_key`` existed gets the column (null) and its index.
+
+    Standard SQL, for SQLite and PostgreSQL alike. Two processes opening an old store at
+    once may both try: the loser's error is ignored once the column is there.
+    """
+    if _has_idempotency_key(engine):
+        return
+    try:
+        with engine.begin() as connection:
+            connection.execute(text("ALTER TABLE jobs ADD COLUMN idempotency_key VARCHAR(200)"))
+    except DBAPIError:
+        if not _has_idempotency_key(engine):
+            raise
+    IDEMPOTENCY_INDEX.create(engine, checkfirst=True)
+
+
+def _has_idempotency_key(engine: Engine) -> bool:
+    return "idempotency_key" in {column["name"] for column in inspect(engine).get_columns("jobs")}

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import re
-import struct
 from pathlib import Path
 
 import ezc3d
 import numpy as np
 
 from service.errors import InputError
+from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout
 from service.io.formats.conventions import (
     hidden_samples,
     require_file,
@@ -18,24 +18,24 @@ from service.io.formats.conventions import (
 )
 from service.io.recording import LabeledTrajectories, Recording
 
-_BLOCK = 512  # C3D sections are addressed in 512-byte blocks
-_MIPS = 86  # processor-type byte of the only big-endian C3D flavour
 
-
-def read_c3d(path: str | Path) -> Recording:
+def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | None = None) -> Recording:
     """Read the labeled 3D points of a C3D file, in millimetres.
 
-    Missing samples (negative residual, or exactly (0, 0, 0)) become NaN.
+    Missing samples (negative residual, or exactly (0, 0, 0)) become NaN. The header and
+    parameter section are checked (``c3d_layout``), and the point and frame counts against
+    ``max_points``/``max_frames`` if given, before the C3D reader sees the file.
 
     Raises:
-        InputError: missing, unreadable or truncated file; no labeled points or a
-            blank label; zero frames; no frame rate; a length unit other than mm, cm or m.
+        InputError: missing, unreadable or truncated file; a broken parameter section; more
+            points or frames than allowed; no labeled points, a blank label or one that is
+            not UTF-8 text; zero frames; no frame rate; a length unit other than mm, cm or m.
     """
     path = require_file(path)
+    _check_layout(path, max_points, max_frames)
     c3d = _load(path)
     points = c3d["data"]["points"][:3]  # (3, markers, frames)
     names = _labels(c3d, points.shape[1], path)
-    _check_complete(c3d, path)
     if points.shape[2] == 0:
         raise InputError(f"{path}: C3D file has zero frames")
     rate = float(c3d["header"]["points"]["frame_rate"])
@@ -70,6 +70,15 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories) -> None:
     c3d.write(str(path))
 
 
+def _check_layout(path: Path, max_points: int | None, max_frames: int | None) -> None:
+    with path.open("rb") as f:
+        prefix = f.read(PREFIX_BYTES)
+    try:
+        c3d_layout(prefix, path.stat().st_size).check_limits(max_points, max_frames)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
 def _load(path: Path) -> ezc3d.c3d:
     try:
         return ezc3d.c3d(str(path))
@@ -94,27 +103,20 @@ def _labels(c3d: ezc3d.c3d, n_markers: int, path: Path) -> list[str]:
         raise InputError(f"{path}: C3D file has no point labels (all {n_markers} are blank)")
     if blank:
         raise InputError(f"{path}: C3D point {blank[0] + 1} of {n_markers} has a blank label")
+    # ezc3d decodes bytes outside UTF-8 as lone surrogates, which no JSON or text output can hold.
+    garbled = [i for i, label in enumerate(labels) if not _is_utf8(label)]
+    if garbled:
+        raise InputError(f"{path}: C3D point {garbled[0] + 1} of {n_markers} has a label that is not UTF-8 text "
+                         f"({labels[garbled[0]].encode('utf-8', 'backslashreplace').decode()})")
     return labels
 
 
-def _check_complete(c3d: ezc3d.c3d, path: Path) -> None:
-    """Compare the file size with what its header declares.
-
-    ezc3d stops silently at the end of a truncated file and rewrites its header to
-    match, so the declared frame count is read from the raw header here.
-    """
-    with path.open("rb") as f:
-        header = f.read(_BLOCK)
-        f.seek((header[0] - 1) * _BLOCK + 3)
-        order = ">" if f.read(1) == bytes([_MIPS]) else "<"
-    n_points, n_analog, first, last = struct.unpack_from(order + "4H", header, 2)
-    (data_start,) = struct.unpack_from(order + "H", header, 16)
-    word = 4 if c3d["parameters"]["POINT"]["SCALE"]["value"][0] < 0 else 2  # float or int
-    frames = max(last - first + 1, 0)
-    expected = (data_start - 1) * _BLOCK + frames * word * (4 * n_points + n_analog)
-    size = path.stat().st_size
-    if size < expected:
-        raise InputError(f"{path}: truncated C3D file ({size} of {expected} bytes)")
+def _is_utf8(label: str) -> bool:
+    try:
+        label.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
 
 
 def _check_writable(path: Path) -> None:
@@ -126,5 +128,8 @@ def _check_writable(path: Path) -> None:
 
 
 def _first_line(exc: Exception) -> str:
+    """The reader's own first line, without its advice to set an ezc3d option: markerflow
+    exposes none of them, so the user can only repair or re-export the file."""
     text = str(exc).strip()
-    return text.splitlines()[0] if text else type(exc).__name__
+    line = text.splitlines()[0] if text else type(exc).__name__
+    return re.sub(r"\.?\s*If you want to ignore this error.*$", "", line)

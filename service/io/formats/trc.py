@@ -18,12 +18,16 @@ _KEYS = ("DataRate", "NumFrames", "NumMarkers", "Units")
 _FIRST_DATA_LINE = 6  # after the magic line, the key/value lines, names, X1 Y1 Z1
 
 
-def read_trc(path: str | Path) -> Recording:
+def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int | None = None) -> Recording:
     """Read a TRC file into millimetres; blank cells and (0, 0, 0) samples become NaN.
+
+    NumMarkers and NumFrames are checked against ``max_markers``/``max_frames`` (if given)
+    before any row is read.
 
     Raises:
         InputError: missing or malformed file (header, names, a non-numeric cell, a
-            row count other than NumFrames), zero frames, or an unknown unit.
+            row count other than NumFrames), zero frames, an unknown unit, or more
+            markers or frames than allowed.
     """
     path = require_file(path)
     lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
@@ -33,13 +37,15 @@ def read_trc(path: str | Path) -> Recording:
         raise InputError(f"{path}: TRC file ends inside its header")
     header = _header(lines, path)
     n_markers = int(_number(header, "NumMarkers", path))
+    declared = int(_number(header, "NumFrames", path))
+    _at_most(n_markers, "markers", max_markers, "max_markers", path)
+    _at_most(declared, "frames", max_frames, "max_frames", path)
     names = _names(lines[3], n_markers, path)
     rows = [
         _row(line, n_markers, f"{path}:{number}")
         for number, line in enumerate(lines[_FIRST_DATA_LINE - 1 :], start=_FIRST_DATA_LINE)
         if line.strip()
     ]
-    declared = int(_number(header, "NumFrames", path))
     if len(rows) != declared:
         raise InputError(f"{path}: header says NumFrames {declared} but has {len(rows)} rows")
     if not rows:
@@ -47,6 +53,11 @@ def read_trc(path: str | Path) -> Recording:
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
     return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path))
+
+
+def _at_most(count: int, what: str, limit: int | None, name: str, path: Path) -> None:
+    if limit is not None and count > limit:
+        raise InputError(f"{path}: {count} {what} exceeds the limit of {limit} (limits.{name})")
 
 
 def _header(lines: list[str], path: Path) -> dict[str, str]:
@@ -67,6 +78,8 @@ def _number(header: dict[str, str], key: str, path: Path) -> float:
         value = float(header[key])
     except ValueError:
         raise InputError(f"{path}: TRC header {key} is {header[key]!r}, not a number") from None
+    if not np.isfinite(value):
+        raise InputError(f"{path}: TRC header {key} is {header[key]!r}, not a finite number")
     if not value > 0 and key != "NumFrames":
         raise InputError(f"{path}: TRC header {key} must be positive, got {header[key]}")
     return value
