@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 
 from formulations.methods.formulation import Formulation
+from formulations.methods.frame_steps import FrameSteps
 from formulations.window.objective import path_cost
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
@@ -42,35 +43,23 @@ class NnHungarian(Formulation):
 
     def solve(self, problem: WindowProblem) -> WindowSolution:
         start = time.perf_counter()
-        by_tail = np.argsort(problem.arc_tail, kind="stable")
-        out_start = np.searchsorted(problem.arc_tail[by_tail], np.arange(problem.n_nodes + 1))
-        node_groups = problem.conflict_groups.T.tocsr()  # (V, G)
-        taken = np.zeros(node_groups.shape[1])
+        steps = FrameSteps(problem)
+        taken = np.zeros(steps.node_groups.shape[1])
         previous = problem.source_nodes()
         path = np.empty((problem.n_objects, problem.n_frames), dtype=int)
         for m in range(problem.n_frames):
-            arcs = by_tail[_ranges(out_start[previous], out_start[previous + 1])]
-            node, cost = problem.arc_head[arcs], problem.arc_cost[arcs]
-            free = node_groups[node] @ taken == 0
-            node, cost = node[free], cost[free]
-            held = node_groups[node]
+            node, cost, held = steps.successors(previous, taken)
             if (np.diff(held.indptr) > 1).any():
                 previous = _greedy(problem, node, cost, held)
             else:
                 previous = _assign(problem, node, cost, held)
-            taken[node_groups[previous].indices] = 1.0
+            taken[steps.node_groups[previous].indices] = 1.0
             path[:, m] = previous
         solve = time.perf_counter() - start
         return WindowSolution(
             path=path, cost=path_cost(problem, path), lower_bound=-np.inf, integral=False,
             status="baseline", solve_seconds=solve, round_seconds=time.perf_counter() - start - solve,
         )
-
-
-def _ranges(first: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Concatenation of arange(first[i], stop[i]) without a Python loop."""
-    counts = stop - first
-    return np.repeat(first - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
 
 
 def _assign(problem: WindowProblem, node: np.ndarray, cost: np.ndarray, held: sp.csr_matrix) -> np.ndarray:

@@ -26,6 +26,7 @@ _FORMULATIONS = {
     "dp-sequential": "formulations.methods.dp_sequential:DpSequential",
     "dp-extended": "formulations.methods.dp_extended:DpExtended",
     "nn-hungarian": "formulations.methods.nn_hungarian:NnHungarian",
+    "mht": "formulations.methods.mht:Mht",
 }
 
 
