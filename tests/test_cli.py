@@ -20,7 +20,7 @@ CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 SUMMARY_KEYS = {
     "label_accuracy", "swaps", "ghost_precision", "ghost_recall", "integral_window_fraction",
-    "gap_median", "gap_max", "seconds_per_frame", "frames", "markers", "formulation",
+    "gap_median", "gap_max", "seconds_per_frame", "frames", "markers", "formulation", "doubtful_fraction",
 }  # fmt: skip
 
 

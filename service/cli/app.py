@@ -52,7 +52,7 @@ def track(
     input: Annotated[Path, typer.Argument(
         help="Capture .json (see \"Capture JSON\" in README.md), or a labeled .c3d/.trc/.csv whose first frame names the markers."
     )],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d or .csv.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d, .trc or .csv.")],
     formulation: FormulationOption = None,
     window: WindowOption = None,
     shuffle: Annotated[bool, typer.Option(help="C3D/TRC input: shuffle each frame's points before labeling.")] = True,

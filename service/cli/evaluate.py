@@ -7,15 +7,18 @@ import json
 from pathlib import Path
 
 from service.capture.formulation_spec import formulation_from_spec, resolve_formulation
-from service.cli.report import print_summary, window_progress
+from service.cli.report import print_summary, warn_doubtful, window_progress
 from service.evaluation.cameras import CameraEvaluation, evaluate_cameras
 from service.evaluation.cloud import Evaluation, evaluate
 from service.evaluation.scenario import Scenario
 from service.io.formats import read_labeled
+from service.labeling.stats import doubtful_fraction
 
 
 def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, window: int | None, as_json: bool) -> None:
-    """Simulate, label and score; print a table or one JSON object."""
+    """Simulate, label and score; print a table or one JSON object, and warn on stderr when
+    many labels are doubtful (``doubtful_fraction``; None in camera mode, whose evaluation
+    keeps no labeled trajectories)."""
     scenario = Scenario.from_toml(scenario_path)
     if window is not None:
         scenario = dataclasses.replace(scenario, window=window)
@@ -31,7 +34,12 @@ def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, w
             result = evaluate_cameras(truth, scenario, chosen, progress=progress)
         else:
             result = evaluate(truth, scenario, chosen, progress=progress)
+    doubtful = None
+    if isinstance(result, Evaluation):
+        doubtful = doubtful_fraction(result.result.occluded, result.windows)
+    summary = {**result.summary(), "doubtful_fraction": doubtful}
     if as_json:
-        print(json.dumps(result.summary(), allow_nan=False))
+        print(json.dumps(summary, allow_nan=False))
     else:
-        print_summary(result.summary(), f"{trajectories.name} · {scenario_path.name}")
+        print_summary(summary, f"{trajectories.name} · {scenario_path.name}")
+    warn_doubtful(doubtful)

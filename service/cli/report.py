@@ -11,6 +11,8 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from service.labeling.stats import DOUBTFUL_WARNING, REACQUIRED_FRAMES
+
 # Piped output (files, CI logs) has no width to detect: give tables room rather than 80
 # columns, and never break a line of text (a script reads the summary as one line).
 out = Console() if sys.stdout.isatty() else Console(width=120, soft_wrap=True)
@@ -19,12 +21,15 @@ quiet = False  # ``markerflow --quiet``: no progress; results are still printed
 PLAIN_EVERY_SECONDS = 10.0  # piped progress: a line at least this often,
 PLAIN_LINES = 10  # and about this many lines per run
 
+CERTIFICATE = "optimal under the model"  # what an integral window proves: not that its labels are right
+
 LABELS = {
     "label_accuracy": ("label accuracy", "{:.4%}"),
     "swaps": ("label swaps", "{}"),
     "ghost_precision": ("ghost precision", "{:.3f}"),
     "ghost_recall": ("ghost recall", "{:.3f}"),
-    "integral_window_fraction": ("integral windows", "{:.1%}"),
+    "integral_window_fraction": (f"windows {CERTIFICATE}", "{:.1%}"),
+    "doubtful_fraction": ("doubtful labels", "{:.1%}"),
     "gap_median": ("median gap", "{:.2e}"),
     "gap_max": ("max gap", "{:.2e}"),
     "seconds_per_frame": ("ms per frame", None),
@@ -37,8 +42,9 @@ LABELS = {
 
 
 def print_summary(summary: dict, title: str) -> None:
-    """A two-column table of the figures in ``summary``."""
-    table = Table(title=title, show_header=False)
+    """A two-column table of the figures in ``summary``, captioned with what the certificate proves."""
+    caption = f"an integral window is {CERTIFICATE} (proven best for its costs), not proven right"
+    table = Table(title=title, caption=caption, show_header=False)
     for key, value in summary.items():
         label, fmt = LABELS.get(key, (key, "{}"))
         if value is None:
@@ -49,6 +55,15 @@ def print_summary(summary: dict, title: str) -> None:
             text = fmt.format(value)
         table.add_row(label, text)
     out.print(table)
+
+
+def warn_doubtful(fraction: float | None) -> None:
+    """One stderr line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
+    if fraction is not None and fraction > DOUBTFUL_WARNING:
+        sys.stdout.flush()  # after the figures it qualifies, also when both go to one terminal
+        print(f"warning: {fraction:.1%} of the labels are doubtful (within {REACQUIRED_FRAMES} frames of a "
+              f"re-acquisition after an occlusion, or in a window not proven {CERTIFICATE}); check them",
+              file=sys.stderr, flush=True)
 
 
 @contextmanager

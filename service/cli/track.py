@@ -6,6 +6,7 @@ import json
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -15,12 +16,12 @@ from service.capture.document import read_capture_document
 from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording
 from service.cli.output import check_writable_output
-from service.cli.report import out, window_progress
+from service.cli.report import CERTIFICATE, out, warn_doubtful, window_progress
 from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
-from service.io.recording import LabeledTrajectories
+from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.stats import WindowStats, certificate_figures, finite_or_none
+from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 
 
 def run_track(
@@ -29,10 +30,13 @@ def run_track(
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
 
     ``formulation`` and ``window`` override a JSON document's own options when given.
-    Prints one line, or with ``as_json`` one JSON object (``track_summary``), on stdout.
+    A .c3d/.trc output of a .c3d/.trc input keeps the input's unit and frame numbering;
+    a .c3d of a .c3d keeps everything but the points (``write_labeled``).
+    Prints one line, or with ``as_json`` one JSON object (``track_summary``), on stdout,
+    and a warning on stderr when many labels are doubtful.
     """
     check_writable_output(output)
-    capture, options = _read_input(input, shuffle)
+    capture, options, source = _read_input(input, shuffle)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:
@@ -41,28 +45,32 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    write_labeled(output, result)
+    write_labeled(output, result, source)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     if as_json:
         print(json.dumps(summary, allow_nan=False))
-        return
-    out.print(
-        f"{input.name}: {summary['markers']} markers x {summary['frames']} frames ({capture.mode}) -> {output} "
-        f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows integral, "
-        f"max gap {max((w.gap for w in windows), default=0.0):.1e}, noise {_mm(summary['noise_mm'])})",
-        highlight=False,
-    )
+    else:
+        out.print(
+            f"{input.name}: {summary['markers']} markers x {summary['frames']} frames ({capture.mode}) -> {output} "
+            f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
+            f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
+            f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})",
+            highlight=False,
+        )
+    warn_doubtful(summary["doubtful_fraction"])
 
 
 def track_summary(
     capture: Capture, result: LabeledTrajectories, windows: list[WindowStats], formulation: str, seconds: float,
     output: Path,
-) -> dict[str, float | int | str | None]:
-    """The figures ``markerflow track --json`` prints: size, occluded share, certificate, noise, time.
+) -> dict[str, Any]:
+    """The figures ``markerflow track --json`` prints: size, occluded share, certificate, doubt, noise, time.
 
-    ``noise_mm`` is the take's measurement noise read back from the labeled positions
-    (``TakeNoise``: the robust scale of the constant-acceleration residual, mean over the
-    axes); None when too little was seen to say.
+    ``certificate`` says what an integral window proves: optimal under the model, not
+    right. ``doubtful_fraction`` and ``reacquired`` (marker -> frames) are those of
+    ``service.labeling.stats``. ``noise_mm`` is the take's measurement noise read back
+    from the labeled positions (``TakeNoise``: the robust scale of the constant-acceleration
+    residual, mean over the axes); None when too little was seen to say.
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {
@@ -72,6 +80,9 @@ def track_summary(
         "occluded_fraction": float(result.occluded.mean()),
         "noise_mm": None if noise is None else finite_or_none(float(noise.measurement_mm.mean())),
         **certificate_figures(windows),
+        "certificate": CERTIFICATE,
+        "doubtful_fraction": doubtful_fraction(result.occluded, windows),
+        "reacquired": reacquisitions(result.names, result.occluded),
         "seconds": seconds,
         "formulation": formulation,
         "output": str(output),
@@ -87,15 +98,17 @@ def _mm(value: object) -> str:
     return "unknown" if value is None else f"{value:.2f} mm"
 
 
-def _read_input(input: Path, shuffle: bool) -> tuple[Capture, LabelingOptions]:
+def _read_input(input: Path, shuffle: bool) -> tuple[Capture, LabelingOptions, SourceFile | None]:
+    """The capture, its options, and the file that output written from it keeps (none for JSON)."""
     if input.suffix.lower() != ".json":
-        return capture_from_recording(read_labeled(input), shuffle), LabelingOptions()
+        recording = read_labeled(input)
+        return capture_from_recording(recording, shuffle), LabelingOptions(), recording.source
     try:
         text = input.read_bytes()
     except OSError as error:
         raise InputError(f"{input}: cannot read ({error.strerror})") from None
     document = read_capture_document(text, str(input))
-    return document.capture(), document.options()
+    return document.capture(), document.options(), None
 
 
 def _formulation_table(spec: str) -> str | dict:

@@ -3,10 +3,28 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from service.errors import InputError
+
+
+@dataclass(frozen=True)
+class SourceFile:
+    """What labeled output keeps of the file it relabels (``read_labeled`` fills it in).
+
+    Attributes:
+        unit: The input's length unit (mm, cm or m): the output is written in it.
+        first_frame: The input's number of its first frame (the C3D header's, from 0).
+        c3d: A C3D input as ezc3d read it: a C3D output is this file with only its points,
+            their labels and residuals replaced. None for other inputs. (``Any``: ezc3d
+            ships no type information.)
+    """
+
+    unit: str = "mm"
+    first_frame: int = 0
+    c3d: Any = None
 
 
 @dataclass
@@ -17,11 +35,13 @@ class Recording:
         names: One label per marker, in column order.
         positions: ``(frames, markers, 3)`` in millimetres; NaN where a marker is missing.
         rate: Frames per second.
+        source: The file it was read from, for output that keeps it; None if built in memory.
     """
 
     names: list[str]
     positions: np.ndarray
     rate: float
+    source: SourceFile | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.positions = np.asarray(self.positions, dtype=float)

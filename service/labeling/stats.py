@@ -1,4 +1,10 @@
-"""Per-window statistics kept by the labeler: the certificate and where the time went."""
+"""Per-window statistics kept by the labeler: the certificate, where the time went, and
+which labels the certificate does not vouch for.
+
+An integral window is optimal *under the model* (the arc costs and gates of the window
+LP): it proves no label right. Labels are called doubtful where the model had the least
+to go on, and a take's share of them is reported next to the certificate.
+"""
 
 from __future__ import annotations
 
@@ -58,6 +64,49 @@ class WindowStats:
 def finite_or_none(value: float) -> float | None:
     """JSON has no inf: a figure nothing proved (a heuristic's gap) becomes None."""
     return float(value) if np.isfinite(value) else None
+
+
+REACQUIRED_FRAMES = 5  # a label stays doubtful this many frames after its marker reappears
+DOUBTFUL_WARNING = 0.02  # warn when more than this share of a take's labels is doubtful
+REACQUIRED_LISTED = 20  # re-acquisition frames listed per marker in a summary
+
+
+def reacquired(occluded: np.ndarray, frames: int = REACQUIRED_FRAMES) -> np.ndarray:
+    """``(F, M)`` bool: seen in frame ``f`` and occluded in one of frames ``f - frames .. f - 1``.
+
+    Such a label was picked up again rather than carried along a track: the marker state
+    that chose it had been predicted, unseen, through the gap.
+    """
+    recent = np.zeros_like(occluded, dtype=bool)
+    for back in range(1, frames + 1):
+        recent[back:] |= occluded[:-back]
+    return recent & ~occluded
+
+
+def doubtful_labels(occluded: np.ndarray, windows: list[WindowStats]) -> np.ndarray:
+    """``(F, M)`` bool: labels (seen samples) that are ``reacquired``, or that lie in a window
+    whose relaxation was fractional (rounded, so not even optimal under the model)."""
+    fractional = np.zeros(len(occluded), dtype=bool)
+    for w in windows:
+        fractional[w.template + 1 : w.last + 1] |= not w.integral
+    return reacquired(occluded) | (fractional[:, None] & ~occluded)
+
+
+def doubtful_fraction(occluded: np.ndarray, windows: list[WindowStats]) -> float:
+    """Doubtful labels / labels (``doubtful_labels``; 0 with no label)."""
+    occluded = np.asarray(occluded, dtype=bool)
+    labels = int((~occluded).sum())
+    return int(doubtful_labels(occluded, windows).sum()) / labels if labels else 0.0
+
+
+def reacquisitions(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:
+    """Per marker that has any, the first ``REACQUIRED_LISTED`` frames (from 0) where it
+    reappeared after an occlusion: where its identity went from predicted back to a point."""
+    onsets = reacquired(np.asarray(occluded, dtype=bool), frames=1)
+    return {
+        name: np.flatnonzero(onsets[:, m])[:REACQUIRED_LISTED].tolist()
+        for m, name in enumerate(names) if onsets[:, m].any()
+    }
 
 
 def certificate_figures(windows: list[WindowStats]) -> dict[str, float | None]:

@@ -9,8 +9,8 @@ from typing import Any
 from service.errors import InputError
 from service.io.formats.c3d import read_c3d, write_c3d
 from service.io.formats.csv import read_csv_labeled, write_csv
-from service.io.formats.trc import read_trc
-from service.io.recording import LabeledTrajectories, Recording
+from service.io.formats.trc import read_trc, write_trc
+from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 
 def _read_csv(path: str | Path) -> Recording:
@@ -20,11 +20,14 @@ def _read_csv(path: str | Path) -> Recording:
 
 
 _READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": _read_csv}
-_WRITERS = {".c3d": write_c3d, ".csv": write_csv}
+_WRITERS = {".c3d": write_c3d, ".trc": write_trc, ".csv": write_csv}
 
 
 def read_labeled(path: str | Path) -> Recording:
     """Read labeled trajectories from a .c3d, .trc or markerflow .csv file (millimetres, NaN gaps).
+
+    The recording's ``source`` keeps what output written from it needs (unit, frame
+    numbering, and a C3D's other content); a .csv has none: markerflow wrote it, in mm.
 
     Raises:
         InputError: unsupported suffix, or a missing or malformed file.
@@ -32,13 +35,25 @@ def read_labeled(path: str | Path) -> Recording:
     return _by_suffix(_READERS, path, "read")(path)
 
 
-def write_labeled(path: str | Path, traj: LabeledTrajectories) -> None:
-    """Write markerflow's labels to a .c3d or .csv file.
+def write_labeled(
+    path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0
+) -> None:
+    """Write markerflow's labels to a .c3d, .trc or .csv file.
+
+    Args:
+        path: The output; its suffix picks the format.
+        traj: The labels.
+        source: The input's ``Recording.source``: a .c3d or .trc output is then written in
+            the input's unit and frame numbering, and a .c3d from a C3D input is that file
+            with only its points replaced (``write_c3d``). None: mm, frames from 0.
+        start: The input frame of ``traj``'s first frame: a labeled span of a longer input
+            (a C3D output still holds every input frame, unlabeled outside the span).
 
     Raises:
-        InputError: unsupported suffix, or a path that cannot be written.
+        InputError: unsupported suffix, labels that do not fit the source, or a path that
+            cannot be written.
     """
-    _by_suffix(_WRITERS, path, "write")(path, traj)
+    _by_suffix(_WRITERS, path, "write")(path, traj, source, start)
 
 
 def check_output(path: str | Path) -> None:

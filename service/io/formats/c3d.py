@@ -1,7 +1,13 @@
-"""C3D files: read labeled marker trajectories, write markerflow's labels."""
+"""C3D files: read labeled marker trajectories, write markerflow's labels.
+
+A C3D written from a C3D input is that file with only its points, their labels and
+residuals replaced: analog channels, force platforms, events, subjects, trial and every
+other parameter group, the frame numbering, the point rate and the length unit are copied.
+"""
 
 from __future__ import annotations
 
+import copy
 import re
 from pathlib import Path
 
@@ -11,12 +17,13 @@ import numpy as np
 from service.errors import InputError
 from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout
 from service.io.formats.conventions import (
+    from_millimetres,
     hidden_samples,
     require_file,
     to_millimetres,
     zero_gaps_to_nan,
 )
-from service.io.recording import LabeledTrajectories, Recording
+from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 
 def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | None = None) -> Recording:
@@ -43,31 +50,75 @@ def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | 
         raise InputError(f"{path}: C3D file has no point frame rate")
     units = list(c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])) or [""]
     positions = to_millimetres(points.transpose(2, 1, 0), units[0], path)
-    return Recording(names, zero_gaps_to_nan(positions), rate)
+    source = SourceFile(units[0].strip().lower(), int(c3d["header"]["points"]["first_frame"]), c3d)
+    return Recording(names, zero_gaps_to_nan(positions), rate, source)
 
 
-def write_c3d(path: str | Path, traj: LabeledTrajectories) -> None:
-    """Write ``traj`` as C3D points in mm; occluded samples get residual -1.
+def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
+    """Write ``traj`` as C3D points; occluded samples are (0, 0, 0) with residual -1.
+
+    With a C3D ``source`` the output is a copy of it whose points named in ``traj`` hold
+    the labels from input frame ``start`` on, and are missing in the input's frames before
+    and after; points ``traj`` does not name keep the input's samples. Otherwise a new
+    C3D of the labels alone, numbered from ``source.first_frame + start``. Either way in
+    ``source.unit`` (mm without a source).
 
     Raises:
-        InputError: nothing to write, or the path cannot be written.
+        InputError: nothing to write, labels that do not fit the source (a name it lacks,
+            frames past its end), or the path cannot be written.
     """
     path = Path(path)
     if traj.n_frames == 0 or not traj.names:
         raise InputError(f"{path}: nothing to write (zero frames or zero markers)")
+    source = source or SourceFile()
+    if source.c3d is None:
+        c3d = _with_labels(_new_c3d(traj, source, start), traj, source.unit, 0, path)
+    else:  # a copy: ezc3d's write extends the LABELS list it is given
+        c3d = _with_labels(copy.deepcopy(source.c3d), traj, source.unit, start, path)
     _check_writable(path)
-    hidden = hidden_samples(traj)
-    points = np.ones((4, len(traj.names), traj.n_frames))
-    # (0, 0, 0) under residual -1: readers that ignore residuals see the usual zero gap.
-    points[:3] = np.where(hidden[..., None], 0.0, traj.positions).transpose(2, 1, 0)
+    c3d.write(str(path))
+
+
+def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d.c3d:
+    """An empty C3D with one point per marker, ``traj``'s frames numbered from the input's."""
     c3d = ezc3d.c3d()
     point = c3d["parameters"]["POINT"]
     point["RATE"]["value"] = np.array([float(traj.rate)])
     point["LABELS"]["value"] = list(traj.names)
-    point["UNITS"]["value"] = ["mm"]
-    c3d["data"]["points"] = points
-    c3d["data"]["meta_points"]["residuals"] = np.where(hidden, -1.0, 0.0).T[None]
-    c3d.write(str(path))
+    point["UNITS"]["value"] = [source.unit]
+    c3d["header"]["points"]["first_frame"] = source.first_frame + start
+    c3d["data"]["points"] = np.ones((4, len(traj.names), traj.n_frames))
+    c3d["data"]["meta_points"]["residuals"] = np.zeros((1, len(traj.names), traj.n_frames))
+    return c3d
+
+
+def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: int, path: Path) -> ezc3d.c3d:
+    """``c3d`` with the points ``traj`` names replaced (in place): the labels in frames
+    ``start ..``, missing in every other frame. Camera masks of those points are cleared:
+    the cameras that saw an input point say nothing of the label it now carries."""
+    points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
+    columns = _columns(_labels(c3d, points.shape[1], path), traj.names, path)
+    frames = slice(start, start + traj.n_frames)
+    if start < 0 or frames.stop > points.shape[2]:
+        raise InputError(f"{path}: labels of frames {start}..{frames.stop - 1} do not fit the input's "
+                         f"{points.shape[2]} frames")
+    hidden = hidden_samples(traj)
+    points[:3, columns], meta["residuals"][0, columns] = 0.0, -1.0
+    # (0, 0, 0) under residual -1: readers that ignore residuals see the usual zero gap.
+    points[:3, columns, frames] = np.where(hidden[..., None], 0.0, from_millimetres(traj.positions, unit)).T
+    meta["residuals"][0, columns, frames] = np.where(hidden, -1.0, 0.0).T
+    if "camera_masks" in meta and meta["camera_masks"].size:
+        meta["camera_masks"][:, columns] = False
+    return c3d
+
+
+def _columns(labels: list[str], names: list[str], path: Path) -> list[int]:
+    """The input point of each labeled marker: the one of the same name."""
+    column = {label: i for i, label in enumerate(labels)}
+    absent = [name for name in names if name not in column]
+    if absent:
+        raise InputError(f"{path}: the input has no point named {absent[0]!r}")
+    return [column[name] for name in names]
 
 
 def _check_layout(path: Path, max_points: int | None, max_frames: int | None) -> None:

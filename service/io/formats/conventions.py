@@ -34,6 +34,11 @@ def to_millimetres(values: np.ndarray, unit: str, path: Path) -> np.ndarray:
     return np.asarray(values, dtype=float) * scale
 
 
+def from_millimetres(values: np.ndarray, unit: str) -> np.ndarray:
+    """Millimetres in ``unit`` (one ``to_millimetres`` accepts): the inverse scaling."""
+    return np.asarray(values, dtype=float) / MM_PER_UNIT[unit.strip().lower()]
+
+
 def zero_gaps_to_nan(positions: np.ndarray) -> np.ndarray:
     """Copy of ``(frames, markers, 3)`` positions with exact (0, 0, 0) samples set to NaN.
 
@@ -47,3 +52,14 @@ def zero_gaps_to_nan(positions: np.ndarray) -> np.ndarray:
 def hidden_samples(traj: LabeledTrajectories) -> np.ndarray:
     """``(frames, markers)`` bool: samples to write as missing (occluded, or NaN position)."""
     return np.asarray(traj.occluded, dtype=bool) | np.isnan(traj.positions).any(axis=2)
+
+
+def sample_cells(xyz: np.ndarray, hidden: np.ndarray) -> list[str]:
+    """One frame's x, y, z text cells per marker, blank where hidden.
+
+    ``repr`` of a float round-trips exactly: a table read back gives the values written.
+    """
+    cells: list[str] = []
+    for sample, gone in zip(xyz, hidden, strict=True):
+        cells += [""] * 3 if gone else [repr(float(v)) for v in sample]
+    return cells

@@ -8,26 +8,34 @@ from pathlib import Path
 import numpy as np
 
 from service.errors import InputError
-from service.io.formats.conventions import hidden_samples, require_file
-from service.io.recording import LabeledTrajectories
+from service.io.formats.conventions import hidden_samples, require_file, sample_cells
+from service.io.recording import LabeledTrajectories, SourceFile
 
 _AXES = ("x", "y", "z")
 
 
-def write_csv(path: str | Path, traj: LabeledTrajectories) -> None:
+def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
     """Write ``frame,time,<name>_x,<name>_y,<name>_z,...`` in mm; occluded cells empty.
+
+    ``frame`` numbers the input's frames as its file does (the labels of input frame
+    ``start`` are frame ``source.first_frame + start``); ``time`` is seconds since the
+    input's first frame. Always mm: the table has no unit of its own.
 
     Raises:
         InputError: the path cannot be written.
     """
     path = Path(path)
+    first = (source or SourceFile()).first_frame + start
     hidden = hidden_samples(traj)
     header = ["frame", "time"] + [f"{name}_{axis}" for name in traj.names for axis in _AXES]
     try:
         with path.open("w", newline="", encoding="utf-8") as f:
             writer = csv.writer(f)
             writer.writerow(header)
-            writer.writerows(_cells(traj, frame, hidden[frame]) for frame in range(traj.n_frames))
+            writer.writerows(
+                [str(first + f), repr((start + f) / traj.rate)] + sample_cells(traj.positions[f], hidden[f])
+                for f in range(traj.n_frames)
+            )
     except OSError as exc:
         raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
 
@@ -55,14 +63,6 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
     return LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))
-
-
-def _cells(traj: LabeledTrajectories, frame: int, hidden: np.ndarray) -> list[str]:
-    # repr of a float round-trips exactly, so a written table reads back bit for bit.
-    cells = [str(frame), repr(frame / traj.rate)]
-    for xyz, gone in zip(traj.positions[frame], hidden, strict=True):
-        cells += [""] * 3 if gone else [repr(float(v)) for v in xyz]
-    return cells
 
 
 def _names(header: list[str], path: Path) -> list[str]:

@@ -1,4 +1,4 @@
-"""TRC files: the tab-separated marker tables of OpenSim and Pose2Sim.
+"""TRC files: the tab-separated marker tables of OpenSim and Pose2Sim, read and written.
 
 Parsed by hand: the one TRC reader on PyPI (trc-data-reader) is a small package we have
 not vetted and would rather not depend on, and the format is a plain tab-separated table.
@@ -11,8 +11,15 @@ from pathlib import Path
 import numpy as np
 
 from service.errors import InputError
-from service.io.formats.conventions import require_file, to_millimetres, zero_gaps_to_nan
-from service.io.recording import Recording
+from service.io.formats.conventions import (
+    from_millimetres,
+    hidden_samples,
+    require_file,
+    sample_cells,
+    to_millimetres,
+    zero_gaps_to_nan,
+)
+from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _KEYS = ("DataRate", "NumFrames", "NumMarkers", "Units")
 _FIRST_DATA_LINE = 6  # after the magic line, the key/value lines, names, X1 Y1 Z1
@@ -52,7 +59,45 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
         raise InputError(f"{path}: TRC file has zero frames")
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
-    return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path))
+    source = SourceFile(unit=header["Units"].strip().lower())
+    return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
+
+
+def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
+    """Write ``traj`` as a TRC table in ``source.unit`` (mm without a source); occluded cells empty.
+
+    ``Frame#`` counts from 1 at the input's first frame, so the labels of input frame
+    ``start`` are numbered ``source.first_frame + start + 1``; ``Time`` is seconds since
+    the input's first frame.
+
+    Raises:
+        InputError: the path cannot be written.
+    """
+    path = Path(path)
+    source = source or SourceFile()
+    first = source.first_frame + start + 1
+    names = "\t".join(f"{name}\t\t" for name in traj.names)
+    axes = "\t".join(f"X{i}\tY{i}\tZ{i}" for i in range(1, len(traj.names) + 1))
+    header = [
+        f"PathFileType\t4\t(X/Y/Z)\t{path.name}",
+        "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames",
+        f"{traj.rate!r}\t{traj.rate!r}\t{traj.n_frames}\t{len(traj.names)}\t{source.unit}\t{traj.rate!r}\t{first}\t"
+        f"{traj.n_frames}",
+        f"Frame#\tTime\t{names}",
+        f"\t\t{axes}",
+        "",
+    ]
+    values = from_millimetres(traj.positions, source.unit)
+    hidden = hidden_samples(traj)
+    rows = [
+        "\t".join([str(first + f), repr((start + f) / traj.rate)] + sample_cells(values[f], hidden[f]))
+        for f in range(traj.n_frames)
+    ]
+    try:
+        path.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
+
 
 
 def _at_most(count: int, what: str, limit: int | None, name: str, path: Path) -> None:
