@@ -13,7 +13,6 @@ from pathlib import Path
 
 import httpx
 import numpy as np
-import uvicorn
 
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import CaptureDocument
@@ -21,6 +20,7 @@ from service.evaluation.scenario import Scenario
 from service.evaluation.scene import generate_scene
 from service.evaluation.simulate_cloud import simulate_cloud
 from service.server.app import create_app
+from service.server.serving import service_server
 from service.server.settings import Settings
 
 REPO = Path(__file__).resolve().parents[1]
@@ -43,8 +43,7 @@ def document_json(capture: Capture, options: LabelingOptions = LabelingOptions()
 @contextmanager
 def serving(settings: Settings, token: str | None = None):
     """``create_app(settings)`` under uvicorn in a thread on 127.0.0.1:<free port>; an httpx client to it."""
-    server = uvicorn.Server(uvicorn.Config(create_app(settings), host="127.0.0.1", port=0, log_level="warning",
-                                           timeout_graceful_shutdown=2))
+    server = service_server(create_app(settings), settings, "127.0.0.1", 0, "warning")
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + 30
@@ -109,6 +108,17 @@ class ServerProcess:
         peak = re.search(r"VmHWM:\s+(\d+) kB", status)
         assert peak is not None, status
         return int(peak.group(1)) / 1024
+
+
+def resumed_result(db: str, log: Path, job_id: str, timeout: float = 120) -> tuple[dict, int]:
+    """A new server on the store ``db`` resumes the job: its JSON result once done, and the server's pid."""
+    server = ServerProcess(db, log)
+    try:
+        with httpx.Client(base_url=server.url, timeout=30) as client:
+            assert wait_for(client, job_id, timeout=timeout)["state"] == "done"
+            return client.get(f"/v1/jobs/{job_id}/result").json(), server.process.pid
+    finally:
+        server.stop()
 
 
 def mutations(data: bytes, count: int, seed: int) -> list[tuple[str, bytes]]:

@@ -1,16 +1,22 @@
-"""Jobs on a Dask cluster (a LocalCluster of worker processes) give what the in-process pool gives."""
+"""Jobs on a Dask cluster (a LocalCluster of worker processes) give what the in-process pool gives,
+and a job the cluster gives up on fails with the reason instead of staying ``running``."""
 
 from __future__ import annotations
 
 import os
 import sqlite3
+import sys
 
+import cloudpickle
+import dask
 import numpy as np
 import pytest
 from distributed import LocalCluster
 from service_fixtures import document_json, generated_capture, nan_array, serving, wait_for
 
 from service.capture.capture import LabelingOptions
+from service.server import executor
+from service.server.runner import run_job
 from service.server.settings import Settings
 
 OPTIONS = LabelingOptions(formulation="ilp", window=10)
@@ -45,3 +51,37 @@ def test_a_job_on_a_dask_cluster_matches_the_in_process_run(tmp_path):
 def test_sqlite_paths_are_made_absolute_for_workers_elsewhere(db, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert Settings(db=db).db == f"sqlite:///{tmp_path / 'relative.db'}"
+
+
+def _two_windows_then_raise(db_url: str, job_id: str) -> str:
+    """A task that stores two windows and then errs (as a worker's broken environment would)."""
+    stops = iter([False, True])
+    run_job(db_url, job_id, lambda: next(stops))
+    raise RuntimeError("the worker's environment is broken")
+
+
+def _lose_the_worker(db_url: str, job_id: str) -> str:
+    os._exit(1)  # the worker process dies, as under the OOM killer
+
+
+def test_a_job_the_cluster_gives_up_on_fails_with_the_reason_and_keeps_its_windows(tmp_path, monkeypatch):
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])  # the workers cannot import this test module
+    settings = Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")
+    body = document_json(generated_capture(frames=60, seed=8), OPTIONS)
+    # The worker is lost twice: once, then once more on the retry (allowed-failures + 1 times).
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 1}),
+        LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
+        serving(settings.model_copy(update={"dask": cluster.scheduler_address})) as client,
+    ):
+        ended = []
+        for task in (_two_windows_then_raise, _lose_the_worker):  # one after the other: one worker, two fates
+            monkeypatch.setattr(executor, "run_job", task)
+            answer = client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
+            ended.append(wait_for(client, answer.json()["id"], timeout=60))
+        erred, lost = ended
+        partial = client.get(f"/v1/jobs/{erred['id']}/result", params={"partial": "true"})
+    assert erred["state"] == "failed" and erred["windows_done"] == 2 and len(erred["windows"]) == 2
+    assert erred["error"] == "the Dask cluster gave up on the job (RuntimeError: the worker's environment is broken)"
+    assert partial.status_code == 200 and not all(map(all, partial.json()["occluded"]))
+    assert lost["state"] == "failed" and "KilledWorker" in lost["error"] and lost["windows_done"] == 0

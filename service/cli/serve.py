@@ -9,14 +9,12 @@ from service.server.settings import load_settings
 
 def run_serve(host: str | None, port: int | None, db: str | None, dask: str | None, config: Path | None) -> None:
     """Settings from the options, ``MARKERFLOW_*`` and ``config``; refuse an open bind without tokens."""
-    import uvicorn
-
     from service.server.app import create_app
+    from service.server.serving import service_server
 
     settings = load_settings(config, host=host, port=port, db=database_url(db), dask=dask)
-    app = create_app(settings)
-    # A bounded graceful shutdown: open event streams must not hold a restart forever.
-    uvicorn.run(app, host=settings.host, port=settings.port, timeout_graceful_shutdown=5, log_level="info")
+    # Read timeouts, and a bounded shutdown: neither a stalled client nor a long window holds a restart.
+    service_server(create_app(settings), settings, settings.host, settings.port, "info").run()
 
 
 def database_url(db: str | None) -> str | None:

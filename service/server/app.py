@@ -20,7 +20,8 @@ from starlette.exceptions import HTTPException
 from service.capture.document import CaptureDocument
 from service.errors import InputError
 from service.server import routes_info, routes_jobs, routes_solve
-from service.server.executor import DaskExecutor, Executor, ThreadExecutor
+from service.server.events import EventStreams
+from service.server.executor import DaskExecutor, Executor, ProcessPoolExecutor
 from service.server.limits import BodyLimit
 from service.server.metrics import metrics_registry
 from service.server.settings import Settings
@@ -45,7 +46,9 @@ def create_app(settings: Settings) -> FastAPI:
     )
     app.state.settings = settings
     app.state.owners = settings.owners()
-    app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes, owners=app.state.owners)
+    app.state.event_streams = EventStreams(settings.max_event_streams_per_token)
+    app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes, owners=app.state.owners,
+                       read_seconds=settings.read_timeout_seconds)
     for router in (routes_jobs.router, routes_solve.router, routes_info.router):
         app.include_router(router)
     # Starlette types every handler as taking any Exception; each of these gets only its own class.
@@ -60,7 +63,7 @@ def create_app(settings: Settings) -> FastAPI:
 def _executor(settings: Settings) -> Executor:
     if settings.dask:
         return DaskExecutor(settings.db, settings.dask)
-    return ThreadExecutor(settings.db, settings.max_parallel_jobs)
+    return ProcessPoolExecutor(settings.db, settings.max_parallel_jobs, settings.shutdown_grace_seconds)
 
 
 @asynccontextmanager

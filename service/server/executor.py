@@ -1,40 +1,87 @@
-"""Where jobs run: a bounded in-process thread pool, or a Dask cluster.
+"""Where jobs run: a bounded pool of job worker processes, or a Dask cluster.
 
-Threads, not processes: the heavy parts (HiGHS, numpy) release the GIL, a thread shares
-the store's connection pool, and a shutdown can ask a thread to stop between windows.
-More machines come from the Dask path, which runs the very same ``run_job``.
+The in-process pool watches each job from a thread and runs its windows in a worker
+process of its own (``job_process``), so a cancel stops the window being computed and a
+shutdown waits at most its grace period. More machines come from the Dask path, which
+runs the very same ``run_job``.
 """
 
 from __future__ import annotations
 
+import logging
 import threading
+import time
 import uuid
 from concurrent.futures import ThreadPoolExecutor
-from typing import Protocol
+from typing import Any, Protocol
 
+from service.server.job_process import JobWatch, worker_context
 from service.server.runner import run_job
+from service.server.store import store_for
+
+log = logging.getLogger("markerflow.server")
 
 
 class Executor(Protocol):
     def submit(self, job_id: str) -> None: ...
 
+    def cancel(self, job_id: str) -> None: ...
+
+    def stop_windows(self) -> None: ...
+
     def close(self) -> None: ...
 
 
-class ThreadExecutor:
-    """Up to ``max_parallel_jobs`` jobs at once; each job's windows in order in one thread."""
+class ProcessPoolExecutor:
+    """Up to ``max_parallel_jobs`` jobs at once; each job's windows in order in its worker process.
 
-    def __init__(self, db_url: str, max_parallel_jobs: int) -> None:
-        self.db_url = db_url
+    Args:
+        grace_seconds: After a shutdown begins (``stop_windows``), running windows get this
+            long to finish; then their workers are killed. Their jobs stay ``running`` and
+            resume on restart after their last stored window.
+    """
+
+    def __init__(self, db_url: str, max_parallel_jobs: int, grace_seconds: float) -> None:
+        self.db_url, self.grace_seconds = db_url, grace_seconds
+        self._context = worker_context()
         self._pool = ThreadPoolExecutor(max_parallel_jobs, thread_name_prefix="markerflow-job")
-        self._stopping = threading.Event()
+        self._watches: dict[str, JobWatch] = {}
+        self._deadline: float | None = None  # set when the shutdown begins
+        self._lock = threading.Lock()
 
     def submit(self, job_id: str) -> None:
-        self._pool.submit(run_job, self.db_url, job_id, self._stopping.is_set)
+        self._pool.submit(self._watch, job_id)
+
+    def _watch(self, job_id: str) -> None:
+        with self._lock:
+            if self._deadline is not None:
+                return  # queued behind the pool when the shutdown began: resumed on restart
+            watch = self._watches[job_id] = JobWatch(self._context, self.db_url, job_id)
+        try:
+            watch.run()
+        except Exception:  # the store unreachable, say: the job stays where the store has it
+            log.exception("watching job %s failed", job_id)
+        finally:
+            with self._lock:
+                self._watches.pop(job_id, None)
+
+    def cancel(self, job_id: str) -> None:
+        """Stop the job's window now (the store already says ``cancelled``)."""
+        with self._lock:
+            watch = self._watches.get(job_id)
+        if watch is not None:
+            watch.cancelled.set()
+
+    def stop_windows(self) -> None:
+        """Begin the shutdown: workers stop between windows, or are killed at the grace deadline."""
+        with self._lock:
+            if self._deadline is None:
+                self._deadline = time.monotonic() + self.grace_seconds
+                for watch in self._watches.values():
+                    watch.stop_by(self._deadline)
 
     def close(self) -> None:
-        """Running jobs stop after their current window and stay ``running``, resumed on restart."""
-        self._stopping.set()
+        self.stop_windows()
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -43,7 +90,10 @@ class DaskExecutor:
 
     ``fire_and_forget``: the task runs to its end even if this server stops; a restarted
     server re-submits unfinished jobs, and the store's one-row-per-window key makes a
-    second runner of the same job stop at its first stored window.
+    second runner of the same job stop at its first stored window. A task the cluster
+    gives up on (it raised, or its worker was lost ``distributed.scheduler.allowed-failures``
+    + 1 times: ``KilledWorker``) fails its job with the reason; its stored windows stay.
+    A cancel stops the job after its current window (a Dask task cannot be interrupted).
     """
 
     def __init__(self, db_url: str, address: str) -> None:
@@ -51,12 +101,31 @@ class DaskExecutor:
 
         self.db_url = db_url
         self._client = Client(address)
+        self._futures: dict[str, Any] = {}  # held so their done callbacks run
 
     def submit(self, job_id: str) -> None:
         from distributed import fire_and_forget
 
         key = f"markerflow-job-{job_id}-{uuid.uuid4().hex[:8]}"
-        fire_and_forget(self._client.submit(run_job, self.db_url, job_id, key=key, pure=False))
+        future = self._client.submit(run_job, self.db_url, job_id, key=key, pure=False)
+        self._futures[key] = future
+        future.add_done_callback(lambda done: self._done(job_id, key, done))
+        fire_and_forget(future)
+
+    def _done(self, job_id: str, key: str, future: Any) -> None:
+        self._futures.pop(key, None)
+        if future.status != "error":
+            return
+        error = future.exception()
+        reason = f"{type(error).__name__}: {error}"
+        if store_for(self.db_url).fail(job_id, f"the Dask cluster gave up on the job ({reason})"):
+            log.warning("job %s failed on Dask: %s", job_id, reason)
+
+    def cancel(self, job_id: str) -> None:
+        """Nothing to do here: the task sees the cancel in the store after its current window."""
+
+    def stop_windows(self) -> None:
+        """Nothing to do here: Dask tasks run on without this server (``fire_and_forget``)."""
 
     def close(self) -> None:
         self._client.close()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 from collections.abc import Mapping
 
@@ -23,13 +24,14 @@ class BodyLimit:
     of its body is read. A declared ``Content-Length`` over the limit is refused (413) at
     once; otherwise the body is read up to the limit (chunked uploads declare no length)
     and replayed to the app. Hand-written because Starlette and uvicorn have no body-size
-    setting.
+    setting. A body that stalls for ``read_seconds`` answers 408.
     """
 
-    def __init__(self, app: ASGIApp, max_bytes: int, owners: dict[str, str]) -> None:
+    def __init__(self, app: ASGIApp, max_bytes: int, owners: dict[str, str], read_seconds: float) -> None:
         self.app = app
         self.max_bytes = max_bytes
         self.owners = owners
+        self.read_seconds = read_seconds  # the longest wait for the next piece of the body
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http" or scope["method"] in ("GET", "HEAD", "DELETE", "OPTIONS"):
@@ -44,7 +46,11 @@ class BodyLimit:
             return await self._refuse(send)
         chunks, size, more = [], 0, True
         while more:
-            message = await receive()
+            try:
+                message = await asyncio.wait_for(receive(), self.read_seconds)
+            except TimeoutError:  # a stalled body must not hold a connection and its memory forever
+                return await _answer(send, 408, f"no request body data for {self.read_seconds:g} s "
+                                                "(read_timeout_seconds)", {})
             if message["type"] == "http.disconnect":
                 return
             chunk = message.get("body", b"")

@@ -1,7 +1,8 @@
 """A job's labeled trajectories: stored as npz, served as JSON, CSV or C3D.
 
 The result is stored once, when the job finishes (not assembled on each fetch): in
-camera mode assembling needs the cross-camera cloud, which is costly to rebuild.
+camera mode assembling needs the cross-camera cloud, which is costly to rebuild. Only a
+partial result (a job not done) is assembled on request, from its stored windows.
 """
 
 from __future__ import annotations
@@ -14,8 +15,11 @@ from typing import Any
 
 import numpy as np
 
+from service.capture.document import CaptureDocument
 from service.io.formats import write_labeled
 from service.io.recording import LabeledTrajectories
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.outcome import WindowOutcome
 
 MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3d": "application/octet-stream"}
 
@@ -36,6 +40,12 @@ def trajectories_from_bytes(data: bytes) -> LabeledTrajectories:
             names=header["names"], positions=stored["positions"], occluded=stored["occluded"], rate=header["rate"],
             point_index=stored["point_index"], filled=stored["filled"],
         )
+
+
+def stored_windows_trajectories(document: bytes, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
+    """What the stored windows label (frame 0 and the windows' frames); later frames occluded."""
+    capture = CaptureDocument.model_validate_json(document)
+    return CaptureLabeling(capture.capture(), capture.options()).result(outcomes)
 
 
 def nullable(values: np.ndarray) -> list[Any]:

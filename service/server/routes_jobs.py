@@ -6,13 +6,11 @@ import re
 from typing import Any, Literal
 
 from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request, Response
-from fastapi.responses import StreamingResponse
 from starlette.concurrency import run_in_threadpool
 
 from service.server.auth import caller
 from service.server.bodies import read_submission, request_body
-from service.server.events import job_events
-from service.server.results import MEDIA_TYPES, render, trajectories_from_bytes
+from service.server.results import MEDIA_TYPES, render, stored_windows_trajectories, trajectories_from_bytes
 from service.server.schemas import ErrorBody, JobAccepted, JobPage, JobStatus, JobSummary, LabeledResult, WindowSummary
 from service.server.store import ACTIVE, Job, JobStore
 
@@ -97,10 +95,12 @@ async def get_job(request: Request, job_id: str, owner: str = Depends(caller)) -
 
 @router.delete("/{job_id}", response_model=JobStatus, responses={**ERRORS, 409: {"model": ErrorBody}})
 async def cancel_job(request: Request, job_id: str, owner: str = Depends(caller)) -> JobStatus:
-    """Cancel a queued or running job; a running job stops after its current window."""
+    """Cancel a queued or running job; on the in-process pool its running window stops at once,
+    on Dask after it ends. The windows stored so far stay (``result?partial=true``)."""
     job = await _job(request, job_id, owner)
     if job.state in ACTIVE:
         await run_in_threadpool(_store(request).cancel, job.id)
+        await run_in_threadpool(request.app.state.executor.cancel, job.id)
         job = await _job(request, job_id, owner)
     if job.state != "cancelled":
         raise HTTPException(409, f"job {job_id} is already {job.state}")
@@ -108,15 +108,18 @@ async def cancel_job(request: Request, job_id: str, owner: str = Depends(caller)
 
 
 @router.get(
-    "/{job_id}/events", responses={**ERRORS, 200: {"content": {"text/event-stream": {"schema": {"type": "string"}}},
-                                                   "description": "`window` events, then `state` events."}},
+    "/{job_id}/events", responses={
+        **ERRORS, 429: {"model": ErrorBody, "description": "This token has max_event_streams_per_token streams open."},
+        200: {"content": {"text/event-stream": {"schema": {"type": "string"}}},
+              "description": "`window` events, then `state` events."}},
 )
-async def job_progress(request: Request, job_id: str, owner: str = Depends(caller)) -> StreamingResponse:
-    """Server-sent events: one `window` event per finished window, `state` at each change; ends with the job."""
+async def job_progress(request: Request, job_id: str, owner: str = Depends(caller)) -> Response:
+    """Server-sent events: one `window` event per finished window, `state` at each change; ends with the job.
+
+    A token may hold ``max_event_streams_per_token`` streams open; past that, 429."""
     job = await _job(request, job_id, owner)
     poll = request.app.state.settings.events_poll_seconds
-    return StreamingResponse(job_events(_store(request), job.id, poll), media_type="text/event-stream",
-                             headers={"Cache-Control": "no-cache"})
+    return request.app.state.event_streams.response(owner, _store(request), job.id, poll)
 
 
 @router.get(
@@ -129,13 +132,20 @@ async def job_progress(request: Request, job_id: str, owner: str = Depends(calle
 async def job_result(
     request: Request, job_id: str, owner: str = Depends(caller),
     format: Literal["json", "csv", "c3d"] = Query("json", description="json, csv or c3d."),
+    partial: bool = Query(False, description="Before the job is done (failed, cancelled, running): the frames "
+                                             "its stored windows labeled; later frames are occluded (null)."),
 ) -> Response:
-    """The labeled trajectories, once the job is done."""
+    """The labeled trajectories, once the job is done (or, with ``partial=true``, so far)."""
     job = await _job(request, job_id, owner)
-    if job.state != "done":
-        raise HTTPException(409, f"job {job_id} is {job.state}, not done")
-    stored = await run_in_threadpool(_store(request).result, job.id)
-    content = await run_in_threadpool(lambda: render(trajectories_from_bytes(stored), format))
+    if job.state != "done" and not partial:
+        raise HTTPException(409, f"job {job_id} is {job.state}, not done (partial=true gives its stored windows)")
+    store = _store(request)
+    if job.state == "done":
+        stored = await run_in_threadpool(store.result, job.id)
+        content = await run_in_threadpool(lambda: render(trajectories_from_bytes(stored), format))
+    else:
+        content = await run_in_threadpool(
+            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format))
     disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
     return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
 

@@ -1,8 +1,11 @@
-"""Run or resume one stored job: the code path of the in-process pool and of Dask workers.
+"""Run or resume one stored job: the code path of the job worker processes and of Dask workers.
 
 Each finished window is committed (outcome + stats + count) before the next is computed,
 so a restart resumes after the last stored window and recomputes nothing: the library
 guarantees ``windows(after=last)`` gives what an uninterrupted run would.
+
+A window that raises fails the job with the window's index and message; the windows
+stored before it stay, and ``GET /v1/jobs/{id}/result?partial=true`` assembles them.
 """
 
 from __future__ import annotations
@@ -33,13 +36,16 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     worker = f"{socket.gethostname()}:{os.getpid()}"  # which process computed each window
     if not store.start(job_id):
         return store.known(job_id).state
+    where = ""  # "window k: " once the windows are being computed
     try:
         document = CaptureDocument.model_validate_json(store.input(job_id))
         labeling = CaptureLabeling(document.capture(), document.options())
         outcomes = store.outcomes(job_id)
+        where = f"window {len(outcomes)}: "
         for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
             store.save_window(job_id, outcome, worker)
             outcomes.append(outcome)
+            where = f"window {len(outcomes)}: " if len(outcomes) < labeling.n_windows else ""
             # Between windows: a cancel (from any process) or a shutdown stops the job here.
             if stop() or store.known(job_id).state != "running":
                 return store.known(job_id).state
@@ -47,8 +53,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except InputError as error:  # e.g. a formulation that cannot take one of the windows
-        store.fail(job_id, str(error))
+        store.fail(job_id, f"{where}{error}")
     except Exception as error:  # a bug: the job fails with its name, the server keeps serving
         log.exception("job %s failed", job_id)
-        store.fail(job_id, f"internal error: {type(error).__name__}: {error}")
+        store.fail(job_id, f"{where}internal error: {type(error).__name__}: {error}")
     return store.known(job_id).state

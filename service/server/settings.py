@@ -50,6 +50,9 @@ class Settings(BaseSettings):
     dask: str | None = None
     max_parallel_jobs: int = Field(default=2, gt=0)
     events_poll_seconds: float = Field(default=0.2, gt=0)
+    max_event_streams_per_token: int = Field(default=20, gt=0)
+    read_timeout_seconds: float = Field(default=10.0, gt=0)
+    shutdown_grace_seconds: float = Field(default=10.0, gt=0)
     max_queued_jobs: int = Field(default=1000, gt=0)
     retry_after_seconds: int = Field(default=10, gt=0)
     api_docs: bool = True

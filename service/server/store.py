@@ -194,7 +194,8 @@ class JobStore:
         return self._move(job_id, ("running",), state="done", result=result)
 
     def fail(self, job_id: str, error: str) -> bool:
-        return self._move(job_id, ("running",), state="failed", error=error)
+        """A queued job fails too: its executor may give up before it starts (a lost Dask worker)."""
+        return self._move(job_id, ACTIVE, state="failed", error=error)
 
     def cancel(self, job_id: str) -> bool:
         return self._move(job_id, ACTIVE, state="cancelled")
