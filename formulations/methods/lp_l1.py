@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from formulations.methods.formulation import check_parameters
+from formulations.methods.repair import k_best_repair
 from formulations.relaxation.certify import INTEGRALITY_TOLERANCE, round_and_certify
 from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.relaxation.pricing import PRICING_MIN_ARCS, PRICING_SUCCESSORS
@@ -27,6 +28,8 @@ class LpL1(ComponentwiseFormulation):
         pricing_min_arcs: Use column generation when a component has more arcs.
         pricing_successors: Cheapest out-arcs per node in the first restricted LP.
         time_limit: Seconds per LP solve (None: no limit).
+        repair: I = J of the k-best repair (``formulations.methods.repair``) run on a
+            component whose LP optimum was fractional; 0 turns the repair off.
     """
 
     name: ClassVar[str] = "lp-l1"
@@ -35,12 +38,16 @@ class LpL1(ComponentwiseFormulation):
     pricing_min_arcs: int = PRICING_MIN_ARCS
     pricing_successors: int = PRICING_SUCCESSORS
     time_limit: float | None = None
+    repair: int = 10
 
     def __post_init__(self) -> None:
         check_parameters(self, positive=("integrality_tolerance", "pricing_successors"),
-                         non_negative=("pricing_min_arcs",), optional_positive=("time_limit",))
+                         non_negative=("pricing_min_arcs", "repair"), optional_positive=("time_limit",))
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
-        """Build, solve, round and certify one LP over the whole (sub-)window."""
+        """Build, solve, round and certify one LP over the whole (sub-)window; repair if fractional."""
         relaxation = solve_window_lp(problem, self.time_limit, self.pricing_min_arcs, self.pricing_successors)
-        return round_and_certify(problem, relaxation, self.integrality_tolerance)
+        rounded = round_and_certify(problem, relaxation, self.integrality_tolerance)
+        if rounded.integral or self.repair == 0 or not relaxation.optimal:
+            return rounded
+        return k_best_repair(problem, rounded, self.repair)
