@@ -20,8 +20,9 @@ LIMITS = Limits(max_frames=6, max_markers=4, max_points_per_frame=5, max_detecti
 
 
 @pytest.fixture(scope="module")
-def client(tmp_path_factory):
-    with serving(Settings(db=f"sqlite:///{tmp_path_factory.mktemp('hostile') / 'jobs.db'}")) as client:
+def client(store_url):
+    """A server on SQLite and on PostgreSQL: a NUL byte or a 300-character filename once gave a 500 on PostgreSQL only."""
+    with serving(Settings(db=store_url)) as client:
         yield client
 
 

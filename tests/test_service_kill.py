@@ -1,16 +1,17 @@
 """SIGKILL the server mid-job: on restart the job resumes after its last stored window,
-recomputes none of the stored ones, and ends bit for bit where an uninterrupted run does."""
+recomputes none of the stored ones, and ends bit for bit where an uninterrupted run does.
+On SQLite and on PostgreSQL (``store_url``)."""
 
 from __future__ import annotations
 
 import os
 import signal
-import sqlite3
 import time
 
 import httpx
 import numpy as np
 from service_fixtures import ServerProcess, document_json, generated_capture, nan_array, resumed_result
+from sqlalchemy import create_engine, text
 
 from service.capture.capture import LabelingOptions
 from service.labeling.capture_labeling import CaptureLabeling
@@ -20,18 +21,23 @@ from service.server.job_process import SERVER_POLL_SECONDS
 OPTIONS = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=4)
 
 
-def _stored(db_path, job_id: str) -> tuple[tuple, list[tuple]]:
-    with sqlite3.connect(db_path) as db:
-        job = db.execute("SELECT state, windows_done, windows_total FROM jobs WHERE id = ?", (job_id,)).fetchone()
-        windows = db.execute('SELECT "index", worker, outcome FROM windows WHERE job_id = ? ORDER BY "index"',
-                             (job_id,)).fetchall()
-    return job, windows
+def _stored(store_url: str, job_id: str) -> tuple[tuple, list[tuple]]:
+    """The job's (state, windows_done, windows_total) and its stored windows' (index, worker, outcome)."""
+    engine = create_engine(store_url)
+    try:
+        with engine.connect() as db:
+            job = db.execute(text("SELECT state, windows_done, windows_total FROM jobs WHERE id = :id"),
+                             {"id": job_id}).one()
+            windows = db.execute(text('SELECT "index", worker, outcome FROM windows WHERE job_id = :id ORDER BY "index"'),
+                                 {"id": job_id}).all()
+        return tuple(job), [(index, worker, bytes(outcome)) for index, worker, outcome in windows]
+    finally:
+        engine.dispose()
 
 
-def test_a_killed_job_resumes_from_its_last_stored_window(tmp_path):
-    db_path = tmp_path / "jobs.db"
+def test_a_killed_job_resumes_from_its_last_stored_window(store_url, tmp_path):
     capture = generated_capture(frames=200, seed=7)
-    first = ServerProcess(f"sqlite:///{db_path}", tmp_path / "first.log")
+    first = ServerProcess(store_url, tmp_path / "first.log")
     try:
         with httpx.Client(base_url=first.url, timeout=30) as client:
             answer = client.post("/v1/jobs", content=document_json(capture, OPTIONS),
@@ -48,16 +54,16 @@ def test_a_killed_job_resumes_from_its_last_stored_window(tmp_path):
     finally:
         first.stop()
 
-    (state, done, total), before = _stored(db_path, job_id)
+    (state, done, total), before = _stored(store_url, job_id)
     assert state == "running" and 3 <= done < total, "the kill must land mid-job"
     assert [row[0] for row in before] == list(range(done))
     # One job worker process of the first server computed them (not the server itself).
     first_workers = {row[1].rsplit(":", 1)[1] for row in before}
     assert len(first_workers) == 1 and str(first.process.pid) not in first_workers
 
-    result, second_pid = resumed_result(f"sqlite:///{db_path}", tmp_path / "second.log", job_id)
+    result, second_pid = resumed_result(store_url, tmp_path / "second.log", job_id)
 
-    (state, finished, total), after = _stored(db_path, job_id)
+    (state, finished, total), after = _stored(store_url, job_id)
     assert state == "done" and finished == total and [row[0] for row in after] == list(range(total))
     # The windows stored before the kill are the very same rows: kept, not recomputed.
     assert after[:done] == before

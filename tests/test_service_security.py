@@ -30,9 +30,9 @@ def small_document(markers: int = 3, frames: int = 4, points: int | None = None)
 
 
 @pytest.fixture(scope="module")
-def guarded(tmp_path_factory):
-    db = tmp_path_factory.mktemp("tokens") / "jobs.db"
-    with serving(Settings(db=f"sqlite:///{db}", tokens={"alice": ALICE, "bob": BOB})) as client:
+def guarded(store_url):
+    """A server with two tokens, on SQLite and on PostgreSQL."""
+    with serving(Settings(db=store_url, tokens={"alice": ALICE, "bob": BOB})) as client:
         yield client
 
 
