@@ -81,6 +81,18 @@ def evaluate(
     _guard(lambda: run_eval(trajectories, scenario, formulation, _window(window), as_json))
 
 
+@app.command()
+def model(
+    inputs: Annotated[list[Path], typer.Argument(help="Labeled .c3d/.trc/.csv takes of one subject (a range of motion).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Subject model .json to write.")],
+    centres: Annotated[Path | None, typer.Option(help="Also write the fitted joint-centre trajectories (.trc).")] = None,
+) -> None:
+    """Learn a subject: which markers share a rigid segment, the joints, the limb lengths."""
+    from service.cli.model import run_model
+
+    _guard(lambda: run_model(inputs, out, centres))
+
+
 @app.command("formulations")
 def list_formulations() -> None:
     """List the window formulations with their parameters and defaults."""

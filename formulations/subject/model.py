@@ -1,0 +1,100 @@
+"""The subject model and its versioned JSON."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from formulations.errors import FormulationError
+
+VERSION = 1
+MARKER_RADIUS_MM = 7.0  # a 14 mm marker, the common size on the body
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A rigid segment: its markers, their coordinates in its frame (mm) and their spread (RMS mm)."""
+
+    name: str
+    markers: list[str]
+    coordinates: list[list[float]]
+    spread: list[float]
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A ball joint: the two segments and the centre in each one's frame (mm); its fit RMS (mm)."""
+
+    name: str
+    segments: tuple[str, str]
+    centres: tuple[list[float], list[float]]
+    rms: float
+
+
+@dataclass(frozen=True)
+class Limb:
+    """The length of a segment between two of its joints: the mean distance of their centres (mm)."""
+
+    segment: str
+    joints: tuple[str, str]
+    length: float
+
+
+@dataclass(frozen=True)
+class SingleMarker:
+    """A marker on no segment, modelled by its mean distance (mm) and its sd to the nearest segments' origins."""
+
+    marker: str
+    segments: list[str]
+    distances: list[float]
+    sd: list[float]
+
+
+@dataclass(frozen=True)
+class SubjectModel:
+    """Which markers ride on which segment, the joints, the limb lengths and the marker radius."""
+
+    segments: list[Segment]
+    joints: list[Joint]
+    limbs: list[Limb]
+    singles: list[SingleMarker]
+    marker_radius: float = MARKER_RADIUS_MM
+
+    def to_json(self) -> str:
+        return json.dumps({"version": VERSION, **asdict(self)}, indent=1)
+
+    @staticmethod
+    def from_json(text: str) -> SubjectModel:
+        """Raises ``FormulationError`` (one line) on text that is not a version-1 subject model."""
+        try:
+            data = json.loads(text)
+        except ValueError as error:
+            raise FormulationError(f"subject model is not JSON ({error})") from None
+        if not isinstance(data, dict) or data.get("version") != VERSION:
+            found = data.get("version") if isinstance(data, dict) else None
+            raise FormulationError(f"subject model version {found!r} is not supported (expected {VERSION})")
+        try:
+            return _decode(data)
+        except (KeyError, TypeError, ValueError) as error:
+            raise FormulationError(f"subject model is malformed: {type(error).__name__} {error}") from None
+
+
+def _decode(data: dict[str, Any]) -> SubjectModel:
+    joints = [
+        Joint(j["name"], (j["segments"][0], j["segments"][1]), (j["centres"][0], j["centres"][1]), float(j["rms"]))
+        for j in data["joints"]
+    ]
+    limbs = [Limb(b["segment"], (b["joints"][0], b["joints"][1]), float(b["length"])) for b in data["limbs"]]
+    model = SubjectModel(
+        [Segment(**s) for s in data["segments"]], joints, limbs,
+        [SingleMarker(**m) for m in data["singles"]], float(data["marker_radius"]),
+    )
+    names = {s.name for s in model.segments}
+    for segment in model.segments:
+        if len(segment.coordinates) != len(segment.markers) or any(len(c) != 3 for c in segment.coordinates):
+            raise ValueError(f"segment {segment.name!r}: coordinates do not match its markers")
+    for joint in model.joints:
+        if not set(joint.segments) <= names:
+            raise ValueError(f"joint {joint.name!r} names an unknown segment")
+    return model

@@ -1,0 +1,81 @@
+"""``markerflow model``: learn a subject (segments, joints, limb lengths) from labeled takes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from rich.table import Table
+
+from formulations.errors import FormulationError
+from formulations.subject.fit import SubjectFit, fit_subject
+from service.cli.output import check_writable_folder, check_writable_output
+from service.cli.report import out
+from service.errors import InputError
+from service.io.formats import read_labeled
+from service.io.recording import LabeledTrajectories, Recording
+
+
+def run_model(inputs: list[Path], output: Path, centres: Path | None) -> None:
+    """Fit a subject model to ``inputs``, print it, write it as JSON and optionally the joint centres as TRC."""
+    check_writable_folder(output.parent)
+    if centres is not None:
+        check_writable_output(centres)
+    names, positions, rate = _pool([read_labeled(path) for path in inputs])
+    try:
+        fit = fit_subject(names, positions)
+    except FormulationError as error:
+        raise InputError(f"{', '.join(p.name for p in inputs)}: {error}") from None
+    _print(fit, len(positions))
+    try:
+        output.write_text(fit.model.to_json())
+    except OSError as error:
+        raise InputError(f"{output}: cannot write ({error.strerror})") from None
+    if centres is not None:
+        from service.io.formats import write_labeled
+
+        write_labeled(centres, _centre_trajectories(fit, rate))
+    out.print(f"-> {output}" + (f", joint centres -> {centres}" if centres else ""), highlight=False)
+
+
+def _pool(takes: list[Recording]) -> tuple[list[str], np.ndarray, float]:
+    """The takes one after another, over the union of their marker names (NaN where a take lacks one)."""
+    names = list(dict.fromkeys(name for take in takes for name in take.names))
+    blocks = []
+    for take in takes:
+        block = np.full((take.n_frames, len(names), 3), np.nan)
+        present = np.where(take.missing()[:, :, None], np.nan, take.positions)
+        block[:, [names.index(n) for n in take.names]] = present
+        blocks.append(block)
+    return names, np.concatenate(blocks), takes[0].rate
+
+
+def _centre_trajectories(fit: SubjectFit, rate: float) -> LabeledTrajectories:
+    """One point per joint, named after its two segments."""
+    joint_names = list(fit.centres)
+    positions = np.stack([fit.centres[name] for name in joint_names], axis=1)
+    occluded = np.asarray(np.isnan(positions).any(axis=2), dtype=bool)
+    return LabeledTrajectories(joint_names, positions, occluded, rate)
+
+
+def _print(fit: SubjectFit, frames: int) -> None:
+    model = fit.model
+    segments = Table(title=f"segments ({frames} frames)")
+    for column in ("segment", "markers", "spread (mm)"):
+        segments.add_column(column)
+    for s in model.segments:
+        segments.add_row(s.name, " ".join(s.markers), f"{max(s.spread):.1f}")
+    for single in model.singles:
+        segments.add_row("(single)", single.marker, f"{single.distances[0]:.0f} from {single.segments[0]}")
+    joints = Table(title="joints")
+    for column in ("joint", "segments", "fit rms (mm)"):
+        joints.add_column(column)
+    for j in model.joints:
+        joints.add_row(j.name, " + ".join(j.segments), f"{j.rms:.1f}")
+    limbs = Table(title="limb lengths")
+    for column in ("segment", "between joints", "length (mm)"):
+        limbs.add_column(column)
+    for limb in model.limbs:
+        limbs.add_row(limb.segment, " and ".join(limb.joints), f"{limb.length:.1f}")
+    for table in (segments, joints, limbs):
+        out.print(table)

@@ -1,0 +1,146 @@
+"""The subject model (Ringer & Lasenby 2004): grouping, joints, limb lengths, JSON and ``markerflow model``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import DATA
+from scipy.spatial.transform import Rotation
+from typer.testing import CliRunner
+
+from formulations.errors import FormulationError
+from formulations.subject.fit import fit_subject
+from formulations.subject.model import SubjectModel
+from service.cli.app import app
+from service.io.formats import read_labeled, write_labeled
+from service.io.recording import LabeledTrajectories
+
+CMU_85_02 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
+LIMB = 400.0  # mm between the joints of a synthetic segment
+
+
+def chain(seed: int, segments: int = 4, markers: int = 4, frames: int = 300, motion: float = 0.6):
+    """Names, ``(frames, markers, 3)`` positions with 1 mm noise, and the true joint centres.
+
+    Segment s hangs from joint s-1 at its origin; joint s is at (0, 0, -LIMB) in segment s.
+    Every joint turns about all three axes by up to about ``motion`` rad.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 1, frames)[:, None]
+
+    def turning() -> np.ndarray:
+        freq, phase = rng.uniform(1.5, 6.0, (2, 3)), rng.uniform(0, 2 * np.pi, (2, 3))
+        angles = motion * (np.sin(2 * np.pi * freq[0] * t + phase[0]) + 0.5 * np.sin(2 * np.pi * freq[1] * t + phase[1]))
+        return Rotation.from_rotvec(angles).as_matrix()
+
+    rotation = turning()
+    origin = np.hstack([200 * np.sin(2 * np.pi * t), 100 * np.cos(2 * np.pi * t), 1000 + 50 * t])
+    names, columns, centres = [], [], []
+    for s in range(segments):
+        local = rng.normal(0, 60, (markers, 3))
+        local[:, :2] += 40 * np.sign(local[:, :2])  # off the long axis, as on skin
+        local[:, 2] = rng.uniform(-350, -50, markers)
+        for m, point in enumerate(local):
+            names.append(f"S{s}M{m}")
+            columns.append(np.einsum("kij,j->ki", rotation, point) + origin)
+        if s < segments - 1:
+            origin = np.einsum("kij,j->ki", rotation, np.array([0.0, 0.0, -LIMB])) + origin
+            centres.append(origin)
+            rotation = np.einsum("kij,kjl->kil", rotation, turning())
+    positions = np.stack(columns, axis=1) + rng.normal(0, 1.0, (frames, len(names), 3))
+    return names, positions, centres
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_synthetic_chain_groups_joints_and_limbs(seed: int) -> None:
+    names, positions, centres = chain(seed)
+    positions[np.random.default_rng(seed).random(positions.shape[:2]) < 0.05] = np.nan  # gaps are allowed
+    fit = fit_subject(names, positions)
+    assert [s.markers for s in fit.model.segments] == [[f"S{s}M{m}" for m in range(4)] for s in range(4)]
+    assert not fit.model.singles
+    assert len(fit.model.joints) == 3
+    for joint in fit.model.joints:
+        first = min(int(name[1]) for name in joint.segments)  # joint s links segments s and s+1
+        assert sorted(int(name[1]) for name in joint.segments) == [first, first + 1]
+        error = np.linalg.norm(fit.centres[joint.name] - centres[first], axis=1)
+        assert np.nanmedian(error) < 3.0, joint.name
+    assert len(fit.model.limbs) == 2
+    for limb in fit.model.limbs:
+        assert abs(limb.length - LIMB) < 3.0
+
+
+def test_a_marker_alone_on_its_segment_is_kept_as_a_single() -> None:
+    names, positions, _ = chain(0)
+    keep = [i for i, name in enumerate(names) if not name.startswith("S3") or name == "S3M0"]
+    fit = fit_subject([names[i] for i in keep], positions[:, keep])
+    assert [s.marker for s in fit.model.singles] == ["S3M0"]
+    assert fit.model.singles[0].segments[0] == "S2M0"  # the segment it hangs from is the nearest
+    assert len(fit.model.segments) == 3
+
+
+def test_static_take_fails_naming_the_markers() -> None:
+    names, positions, _ = chain(1, motion=0.0)
+    with pytest.raises(FormulationError, match="too static to separate segments: markers S0M0, S0M1"):
+        fit_subject(names, positions)
+
+
+def test_too_few_frames_fails() -> None:
+    names, positions, _ = chain(1, frames=10)
+    with pytest.raises(FormulationError, match="only 10 frames"):
+        fit_subject(names, positions)
+
+
+def test_json_round_trip_and_wrong_version_refused() -> None:
+    names, positions, _ = chain(2)
+    model = fit_subject(names, positions).model
+    text = model.to_json()
+    assert SubjectModel.from_json(text) == model
+    data = json.loads(text)
+    data["version"] = 99
+    with pytest.raises(FormulationError, match="version 99 is not supported"):
+        SubjectModel.from_json(json.dumps(data))
+    with pytest.raises(FormulationError, match="not JSON"):
+        SubjectModel.from_json(text[:50])
+    del data["segments"][0]["spread"]
+    data["version"] = 1
+    with pytest.raises(FormulationError, match="malformed"):
+        SubjectModel.from_json(json.dumps(data))
+
+
+def _segment_of(fit: dict, marker: str) -> str | None:
+    return next((s["name"] for s in fit["segments"] if marker in s["markers"]), None)
+
+
+@pytest.mark.skipif(not CMU_85_02.exists(), reason="needs ../shared/data")
+def test_cli_fits_cmu_85_02(tmp_path: Path) -> None:
+    take = read_labeled(CMU_85_02)
+    head = take.positions[:400]
+    trc = tmp_path / "85_02_head.trc"
+    write_labeled(trc, LabeledTrajectories(take.names, head, np.isnan(head).any(axis=2), take.rate))
+    out, centres = tmp_path / "subject.json", tmp_path / "centres.trc"
+    result = CliRunner().invoke(app, ["model", str(trc), "--out", str(out), "--centres", str(centres)])
+    assert result.exit_code == 0, result.output
+    assert "Male:LFHD Male:RFHD Male:LBHD Male:RBHD" in result.output  # the head is one segment
+    model = json.loads(out.read_text())
+    hand = {_segment_of(model, f"Male:L{m}") for m in ("WRA", "WRB", "FIN", "FRM")}
+    assert len(hand - {None}) <= 2
+    for side in "LR":
+        thigh = {_segment_of(model, f"Male:{side}{m}") for m in ("THI", "KNE")} - {None}
+        foot = {_segment_of(model, f"Male:{side}{m}") for m in ("HEE", "MT5", "TOE")} - {None}
+        assert foot and not thigh & foot
+    joints = read_labeled(centres)
+    assert joints.names == [j["name"] for j in model["joints"]] and joints.n_frames == 400
+    assert np.isfinite(joints.positions).all()
+
+
+def test_cli_static_take_is_one_line_error(tmp_path: Path) -> None:
+    names, positions, _ = chain(3, motion=0.0)
+    trc = tmp_path / "static.trc"
+    write_labeled(trc, LabeledTrajectories(names, positions, np.zeros(positions.shape[:2], bool), 100.0))
+    result = CliRunner().invoke(app, ["model", str(trc), "--out", str(tmp_path / "s.json")])
+    assert result.exit_code == 2
+    assert "static.trc: too static to separate segments" in result.output
+    assert not (tmp_path / "s.json").exists()
