@@ -88,10 +88,6 @@ class WindowProblem:
         """``(N, M)`` index of the first node of each (object, frame) block, frames 1..M."""
         return self.blocks()[0][:, 1:-1]
 
-    def occlusion_nodes(self) -> np.ndarray:
-        """``(N, M)`` index of the occlusion node of each (object, frame)."""
-        return np.flatnonzero(self.node_kind == OCCLUSION).reshape(self.n_objects, self.n_frames)
-
     def source_nodes(self) -> np.ndarray:
         return np.flatnonzero(self.node_kind == SOURCE)
 
