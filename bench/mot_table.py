@@ -1,0 +1,71 @@
+"""The box-tracking table of issue 16: HOTA, MOTA, IDF1, ID switches, frames/s.
+
+Per sequence, ``markerflow boxes`` with lp-l1, ilp and nn-hungarian (same costs, windows,
+births and deaths), and for reference published tracker outputs scored as they are:
+
+- TUD-Campus, TUD-Stadtmitte: SORT's published Faster R-CNN detections as input; ground
+  truth from the ``motmetrics`` package (``motmetrics/data/TUD-*/gt.txt``), with the
+  tracker output that ships beside it (``test.txt``) as the reference row.
+- MOT17-02/05/09: MPNTrack's published output with its ids dropped as detections
+  (MOTChallenge's public det.txt is not in ../shared/data); MPNTrack and Lif_T as they are.
+
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import motmetrics  # noqa: E402
+
+from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks  # noqa: E402
+from service.boxes.scores import mot_scores  # noqa: E402
+from service.boxes.track import track_boxes  # noqa: E402
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+MOTMETRICS = Path(motmetrics.__file__).parent / "data"
+
+
+def sequences() -> list[tuple[str, Path, Path, Path | None, dict[str, Path]]]:
+    """(name, detections, gt, seqinfo, published outputs) per sequence."""
+    rows = []
+    for name in ("TUD-Campus", "TUD-Stadtmitte"):
+        rows.append((name, DATA / "mot15_sort_frcnn_detections" / name / "det.txt", MOTMETRICS / name / "gt.txt", None,
+                     {"motmetrics test.txt": MOTMETRICS / name / "test.txt"}))
+    for number in ("02", "05", "09"):
+        base = DATA / "mot17_train_gt_and_tracker_outputs" / f"MOT17-{number}-FRCNN"
+        trackers = {t: base / "trackers" / f"{t}.txt" for t in ("MPNTrack", "Lif_T")}
+        rows.append((f"MOT17-{number}", trackers["MPNTrack"], base / "gt" / "gt.txt", base / "seqinfo.ini", trackers))
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--window", type=int, default=5)
+    parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
+    args = parser.parse_args()
+    print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
+    print("|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for name, det, gt, seqinfo, published in sequences():
+            detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
+            for formulation in args.formulations.split(","):
+                run = track_boxes(detections, formulation, window=args.window)
+                result = Path(folder) / f"{name}-{formulation}.txt"
+                write_tracks(result, run.tracks)
+                s = mot_scores(result, gt, seqinfo)
+                fps = detections.n_frames / run.seconds
+                print(f"| {name} | {formulation} | {s.hota:.3f} | {s.mota:.3f} | {s.idf1:.3f} | {s.id_switches} | {fps:.0f} |",
+                      flush=True)
+            for tracker, path in published.items():
+                s = mot_scores(path, gt, seqinfo)
+                print(f"| {name} | {tracker} (published) | {s.hota:.3f} | {s.mota:.3f} | {s.idf1:.3f} | {s.id_switches} | |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,109 @@
+"""One window of box tracking posed as Jiang's network: candidates near each prediction.
+
+Frame t0 is the template (Sec. II-E: windows overlap by it); frames t0+1..t0+M hold the
+candidates. Every detection inside an object's gate (``BoxCostModel.gate``) is one of its
+candidate nodes with location its corners (Jiang's 4-vector p), template cost g(s_n, v)
+(``BoxCostModel.template_cost``) and, as resources, the conflict sets it belongs to
+(``conflicts.conflict_resources``): a detection is never taken twice, nor two boxes that
+are one spatial location. An object not seen at t0 starts from its prediction with an
+occluded template, so its first arc costs like leaving an occlusion.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from formulations.boxes.conflicts import ConflictRule, conflict_resources
+from formulations.boxes.costs import BoxCostModel, histogram_distance
+from formulations.boxes.geometry import centre, height
+from formulations.boxes.objects import BoxObjects
+from formulations.window.candidates import WindowCandidates
+from formulations.window.costs import ArcCostWeights
+
+Array = NDArray[np.float64]
+Ints = NDArray[np.int_]
+
+
+@dataclass(frozen=True)
+class BoxWindow:
+    """A window ready for ``build_window``: candidates, weights, layout, and which detection each candidate is.
+
+    Attributes:
+        candidates: The window's candidates.
+        weights: Arc cost weights (lambda_2 already divided by the median height).
+        layout_pairs: ``(P, 2)`` neighbouring objects.
+        layout_weight: mu per pair.
+        detection: ``(C,)`` index, into the detections handed in, of each candidate.
+    """
+
+    candidates: WindowCandidates
+    weights: ArcCostWeights
+    layout_pairs: Ints
+    layout_weight: float
+    detection: Ints
+
+
+def box_window(
+    objects: BoxObjects, template_frame: int, n_frames: int, frame: Ints, boxes: Array, histograms: Array | None,
+    model: BoxCostModel, rule: ConflictRule, median_height: float,
+) -> BoxWindow:
+    """Pose frames ``template_frame+1 .. template_frame+n_frames`` for ``objects``.
+
+    Args:
+        objects: Objects alive at the template frame.
+        template_frame: t0.
+        n_frames: M.
+        frame, boxes, histograms: The detections of frames t0+1..t0+M: frame, corners,
+            histograms (None without frames).
+        model: Gate and costs.
+        rule: When two boxes conflict.
+        median_height: Box height that sets the unit of lambda_2 and mu.
+    """
+    frames = template_frame + np.arange(1, n_frames + 1)
+    predicted = objects.predict(frames)  # (N, M, 4)
+    objs, dets = [], []
+    distances, gaps = [], []
+    for m, f in enumerate(frames):
+        index = np.flatnonzero(frame == f)
+        gap = (f - objects.last_seen).astype(float)
+        inside, distance = model.gate(predicted[:, m], gap, boxes[index])
+        n, b = np.nonzero(inside)
+        objs.append(n)
+        dets.append(index[b])
+        distances.append(distance[n, b])
+        gaps.append(gap[n])
+    obj, det = np.concatenate(objs).astype(int), np.concatenate(dets).astype(int)
+    hist_dist = None
+    if histograms is not None and objects.histogram is not None:
+        hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
+    template_cost = model.template_cost(np.concatenate(distances), np.concatenate(gaps), objects.box[obj], boxes[det], hist_dist)
+    resources = sp.csr_matrix(conflict_resources(rule, frame, boxes)[det])
+    start = objects.predict(np.array([template_frame]))[:, 0]
+    velocity = np.repeat(objects.velocity[:, None, :], n_frames, axis=1)
+    candidates = WindowCandidates(
+        template_location=start, template_occluded=objects.last_seen < template_frame, n_frames=n_frames,
+        object=obj, frame=frame[det] - template_frame, location=boxes[det], template_cost=template_cost,
+        resources=resources, occlusion_location=predicted, motion=velocity,
+        appearance=None if hist_dist is None or histograms is None else histograms[det],
+        template_appearance=None if hist_dist is None else objects.histogram,
+    )
+    weights = ArcCostWeights(
+        appearance_change=model.histogram_change if hist_dist is not None else 0.0,
+        displacement=model.displacement / median_height, reappear=model.reappear, disappear=model.disappear,
+        template_on_track=model.template_on_track,
+    )
+    return BoxWindow(candidates, weights, _neighbours(start, model) if model.layout > 0 else np.zeros((0, 2), int),
+                     model.layout / median_height, det)
+
+
+def _neighbours(start: Array, model: BoxCostModel) -> Ints:
+    """Object pairs whose template centres lie within ``layout_reach`` mean heights."""
+    c, h = centre(start), height(start)
+    scale = 0.5 * (h[:, None] + h[None, :])
+    near = np.linalg.norm(c[:, None] - c[None, :], axis=2) <= model.layout_reach * scale
+    i, j = np.nonzero(np.triu(near, 1))
+    return np.column_stack([i, j]).astype(int)

@@ -1,0 +1,97 @@
+"""Objects that come and go: births from unexplained detections, deaths after occlusion.
+
+Jiang's network tracks a fixed set of objects; MOT needs them to come and go. The rule
+(Jiang Sec. II-E inserts "a consistent object which is not on the track" into the object
+list; here consistency is a chain of boxes):
+
+- **Birth.** After a window is solved, the detections of its frames t0..t0+M that no object
+  explains (took, or holds a box in the same conflict set) are linked frame to frame (an
+  optimal assignment on IoU, pairs with IoU >= ``link_iou``, consecutive frames only). A
+  chain of at least ``min_hits`` boxes is a new object, placed at the chain's first box
+  with the chain's fitted velocity and mean histogram (``born``), and the window is
+  solved again with it: from its first frame on, the new object competes for boxes with
+  the others in the window optimisation, and the chain only says where it starts.
+- **Death.** An object unseen for more than ``max_occluded`` frames leaves. One whose
+  prediction has crossed the image border leaves sooner, after ``border_occluded`` frames:
+  a person walking out of the picture is not behind someone. In the window itself an
+  object that goes into occlusion pays c_a + c_b per frame and the sink costs the same as
+  an occlusion node, so the sink never decides a death on its own: the frame count does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
+
+from formulations.boxes.geometry import iou
+from formulations.boxes.objects import BoxObjects, fitted_velocity
+
+Array = NDArray[np.float64]
+Ints = NDArray[np.int_]
+
+
+@dataclass(frozen=True)
+class Lifecycle:
+    """When objects are born and when they leave (see the module docstring).
+
+    Attributes:
+        min_hits: Boxes in a chain of unexplained detections that make a new object.
+        link_iou: Smallest IoU between consecutive boxes of a chain.
+        max_occluded: Frames unseen after which an object leaves.
+        border_occluded: Frames unseen after which an object predicted across the image border leaves.
+    """
+
+    min_hits: int = 3
+    link_iou: float = 0.3
+    max_occluded: int = 30
+    border_occluded: int = 5
+
+    def __post_init__(self) -> None:
+        if self.min_hits < 1 or not 0 < self.link_iou <= 1 or self.border_occluded < 0 or self.max_occluded < 0:
+            raise ValueError("lifecycle: min_hits >= 1, 0 < link_iou <= 1, occlusion limits >= 0")
+
+    def chains(self, frame: Ints, boxes: Array, free: NDArray[np.bool_]) -> list[Ints]:
+        """Chains (detection indices in frame order) of ``min_hits`` or more free boxes."""
+        closed: list[list[int]] = []
+        open_chains: list[list[int]] = []
+        for f in np.unique(frame[free]):
+            index = np.flatnonzero(free & (frame == f))
+            alive = [c for c in open_chains if frame[c[-1]] == f - 1]
+            closed += [c for c in open_chains if frame[c[-1]] != f - 1]
+            overlap = iou(boxes[[c[-1] for c in alive]].reshape(-1, 4), boxes[index])
+            rows, cols = linear_sum_assignment(-overlap)
+            linked = overlap[rows, cols] >= self.link_iou
+            for r, c in zip(rows[linked], cols[linked]):
+                alive[r].append(int(index[c]))
+            taken = set(cols[linked].tolist())
+            closed += [alive[r] for r in range(len(alive)) if r not in set(rows[linked].tolist())]
+            open_chains = [alive[r] for r in rows[linked]] + [[int(index[c])] for c in range(len(index)) if c not in taken]
+        return [np.array(c) for c in closed + open_chains if len(c) >= self.min_hits]
+
+    def leaving(self, objects: BoxObjects, now: int, image: Array) -> NDArray[np.bool_]:
+        """True for the objects that leave at frame ``now``; ``image`` is (x1, y1, x2, y2)."""
+        gap = now - objects.last_seen
+        predicted = objects.predict(np.array([now]))[:, 0]
+        outside = (predicted[:, :2] < image[:2]).any(axis=1) | (predicted[:, 2:] > image[2:]).any(axis=1)
+        result: NDArray[np.bool_] = (gap > self.max_occluded) | (outside & (gap > self.border_occluded))
+        return result
+
+
+def born(chains: list[Ints], frame: Ints, boxes: Array, histograms: Array | None, first_ident: int,
+         template_frame: int) -> BoxObjects:
+    """New objects from chains, numbered from ``first_ident``, posed to enter the window again.
+
+    A chain that starts at the template frame t0 starts there, seen; one that starts at
+    frame s > t0 is last seen one velocity step before its first box, at s - 1, so that
+    the window, solved again with it, can take its first box at s and none before.
+    """
+    n = len(chains)
+    hist = None if histograms is None else np.array([histograms[c].mean(axis=0) for c in chains]).reshape(n, -1)
+    velocity = np.array([fitted_velocity(frame[c], boxes[c]) for c in chains]).reshape(n, 4)
+    first = np.array([frame[c[0]] for c in chains], dtype=int)
+    at_template = first == template_frame
+    box = np.array([boxes[c[0]] for c in chains]).reshape(n, 4) - np.where(at_template, 0.0, 1.0)[:, None] * velocity
+    return BoxObjects(np.arange(first_ident, first_ident + n), box, velocity, first - (~at_template).astype(int), hist)

@@ -1,0 +1,1 @@
+"""Boxes in video (MOTChallenge files), tracked per camera by Jiang's window LP."""

@@ -1,0 +1,43 @@
+"""Boxes per frame: what a detector hands in, and what the tracker hands back."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class BoxDetections:
+    """Detections of one camera, frames numbered from 1 (MOTChallenge).
+
+    Attributes:
+        frame: ``(K,)`` frame number of each box, 1..n_frames.
+        box: ``(K, 4)`` left, top, width, height in pixels.
+        confidence: ``(K,)`` detector score (1 where unknown).
+        n_frames: Length of the sequence (frames without any box count).
+        image_size: ``(width, height)`` in pixels, or None when unknown.
+    """
+
+    frame: np.ndarray
+    box: np.ndarray
+    confidence: np.ndarray
+    n_frames: int
+    image_size: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class BoxTracks:
+    """Tracked boxes: ``BoxDetections`` plus an identity per box.
+
+    Attributes:
+        frame, box, confidence: As in ``BoxDetections`` (one row per tracked box).
+        track_id: ``(K,)`` identity, 1, 2, ... in order of birth.
+        n_frames: Length of the sequence.
+    """
+
+    frame: np.ndarray
+    track_id: np.ndarray
+    box: np.ndarray
+    confidence: np.ndarray
+    n_frames: int

@@ -1,0 +1,114 @@
+"""MOTChallenge text files: detections, results, ground truth, and ``seqinfo.ini``.
+
+One box per line, comma-separated (Milan et al. 2016):
+
+    frame, id, bb_left, bb_top, bb_width, bb_height, conf[, x, y, z]       det.txt, results
+    frame, id, bb_left, bb_top, bb_width, bb_height, consider, class, visibility    gt.txt
+
+Frames count from 1; ``id`` is -1 in detection files. Every line of a file has the same
+number of columns, from 7 to 10; any other file is refused with one line naming it.
+"""
+
+from __future__ import annotations
+
+import configparser
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from service.boxes.detections import BoxDetections, BoxTracks
+from service.errors import InputError
+
+MIN_COLUMNS, MAX_COLUMNS = 7, 10
+
+
+@dataclass(frozen=True)
+class SequenceInfo:
+    """The ``[Sequence]`` section of a ``seqinfo.ini``."""
+
+    name: str
+    length: int
+    image_size: tuple[float, float] | None
+    frame_rate: float | None
+    image_dir: str | None
+    image_ext: str
+
+
+def read_rows(path: Path) -> np.ndarray:
+    """``(K, columns)`` floats of a MOTChallenge file; one-line ``InputError`` when it is not one."""
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file") from None
+    lines = [line for line in text.splitlines() if line.strip()]
+    if not lines:
+        raise InputError(f"{path}: no boxes in the file")
+    widths = {len(line.split(",")) for line in lines}
+    if len(widths) > 1 or not MIN_COLUMNS <= min(widths) <= MAX_COLUMNS:
+        bad = next(i for i, line in enumerate(lines, 1) if not MIN_COLUMNS <= len(line.split(",")) <= MAX_COLUMNS
+                   or len(line.split(",")) != len(lines[0].split(",")))
+        raise InputError(f"{path}: line {bad} has {len(lines[bad - 1].split(','))} columns; a MOTChallenge file has "
+                         f"{MIN_COLUMNS} to {MAX_COLUMNS} (frame, id, left, top, width, height, conf, ...) on every line")
+    try:
+        rows = np.array([[float(v) for v in line.split(",")] for line in lines])
+    except ValueError as error:
+        raise InputError(f"{path}: not a number ({error})") from None
+    _check(path, rows)
+    return rows
+
+
+def _check(path: Path, rows: np.ndarray) -> None:
+    if not np.isfinite(rows[:, :7]).all():
+        raise InputError(f"{path}: frame, id, box and confidence must be finite numbers")
+    frames = rows[:, 0]
+    if (frames < 1).any() or (frames != np.round(frames)).any():
+        raise InputError(f"{path}: line {int(np.argmax((frames < 1) | (frames != np.round(frames)))) + 1}: "
+                         "frames are whole numbers from 1")
+    if (rows[:, 4:6] <= 0).any():
+        raise InputError(f"{path}: line {int(np.argmax((rows[:, 4:6] <= 0).any(axis=1))) + 1}: width and height must be > 0")
+
+
+def read_detections(path: Path, info: SequenceInfo | None = None) -> BoxDetections:
+    """A ``det.txt`` (or a result file, whose ids are ignored) as ``BoxDetections``."""
+    rows = read_rows(path)
+    last = int(rows[:, 0].max())
+    if info is not None and last > info.length:
+        raise InputError(f"{path}: frame {last} is past the sequence's {info.length} frames (seqinfo.ini)")
+    return BoxDetections(
+        frame=rows[:, 0].astype(int), box=rows[:, 2:6].copy(), confidence=rows[:, 6].copy(),
+        n_frames=info.length if info is not None else last, image_size=info.image_size if info is not None else None,
+    )
+
+
+def write_tracks(path: Path, tracks: BoxTracks) -> None:
+    """Write a MOTChallenge result file, sorted by frame then id."""
+    order = np.lexsort((tracks.track_id, tracks.frame))
+    lines = [
+        f"{f},{i},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{c:.4g},-1,-1,-1"
+        for f, i, b, c in zip(tracks.frame[order], tracks.track_id[order], tracks.box[order], tracks.confidence[order])
+    ]
+    try:
+        path.write_text("".join(line + "\n" for line in lines))
+    except OSError as error:
+        raise InputError(f"{path}: cannot write ({error.strerror})") from None
+
+
+def read_seqinfo(path: Path) -> SequenceInfo:
+    """A ``seqinfo.ini``: its length is required, image size and frame rate when present."""
+    parser = configparser.ConfigParser()
+    try:
+        if not parser.read(path):
+            raise InputError(f"{path}: cannot read")
+        section = parser["Sequence"]
+        length = int(section["seqLength"])
+    except (KeyError, ValueError, configparser.Error) as error:
+        raise InputError(f"{path}: not a seqinfo.ini with [Sequence] seqLength ({error})") from None
+    size = None
+    if "imWidth" in section and "imHeight" in section:
+        size = (float(section["imWidth"]), float(section["imHeight"]))
+    rate = float(section["frameRate"]) if "frameRate" in section else None
+    return SequenceInfo(section.get("name", path.parent.name), length, size, rate,
+                        section.get("imDir"), section.get("imExt", ".jpg"))

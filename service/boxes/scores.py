@@ -1,0 +1,102 @@
+"""MOT scores by TrackEval (Luiten et al. 2021): HOTA, MOTA, IDF1, identity switches.
+
+TrackEval reads a MOTChallenge folder tree, so one result and one ground truth are laid out
+in a temporary one (links, no copies) and its dataset class does the reading and the
+MOTChallenge preprocessing; its metric classes are then called on that one sequence,
+without the Evaluator (which prints and writes summary files). TrackEval 1.3 runs on
+numpy 2 as is (no ``np.float``/``np.int`` left in it).
+
+A ground truth with classes (MOT16/17/20: a class column of 1..13) is scored as MOT17,
+which drops the non-pedestrian ground truth and the results matched to distractors; one
+without (MOT15, e.g. TUD-Campus, class -1) as MOT15, without that step.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from service.boxes.mot_files import read_rows, read_seqinfo
+from service.errors import InputError
+
+SEQUENCE, TRACKER = "sequence", "tracker"
+
+
+@dataclass(frozen=True)
+class MotScores:
+    """Scores of one result against one ground truth.
+
+    Attributes:
+        hota: HOTA, mean over the IoU thresholds 0.05..0.95.
+        deta, assa: Its detection and association parts.
+        mota: CLEAR MOT accuracy.
+        idf1: Identity F1.
+        id_switches: CLEAR identity switches.
+        gt_ids, result_ids: Distinct identities scored on each side.
+        frames: Frames scored.
+    """
+
+    hota: float
+    deta: float
+    assa: float
+    mota: float
+    idf1: float
+    id_switches: int
+    gt_ids: int
+    result_ids: int
+    frames: int
+
+    def as_dict(self) -> dict[str, float | int]:
+        return asdict(self)
+
+
+def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores:
+    """Score ``result`` against ``gt``; the length comes from ``seqinfo`` (or a ``seqinfo.ini`` beside the gt folder)."""
+    from trackeval.datasets import MotChallenge2DBox
+    from trackeval.metrics import CLEAR, HOTA, Identity
+    from trackeval.utils import TrackEvalException
+
+    truth, rows = read_rows(gt), read_rows(result)
+    length = _length(gt, seqinfo, truth, rows)
+    classes = truth.shape[1] >= 8 and bool(np.isin(truth[:, 7], np.arange(1, 14)).all())
+    with tempfile.TemporaryDirectory(prefix="markerflow-mot-") as folder:
+        root = Path(folder)
+        (root / "gt" / SEQUENCE / "gt").mkdir(parents=True)
+        (root / "trackers" / TRACKER / "data").mkdir(parents=True)
+        os.symlink(gt.resolve(), root / "gt" / SEQUENCE / "gt" / "gt.txt")
+        os.symlink(result.resolve(), root / "trackers" / TRACKER / "data" / f"{SEQUENCE}.txt")
+        config = {
+            "GT_FOLDER": str(root / "gt"), "TRACKERS_FOLDER": str(root / "trackers"), "SKIP_SPLIT_FOL": True,
+            "SEQ_INFO": {SEQUENCE: length}, "BENCHMARK": "MOT17" if classes else "MOT15",
+            "TRACKERS_TO_EVAL": [TRACKER], "PRINT_CONFIG": False,
+        }
+        try:
+            dataset = MotChallenge2DBox(config)
+            data = dataset.get_preprocessed_seq_data(dataset.get_raw_seq_data(TRACKER, SEQUENCE), "pedestrian")
+        except TrackEvalException as error:
+            raise InputError(f"{result} against {gt}: {error}") from None
+    quiet = {"PRINT_CONFIG": False}
+    hota = HOTA().eval_sequence(data)
+    clear = CLEAR(quiet).eval_sequence(data)
+    identity = Identity(quiet).eval_sequence(data)
+    return MotScores(
+        hota=float(np.mean(hota["HOTA"])), deta=float(np.mean(hota["DetA"])), assa=float(np.mean(hota["AssA"])),
+        mota=float(clear["MOTA"]), idf1=float(identity["IDF1"]), id_switches=int(clear["IDSW"]),
+        gt_ids=int(data["num_gt_ids"]), result_ids=int(data["num_tracker_ids"]), frames=length,
+    )
+
+
+def _length(gt: Path, seqinfo: Path | None, truth: np.ndarray, rows: np.ndarray) -> int:
+    beside = gt.parent.parent / "seqinfo.ini"
+    source = seqinfo if seqinfo is not None else (beside if beside.is_file() else None)
+    if source is None:
+        return int(max(truth[:, 0].max(), rows[:, 0].max()))
+    length = read_seqinfo(source).length
+    last = int(max(truth[:, 0].max(), rows[:, 0].max()))
+    if last > length:
+        raise InputError(f"frame {last} is past the sequence's {length} frames ({source})")
+    return length

@@ -1,0 +1,169 @@
+"""Track the boxes of one camera over a sequence, window by window (Jiang Sec. II-E).
+
+Windows of ``window`` frames overlap by one frame, the template. For each window:
+
+1. the objects alive at its template frame t0 get their candidates in frames t0+1..t0+M
+   (``formulations.boxes.candidates``), the window is built (``formulations.window``) and
+   solved by the chosen formulation (``lp-l1``, ``ilp``, ``nn-hungarian``, ...: any name
+   ``formulations.get_formulation`` knows, so every one sees the same costs);
+2. each object's taken boxes become its track; its last box, velocity and template
+   histogram move on (``formulations.boxes.objects.advance``);
+3. the detections no object explains (neither taken nor in the conflict set of a taken
+   box) are chained into new objects, and the window is solved again with them; objects
+   unseen too long leave (``formulations.boxes.lifecycle``).
+
+With ``formulation="nn-hungarian"`` the same loop runs frame-by-frame optimal assignment on
+the same costs: SORT's association (Hungarian, gated) with a constant-velocity
+prediction and no Kalman filter.
+
+Public entry point (also used for people seen by several cameras, one call per camera):
+
+    track_boxes(detections, formulation="lp-l1", window=5, histograms=None) -> BoxTracking
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from formulations import build_window, get_formulation
+from formulations.boxes.candidates import box_window
+from formulations.boxes.conflicts import ConflictRule, conflict_resources
+from formulations.boxes.costs import BoxCostModel
+from formulations.boxes.geometry import corners, height
+from formulations.boxes.lifecycle import Lifecycle, born
+from formulations.boxes.objects import BoxObjects, advance
+from formulations.errors import FormulationError
+from formulations.methods.formulation import Formulation
+from formulations.window.build import taken_candidates
+from service.boxes.detections import BoxDetections, BoxTracks
+from service.errors import InputError
+
+VELOCITY_SMOOTHING = 0.5  # weight of the old velocity against the window's fit
+HISTOGRAM_RATE = 0.2  # how fast a template histogram follows the taken boxes
+
+
+@dataclass(frozen=True)
+class BoxTracking:
+    """What a tracking run returns: the tracks and how the windows went.
+
+    Attributes:
+        tracks: The tracked boxes.
+        windows: Windows solved (windows without any object are not solved).
+        integral_windows: Windows whose paths carry an optimality certificate.
+        seconds: Wall time of the run.
+    """
+
+    tracks: BoxTracks
+    windows: int
+    integral_windows: int
+    seconds: float
+
+
+def track_boxes(
+    detections: BoxDetections,
+    formulation: str | Formulation = "lp-l1",
+    window: int = 5,
+    histograms: np.ndarray | None = None,
+    model: BoxCostModel = BoxCostModel(),
+    rule: ConflictRule = ConflictRule(),
+    lifecycle: Lifecycle = Lifecycle(),
+) -> BoxTracking:
+    """Track ``detections`` (one camera) and number the tracks 1, 2, ... in order of birth.
+
+    Args:
+        detections: Boxes per frame.
+        formulation: A formulation name or instance (see ``markerflow formulations``).
+        window: Frames per window, template included (>= 2).
+        histograms: ``(K, H)`` normalised histogram per detection row, or None.
+        model, rule, lifecycle: Costs and gate, conflict sets, births and deaths.
+
+    Raises:
+        InputError: A window shorter than 2, an unknown formulation, histograms of the wrong shape.
+    """
+    start = time.perf_counter()
+    solver = _formulation(formulation)
+    if window < 2:
+        raise InputError(f"window must be at least 2 frames (a template and one new frame), got {window}")
+    if histograms is not None and histograms.shape[0] != len(detections.frame):
+        raise InputError(f"{histograms.shape[0]} histograms for {len(detections.frame)} detections")
+    frame, boxes = detections.frame.astype(int), corners(detections.box)
+    median_height = float(np.median(height(boxes))) if len(boxes) else 1.0
+    conflicting = conflict_resources(rule, frame, boxes)  # symmetric: row k is O(k), what taking k explains
+    image = _image(detections, boxes)
+    objects = BoxObjects.empty(None if histograms is None else histograms.shape[1])
+    owner = np.zeros(len(frame), dtype=int)  # track id of each detection, 0 = none
+    windows = integral = 0
+    t0, next_ident = 1, 1
+    while t0 < detections.n_frames:
+        m = min(window - 1, detections.n_frames - t0)
+        inside = (frame > t0) & (frame <= t0 + m)
+        before = objects
+        if objects.n_objects:
+            objects, certified = _solve(solver, before, t0, m, frame, boxes, histograms, model, rule, median_height, owner)
+            windows, integral = windows + 1, integral + certified
+        chains = lifecycle.chains(frame, boxes, (frame >= t0) & (frame <= t0 + m) & ~_explained(owner, conflicting))
+        if chains:
+            new = born(chains, frame, boxes, histograms, next_ident, t0)
+            next_ident += new.n_objects
+            at_template = [c[0] for c in chains if frame[c[0]] == t0]
+            owner[at_template] = new.ident[[i for i, c in enumerate(chains) if frame[c[0]] == t0]]
+            owner[inside] = 0  # the window again, with the new objects competing from their first box
+            objects, certified = _solve(solver, before.joined(new), t0, m, frame, boxes, histograms, model, rule,
+                                        median_height, owner)
+            windows, integral = windows + 1, integral + certified
+        objects = objects.subset(~lifecycle.leaving(objects, t0 + m, image))
+        t0 += m
+    tracked = np.flatnonzero(owner)
+    tracks = BoxTracks(frame=frame[tracked], track_id=owner[tracked], box=detections.box[tracked],
+                       confidence=detections.confidence[tracked], n_frames=detections.n_frames)
+    return BoxTracking(tracks, windows, integral, time.perf_counter() - start)
+
+
+def _solve(
+    solver: Formulation, objects: BoxObjects, t0: int, m: int, frame: np.ndarray, boxes: np.ndarray,
+    histograms: np.ndarray | None, model: BoxCostModel, rule: ConflictRule, median_height: float, owner: np.ndarray,
+) -> tuple[BoxObjects, bool]:
+    """Solve one window; write each taken detection's owner; return the objects moved on and the certificate."""
+    index = np.flatnonzero((frame > t0) & (frame <= t0 + m))
+    hist = None if histograms is None else histograms[index]
+    posed = box_window(objects, t0, m, frame[index], boxes[index], hist, model, rule, median_height)
+    problem, node_candidate = build_window(posed.candidates, posed.weights, posed.layout_pairs, posed.layout_weight)
+    solution = solver.solve(problem)
+    taken = taken_candidates(node_candidate, solution.path, index[posed.detection])  # (N, M), -1 occluded
+    seen_frames, seen_boxes, seen_hists = [], [], []
+    for n in range(objects.n_objects):
+        dets = taken[n][taken[n] >= 0]
+        owner[dets] = objects.ident[n]
+        seen_frames.append(frame[dets])
+        seen_boxes.append(boxes[dets])
+        seen_hists.append(histograms[dets] if histograms is not None else np.zeros((0, 0)))
+    moved = advance(objects, seen_frames, seen_boxes, seen_hists if histograms is not None else None,
+                    VELOCITY_SMOOTHING, HISTOGRAM_RATE)
+    return moved, bool(solution.integral)
+
+
+def _explained(owner: np.ndarray, conflicting: sp.csr_matrix) -> np.ndarray:
+    """Detections taken by an object, or in the conflict set of one taken."""
+    explained = owner > 0
+    explained[conflicting[np.flatnonzero(owner)].indices] = True
+    return explained
+
+
+def _formulation(spec: str | Formulation) -> Formulation:
+    try:
+        return get_formulation(spec)
+    except FormulationError as error:
+        raise InputError(str(error)) from None
+
+
+def _image(detections: BoxDetections, boxes: np.ndarray) -> np.ndarray:
+    """The image rectangle (x1, y1, x2, y2): from seqinfo.ini, else the extent of all the boxes."""
+    if detections.image_size is not None:
+        return np.array([0.0, 0.0, *detections.image_size])
+    if len(boxes) == 0:
+        return np.array([0.0, 0.0, 1.0, 1.0])
+    return np.r_[np.minimum(boxes[:, :2].min(axis=0), 0.0), boxes[:, 2:].max(axis=0)]

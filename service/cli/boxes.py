@@ -1,0 +1,38 @@
+"""``markerflow boxes``: track MOTChallenge detections of one camera, write a result file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from service.boxes.frames import box_histograms
+from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks
+from service.boxes.track import track_boxes
+from service.capture.formulation_spec import formulation_from_spec
+from service.cli.output import check_writable_folder
+from service.cli.report import out
+
+
+def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | None, images: Path | None,
+              window: int, as_json: bool) -> None:
+    """Read ``detections``, track them window by window, write ``output``, print the figures."""
+    check_writable_folder(output.parent if str(output.parent) else Path("."))
+    info = read_seqinfo(seqinfo) if seqinfo is not None else None
+    boxes = read_detections(detections, info)
+    solver = formulation_from_spec(formulation)
+    histograms = None
+    if images is not None:
+        histograms = box_histograms(boxes, images, info.image_ext if info is not None else None)
+    run = track_boxes(boxes, solver, window=window, histograms=histograms)
+    write_tracks(output, run.tracks)
+    summary = {
+        "frames": boxes.n_frames, "detections": len(boxes.frame), "tracked_boxes": len(run.tracks.frame),
+        "tracks": int(len(set(run.tracks.track_id.tolist()))), "formulation": formulation, "window": window,
+        "integral_window_fraction": run.integral_windows / run.windows if run.windows else None,
+        "seconds": round(run.seconds, 3), "frames_per_second": round(boxes.n_frames / max(run.seconds, 1e-9), 1),
+        "histograms": histograms is not None, "output": str(output),
+    }
+    if as_json:
+        print(json.dumps(summary))
+        return
+    out.print(" ".join(f"{key}={value}" for key, value in summary.items()), highlight=False)
