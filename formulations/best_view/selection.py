@@ -1,0 +1,98 @@
+"""Best view by dynamic programming over a sliding window (Jiang, Fels & Little 2008, Sec. III).
+
+For one object, M cameras and a cost c(n, b) of showing it from camera b at frame n
+(lower is better), each sliding window spans the previous decision b_{-1}, the current
+frame 0 and the next N - 1 frames, and solves
+
+    min_{b_0 .. b_{N-1}}  sum_{n=0}^{N-1} c(n, b_n) + lambda sum_{n=0}^{N-1} d(b_n, b_{n-1}),
+
+    d(x, y) = 0 if x = y, 1 otherwise                                       (1)
+
+(the paper writes d = delta(x - y) and says what it means: no cost for keeping the
+camera, a constant one for a switch). Only b_0* is kept; the window slides one frame,
+b_0* becomes the next b_{-1}. The very first b_{-1} is the view with the best
+measurement at frame 0 (step 1 of the paper's algorithm). Near the end of the take a
+window holds the frames that remain.
+
+The paper solves each window by a forward Viterbi pass from b_{-1} and a backtrack to
+f_0. This module evaluates the same window optimum backwards, with the cost-to-go
+
+    V_{N-1}(m) = c(N-1, m),
+    V_n(m)     = c(n, m) + min(V_{n+1}(m), min_i V_{n+1}(i) + lambda),       (2)
+
+so that b_0* = argmin_m lambda d(m, b_{-1}) + V_0(m). V_0 does not depend on b_{-1}:
+it is computed for every start frame and every object at once (N vectorised steps of
+(2)), and the slide itself is one argmin per frame. Both passes minimise (1) over the
+same window; where several sequences tie, this one keeps b_{-1} if it is among the
+optimal first choices, else the lowest camera index.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from formulations.errors import FormulationError
+
+
+def select_views(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.NDArray[np.int64]:
+    """Each object's camera in each frame, by Jiang's sliding-window DP.
+
+    Args:
+        costs: ``(F, K, M)`` cost c(n, b) of camera b for object k at frame n, finite,
+            lower is better.
+        switch_cost: lambda >= 0, the price of one camera switch in the units of ``costs``.
+        window: N >= 1 frames per window, the current frame included (N = 1 with any
+            lambda is the greedy filter that switches when one frame pays for it).
+
+    Returns:
+        ``(F, K)`` chosen camera index b_n* per frame and object.
+
+    Raises:
+        FormulationError: a cost array that is not (F, K, M) with M >= 1, a non-finite
+            cost, a negative or non-finite lambda, or a window under one frame.
+    """
+    c = _checked(costs, switch_cost, window)
+    n_frames, n_objects, _ = c.shape
+    to_go = _cost_to_go(c, switch_cost, window)
+    # Keeping b_{-1} is optimal iff V_0(b_{-1}) <= min_m V_0(m) + lambda; otherwise the
+    # overall argmin of V_0 is another camera, and the best one to switch to.
+    best, switch_bound = np.argmin(to_go, axis=2), to_go.min(axis=2) + switch_cost
+    chosen = np.empty((n_frames, n_objects), dtype=np.int64)
+    objects = np.arange(n_objects)
+    previous = np.argmin(c[0], axis=1) if n_frames else np.empty(0, dtype=np.int64)
+    for n in range(n_frames):
+        previous = np.where(to_go[n, objects, previous] <= switch_bound[n], previous, best[n])
+        chosen[n] = previous
+    return chosen
+
+
+def _cost_to_go(c: npt.NDArray[np.float64], switch_cost: float, window: int) -> npt.NDArray[np.float64]:
+    """``(F, K, M)`` V_0 of (2) for the window starting at every frame.
+
+    Frames past the end are padded with zero cost: a constant V needs no switch, so a
+    padded window has the optimum of the frames that remain.
+    """
+    n_frames = c.shape[0]
+    padded = np.concatenate([c, np.zeros((window - 1,) + c.shape[1:])])
+    to_go = np.zeros_like(c)
+    for n in range(window - 1, -1, -1):
+        carried = np.minimum(to_go, to_go.min(axis=2, keepdims=True) + switch_cost)
+        to_go = padded[n : n + n_frames] + carried
+    return to_go
+
+
+def _checked(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.NDArray[np.float64]:
+    try:
+        c = np.asarray(costs, dtype=float)
+    except (TypeError, ValueError):
+        raise FormulationError("best view: costs must be numeric") from None
+    if c.ndim != 3 or c.shape[2] < 1:
+        raise FormulationError(f"best view: costs must be (frames, objects, cameras) with a camera, got shape {c.shape}")
+    if not np.isfinite(c).all():
+        raise FormulationError("best view: costs must be finite")
+    if not (np.isfinite(switch_cost) and switch_cost >= 0):
+        raise FormulationError(f"best view: switch cost must be finite and >= 0, got {switch_cost}")
+    if window < 1:
+        raise FormulationError(f"best view: window must be at least 1 frame, got {window}")
+    return c

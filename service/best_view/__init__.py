@@ -1,0 +1,1 @@
+"""Best view around the mathematics of ``formulations.best_view``: cost tables, camera-mode markers."""

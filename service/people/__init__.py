@@ -1,0 +1,1 @@
+"""People seen by several calibrated video cameras as 2D body keypoints (OpenPose), as boxes."""

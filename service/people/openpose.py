@@ -1,0 +1,42 @@
+"""OpenPose's per-frame JSON: ``people[i].pose_keypoints_2d`` = (x, y, confidence) per keypoint.
+
+One folder per camera, one file per frame (``<name>.<frame>.json`` or
+``<name>_<frame>_keypoints.json``; frames in the sorted order of the file names), any
+keypoint layout (BODY_25B has 25 keypoints; a confidence of 0 means not detected).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from service.errors import InputError
+
+
+def read_openpose_folder(folder: Path) -> list[list[np.ndarray]]:
+    """Per frame, one ``(J, 3)`` array (x, y, confidence) per detected person.
+
+    Raises:
+        InputError: a missing folder, no JSON file in it, a file that is not OpenPose
+            JSON, or keypoints not in triples.
+    """
+    if not folder.is_dir():
+        raise InputError(f"{folder}: no such folder of OpenPose JSON files")
+    files = sorted(folder.glob("*.json"))
+    if not files:
+        raise InputError(f"{folder}: no OpenPose .json files")
+    return [_people(path) for path in files]
+
+
+def _people(path: Path) -> list[np.ndarray]:
+    try:
+        people = json.loads(path.read_bytes())["people"]
+        flat = [np.asarray(person["pose_keypoints_2d"], dtype=float) for person in people]
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise InputError(f"{path}: not an OpenPose keypoint file ({error})") from None
+    for i, values in enumerate(flat):
+        if values.ndim != 1 or values.size % 3:
+            raise InputError(f"{path}: people.{i}.pose_keypoints_2d has {values.size} values, not (x, y, confidence) triples")
+    return [values.reshape(-1, 3) for values in flat]
