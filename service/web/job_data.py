@@ -1,0 +1,121 @@
+"""What a page shows of a job, read from the store: its options, certificates, labels and doubt.
+
+The store keeps a job's input and result as bytes; the figures the pages need are derived
+here. Inputs and finished results never change, so what is derived from them is cached per
+job (``functools.lru_cache``), and a list of fifty jobs does not parse fifty inputs per view.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from service.capture.document import CaptureDocument
+from service.io.recording import LabeledTrajectories
+from service.labeling.stats import DOUBTFUL_BELOW, WindowStats, certificate_figures, doubtful_labels
+from service.server.results import stored_windows_trajectories, trajectories_from_bytes
+from service.server.store import Job, JobStore, StoredWindow, store_for
+
+CACHED_JOBS = 256
+
+
+@dataclass(frozen=True)
+class JobOptions:
+    """How the job was asked to label, and what it was given."""
+
+    formulation: str
+    window: int
+    association: str | None  # None for 3D points
+    markers: int | None  # None: the subject model's markers
+    frames: int
+
+
+@dataclass(frozen=True)
+class Labels:
+    """A job's labels, with which of them are doubtful.
+
+    ``doubt_source`` says what ``doubtful`` is, for the page to show.
+    """
+
+    names: list[str]
+    rate: float
+    positions: np.ndarray  # (F, M, 3), NaN where occluded
+    occluded: np.ndarray  # (F, M) bool
+    filled: np.ndarray  # (F, M) bool: occluded with a predicted position
+    doubtful: np.ndarray  # (F, M) bool, seen labels only
+    doubt_source: str
+    best_view: list[list[str | None]] | None  # [frame][marker] camera, where the result names one
+
+
+def options_of(document: bytes) -> JobOptions:
+    """The options of a stored capture document (JSON, as ``CaptureDocument`` wrote it)."""
+    fields = json.loads(document)
+    formulation = fields["formulation"]
+    cameras = fields.get("detections") is not None
+    frames = next(iter(fields["detections"].values()), []) if cameras else fields["points"]
+    return JobOptions(formulation=formulation if isinstance(formulation, str) else json.dumps(formulation),
+                      window=fields["window"], association=fields["association"] if cameras else None,
+                      markers=len(fields["markers"]) if fields.get("markers") is not None else None, frames=len(frames))
+
+
+@lru_cache(maxsize=CACHED_JOBS)
+def job_options(db: str, job_id: str) -> JobOptions:
+    return options_of(store_for(db).input(job_id))
+
+
+def window_stats(windows: list[StoredWindow]) -> list[WindowStats]:
+    return [WindowStats(**window.stats) for window in windows]
+
+
+def labels_of(traj: LabeledTrajectories) -> Labels:
+    """The labels of ``traj``, doubtful where their confidence is below ``DOUBTFUL_BELOW``
+    (none are marked when the result carries no confidence), with each marker's best view
+    per frame where the result names one (camera mode)."""
+    occluded = np.asarray(traj.occluded, dtype=bool)
+    filled = ~np.isnan(traj.filled).any(axis=2) & occluded if traj.filled.size else np.zeros_like(occluded)
+    if traj.confidence.size:
+        doubtful, source = doubtful_labels(traj.confidence, occluded), f"confidence below {DOUBTFUL_BELOW:g}"
+    else:
+        doubtful, source = np.zeros_like(occluded), "this result carries no per-label confidence"
+    best_view = None
+    if traj.view_names and traj.best_view.size:
+        cameras = np.array([*traj.view_names, None], dtype=object)  # index -1: no camera chosen
+        best_view = cameras[traj.best_view].tolist()
+    return Labels(list(traj.names), float(traj.rate), traj.positions, occluded, filled, doubtful, source, best_view)
+
+
+@lru_cache(maxsize=CACHED_JOBS)
+def finished_labels(db: str, job_id: str) -> Labels:
+    """A done job's labels (its result and windows never change again)."""
+    return labels_of(trajectories_from_bytes(store_for(db).result(job_id)))
+
+
+def job_labels(db: str, job: Job) -> Labels | None:
+    """The labels so far: a done job's result; a failed or cancelled job's stored windows;
+    None while it runs (assembling needs the whole cross-camera cloud in camera mode)."""
+    if job.state == "done":
+        return finished_labels(db, job.id)
+    if job.state in ("queued", "running") or job.windows_done == 0:
+        return None
+    store = store_for(db)
+    return labels_of(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)))
+
+
+def doubtful_share(windows: list[StoredWindow]) -> float | None:
+    """Doubtful labels / labels over the stored windows; None where they counted no label
+    (windows stored before labels had a confidence)."""
+    stats = window_stats(windows)
+    labels = sum(w.labels for w in stats)
+    return sum(w.doubtful for w in stats) / labels if labels else None
+
+
+def certificate_summary(windows: list[StoredWindow]) -> dict[str, float | None]:
+    """``certificate_figures`` of the stored windows (integral share, gap median and max)."""
+    return certificate_figures(window_stats(windows))
+
+
+def capture_document(store: JobStore, job_id: str) -> CaptureDocument:
+    return CaptureDocument.model_validate_json(store.input(job_id))

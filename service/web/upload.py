@@ -1,0 +1,103 @@
+"""The page's upload form as a checked ``Submission``: the same checks as ``POST /v1/jobs``.
+
+A ``.c3d``/``.trc`` file goes through the API's upload path (read in a bounded child
+process); a capture document (``.json``) through the API's JSON path, with the form's
+options put in place of the document's own.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from starlette.datastructures import FormData, UploadFile
+
+from service.capture.document import CaptureDocument
+from service.errors import InputError
+from service.server.limits import check_body_limits
+from service.server.prescan import check_depth
+from service.server.settings import Limits
+from service.server.submission import UPLOAD_SUFFIXES, Submission, document_submission, upload_submission
+
+FIELDS = ("file", "formulation", "parameters", "window", "association", "model")
+MODEL_OPTION = "model" in CaptureDocument.model_fields  # a subject model in place of the labeled first frame
+
+
+def form_submission(form: FormData, limits: Limits) -> Submission:
+    """The capture the form uploads, with its options.
+
+    Raises:
+        InputError: A missing file, a bad option, or anything the API refuses, named by field.
+    """
+    for name in form:
+        if name not in FIELDS:
+            raise InputError(f"{name}: unknown form field")
+    upload = form.get("file")
+    if not isinstance(upload, UploadFile) or not upload.filename:
+        raise InputError("file: choose a capture file (.json, .c3d or .trc)")
+    name = Path(upload.filename).name
+    formulation = _formulation(_text(form, "formulation") or "lp-l1", _text(form, "parameters"))
+    window = _text(form, "window") or "20"
+    if Path(name).suffix.lower() in UPLOAD_SUFFIXES:
+        fields = FormData([("file", upload), ("formulation", formulation), ("window", window)])
+        return upload_submission(fields, limits)
+    if Path(name).suffix.lower() != ".json":
+        raise InputError(f"file: {name} is not a capture document (.json) or a labeled .c3d/.trc file")
+    upload.file.seek(0)
+    body = upload.file.read()
+    check_body_limits(body, limits)  # nesting and sizes from the bytes, before the parse
+    document = _json(body, f"file: {name}")
+    if not isinstance(document, dict):
+        raise InputError(f"file: {name} is not a capture document (a JSON object)")
+    document["formulation"] = json.loads(formulation) if formulation.startswith("{") else formulation
+    document["window"] = _whole(window)
+    association = _text(form, "association")
+    if association:
+        document["association"] = association
+    model = form.get("model")
+    if MODEL_OPTION and isinstance(model, UploadFile) and model.filename:
+        document["model"] = _json_file(model, "model")
+    return replace(document_submission(json.dumps(document).encode(), limits), source=name)
+
+
+def _text(form: FormData, name: str) -> str:
+    value = form.get(name)
+    if value is not None and not isinstance(value, str):
+        raise InputError(f"{name}: expected text, not a file")
+    return (value or "").strip()
+
+
+def _formulation(name: str, parameters: str) -> str:
+    """The formulation field as ``upload_submission`` reads it: a name, or a JSON table of the
+    name and the parameters object the form's ``parameters`` field gives."""
+    if not parameters:
+        return name
+    try:
+        table = json.loads(parameters)
+    except json.JSONDecodeError as error:
+        raise InputError(f"parameters: not a JSON object ({error})") from None
+    if not isinstance(table, dict):
+        raise InputError('parameters: not a JSON object, e.g. {"time_limit": 10}')
+    return json.dumps({**table, "name": name})
+
+
+def _whole(window: str) -> int:
+    try:
+        return int(window)
+    except ValueError:
+        raise InputError(f"window: expected a whole number of frames, got {window!r}") from None
+
+
+def _json_file(upload: UploadFile, field: str) -> object:
+    upload.file.seek(0)
+    data = upload.file.read()
+    check_depth(data, field)
+    return _json(data, field)
+
+
+def _json(data: bytes, where: str) -> object:
+    try:
+        return json.loads(data)
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise InputError(f"{where}: not a JSON document ({error})") from None

@@ -1,0 +1,94 @@
+"""The page's session cookie over real HTTP: set only for a valid token, HttpOnly and
+SameSite=Strict, read by the page routes only (never by /v1), refused from another origin,
+and checked before an upload's body is read; a C3D uploads through the page as through the API."""
+
+from __future__ import annotations
+
+import httpx
+import numpy as np
+import pytest
+from service_fixtures import document_json, generated_capture, serving
+
+from service.evaluation.scene import generate_scene
+from service.io.formats import write_labeled
+from service.io.recording import LabeledTrajectories
+from service.labeling.spans import window_spans
+from service.server.settings import Settings
+from service.web.session import COOKIE
+
+ALICE = "alice-token-0123456789"
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    db = tmp_path_factory.mktemp("web-session") / "jobs.db"
+    with serving(Settings(db=f"sqlite:///{db}", tokens={"alice": ALICE})) as client:
+        yield client.base_url
+
+
+@pytest.fixture
+def client(server):
+    """A client without cookies (httpx keeps what a response sets)."""
+    with httpx.Client(base_url=server, timeout=60) as client:
+        yield client
+
+
+def _signed_in(client: httpx.Client) -> httpx.Client:
+    answer = client.post("/session", headers={"Authorization": f"Bearer {ALICE}"})
+    assert answer.status_code == 204 and client.cookies[COOKIE] == ALICE
+    return client
+
+
+def test_the_cookie_is_set_only_for_a_valid_token_and_kept_from_scripts_and_other_sites(client):
+    assert client.post("/session", headers={"Authorization": "Bearer not-a-token-at-all"}).status_code == 401
+    assert client.post("/session").status_code == 401
+    answer = client.post("/session", headers={"Authorization": f"Bearer {ALICE}"})
+    flags = [part.strip().lower() for part in answer.headers["set-cookie"].split(";")]
+    assert flags[0] == f"{COOKIE}={ALICE}".lower()
+    assert "httponly" in flags and "samesite=strict" in flags and "path=/" in flags
+    assert not any(flag.startswith(("expires", "max-age")) for flag in flags)  # a browser-session cookie
+
+
+def test_the_api_never_reads_the_cookie(client):
+    browser = _signed_in(client)
+    assert browser.get("/").status_code == 200
+    assert browser.get("/v1/jobs").status_code == 401
+    assert browser.post("/v1/jobs", content=b"{}", headers={"content-type": "application/json"}).status_code == 401
+
+
+def test_pages_without_a_cookie_ask_for_the_token(client):
+    assert client.get("/").status_code == 401 and "Sign in" in client.get("/").text
+    assert client.get("/jobs/" + "0" * 32).status_code == 401
+    assert client.get("/jobs/" + "0" * 32 + "/plots/certificate.svg").status_code == 401
+
+
+def test_an_upload_is_refused_before_its_body_without_a_cookie_or_from_another_origin(client):
+    document = document_json(generated_capture(frames=10, seed=1))
+    anonymous = client.post("/jobs", files={"file": ("take.json", document)})
+    assert anonymous.status_code == 401 and anonymous.headers["connection"] == "close"
+    browser = _signed_in(client)
+    forged = browser.post("/jobs", files={"file": ("take.json", document)}, headers={"Origin": "http://evil.example"})
+    assert forged.status_code == 403
+    accepted = browser.post("/jobs", files={"file": ("take.json", document)}, data={"window": "5"},
+                            headers={"Origin": str(client.base_url).rstrip("/")})
+    assert accepted.status_code == 303 and accepted.headers["location"].startswith("/jobs/")
+
+
+def test_without_tokens_the_pages_need_no_sign_in(tmp_path):
+    with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")) as local:
+        page = local.get("/")
+        assert page.status_code == 200 and "Label a capture" in page.text and "Sign out" not in page.text
+
+
+def test_a_labeled_c3d_uploads_through_the_page_as_through_the_api(client, tmp_path):
+    truth = generate_scene(n_frames=12, seed=2)
+    write_labeled(tmp_path / "take.c3d", LabeledTrajectories(truth.names, truth.positions,
+                                                             np.zeros(truth.positions.shape[:2], dtype=bool), truth.rate))
+    browser = _signed_in(client)
+    with (tmp_path / "take.c3d").open("rb") as upload:
+        answer = browser.post("/jobs", files={"file": ("take.c3d", upload)}, data={"window": "6", "formulation": "ilp"})
+    assert answer.status_code == 303
+    job = httpx.get(f"{client.base_url}/v1{answer.headers['location']}", headers={"Authorization": f"Bearer {ALICE}"}).json()
+    assert job["source"] == "take.c3d" and job["windows_total"] == len(window_spans(12, 6))
+    page = browser.get(answer.headers["location"])
+    assert "ilp · window 6" in page.text and "39 markers · 12 frames" in page.text
