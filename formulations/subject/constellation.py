@@ -1,0 +1,106 @@
+"""Where one segment's marker constellation lies in an unlabeled cloud: pose hypotheses.
+
+A rigid body keeps its inter-marker distances, so three markers (a, b, c) of a segment can
+only be three points (i, j, k) with
+
+    | |x_i - x_j| - |u_a - u_b| | <= tau_ab,  | |x_i - x_k| - |u_a - u_c| | <= tau_ac,  | |x_j - x_k| - |u_b - u_c| | <= tau_bc,
+
+tau_ab = sqrt(tau_a^2 + tau_b^2) (``ModelGeometry``). Each such triple is a correspondence;
+its Kabsch pose (R, d) places every marker of the segment at R u_p + d, and a marker is an
+inlier when a point lies within tau_p of it. The inliers are refitted by Kabsch, and the
+hypotheses are ranked by inliers, then RMS residual. Every triple of markers serves as a
+base, so a segment is found with any three of its markers visible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.rigid import rigid_transform
+from formulations.subject.geometry import SegmentGeometry
+
+Array = NDArray[np.float64]
+Index = NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Marker p of a segment lies at ``rotation @ u_p + origin``."""
+
+    rotation: Array
+    origin: Array
+
+    def place(self, local: Array) -> Array:
+        placed: Array = local @ self.rotation.T + self.origin
+        return placed
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """A pose of one segment and the point each of its markers takes (-1: none within tau)."""
+
+    segment: int
+    pose: Pose
+    point: Index
+    rms: float
+
+    @property
+    def inliers(self) -> int:
+        return int((self.point >= 0).sum())
+
+
+def segment_hypotheses(segment: int, geometry: SegmentGeometry, points: Array, distance: Array) -> list[Hypothesis]:
+    """Distinct hypotheses with at least three inliers, best first.
+
+    Args:
+        segment: The segment's index (carried into each hypothesis).
+        geometry: Its constellation and tolerances.
+        points: ``(P, 3)`` the frame's points; ``distance`` their ``(P, P)`` distances.
+    """
+    u, tau = geometry.coordinates, geometry.tolerance
+    model_distance = np.linalg.norm(u[:, None] - u[None], axis=2)
+    triples: list[tuple[int, ...]] = []
+    for a, b, c in combinations(range(len(u)), 3):
+        near = [np.abs(distance - model_distance[p, q]) <= np.hypot(tau[p], tau[q]) for p, q in ((a, b), (a, c), (b, c))]
+        i, j = np.nonzero(near[0])
+        k_mask = near[1][i] & near[2][j]
+        pair, k = np.nonzero(k_mask)
+        found = np.column_stack([i[pair], j[pair], k])
+        found = found[(found[:, 0] != found[:, 2]) & (found[:, 1] != found[:, 2])]
+        triples.extend((a, b, c, *row) for row in found)
+    if not triples:
+        return []
+    base = np.asarray(triples, dtype=np.int64)
+    rotation, c_s, c_t = rigid_transform(u[base[:, :3]], points[base[:, 3:]], np.ones((len(base), 3)))
+    placed = np.einsum("hij,pj->hpi", rotation, u) - np.einsum("hij,hj->hi", rotation, c_s)[:, None] + c_t[:, None]
+    return _refined(segment, u, tau, placed, points)
+
+
+def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -> list[Hypothesis]:
+    """Inliers of each placed constellation, refitted on them; duplicates dropped, best first."""
+    gap = np.linalg.norm(placed[:, :, None] - points[None, None], axis=3)  # (H, S, P)
+    nearest = gap.argmin(axis=2)
+    inlier = np.take_along_axis(gap, nearest[:, :, None], axis=2)[:, :, 0] <= tau
+    keep = inlier.sum(axis=1) >= 3
+    nearest, inlier = nearest[keep], inlier[keep]
+    if not len(nearest):
+        return []
+    taken = np.where(inlier, nearest, -1)
+    _, first = np.unique(taken, axis=0, return_index=True)
+    taken, inlier = taken[first], inlier[first]
+    source = np.broadcast_to(u, (len(taken),) + u.shape)
+    rotation, c_s, c_t = rigid_transform(source, points[np.maximum(taken, 0)], inlier.astype(float))
+    hypotheses = []
+    for h in range(len(taken)):
+        pose = Pose(rotation[h], c_t[h] - rotation[h] @ c_s[h])
+        residual = np.linalg.norm(pose.place(u) - points[np.maximum(taken[h], 0)], axis=1)
+        ok = inlier[h] & (residual <= tau)
+        if ok.sum() < 3 or len(set(taken[h][ok])) < ok.sum():
+            continue
+        hypotheses.append(Hypothesis(segment, pose, np.where(ok, taken[h], -1), float(np.sqrt(np.mean(residual[ok] ** 2)))))
+    hypotheses.sort(key=lambda h: (-h.inliers, h.rms))
+    return hypotheses

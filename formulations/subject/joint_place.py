@@ -1,0 +1,82 @@
+"""A segment with fewer than three visible markers, placed about a joint whose centre is known.
+
+When a neighbouring segment has a pose, the joint centre x = R_t c_t + d_t is known, and
+segment s turns about it: marker p lies on the sphere |y - x| = |u_p - c_s|. Two visible
+markers (p, q) on their spheres at the right mutual distance, with the centre, are three
+correspondences (c_s, u_p, u_q) -> (x, x_i, x_j): a Kabsch pose, which places the rest of
+the segment. One visible marker gives no pose; it is named only when a single free point
+lies on a single sphere. Either way an ambiguous reading names nothing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.rigid import rigid_transform
+from formulations.subject.constellation import Pose
+from formulations.subject.geometry import SegmentGeometry
+
+Array = NDArray[np.float64]
+Index = NDArray[np.int64]
+
+
+def place_by_joint(
+    geometry: SegmentGeometry, centre_local: Array, centre: Array, points: Array, free: NDArray[np.bool_],
+) -> tuple[Pose | None, Index]:
+    """The segment's pose (None when fewer than two markers fit) and each marker's point (-1: none).
+
+    Args:
+        geometry: The segment.
+        centre_local: c_s, the joint centre in the segment's frame; ``centre`` x in the world.
+        points: ``(P, 3)`` the frame's points; ``free`` ``(P,)`` those no other segment took.
+    """
+    u, tau = geometry.coordinates, geometry.tolerance
+    candidates = np.flatnonzero(free)
+    none: Index = np.full(len(u), -1, dtype=np.int64)
+    if not len(candidates):
+        return None, none
+    reach = np.linalg.norm(u - centre_local, axis=1)  # (S,)
+    gap = np.abs(np.linalg.norm(points[candidates] - centre, axis=1)[None] - reach[:, None])  # (S, C)
+    on_sphere = gap <= tau[:, None]
+    readings = []
+    for pose in _pair_poses(u, tau, centre_local, centre, points, candidates, on_sphere):
+        distance = np.linalg.norm(pose.place(u)[:, None] - points[candidates][None], axis=2)
+        nearest = distance.argmin(axis=1)
+        hit = distance[np.arange(len(u)), nearest] <= tau
+        if len(set(nearest[hit])) == hit.sum():
+            readings.append((int(hit.sum()), pose, np.where(hit, candidates[nearest], -1)))
+    if readings:
+        most = max(r[0] for r in readings)
+        best = [r for r in readings if r[0] == most]
+        if len({tuple(r[2]) for r in best}) == 1:
+            return best[0][1], best[0][2]
+        return None, none
+    marker, point = np.nonzero(on_sphere)
+    if len(marker) == 1:
+        none[marker[0]] = candidates[point[0]]
+    return None, none
+
+
+def _pair_poses(
+    u: Array, tau: Array, centre_local: Array, centre: Array, points: Array, candidates: Index,
+    on_sphere: NDArray[np.bool_],
+) -> list[Pose]:
+    """A pose for every pair of markers on their spheres at their mutual distance."""
+    found: list[tuple[int, int, int, int]] = []
+    for p in range(len(u)):
+        for q in range(p + 1, len(u)):
+            ci, cj = np.flatnonzero(on_sphere[p]), np.flatnonzero(on_sphere[q])
+            if not len(ci) or not len(cj):
+                continue
+            span = np.linalg.norm(points[candidates[ci]][:, None] - points[candidates[cj]][None], axis=2)
+            ok = np.abs(span - np.linalg.norm(u[p] - u[q])) <= np.hypot(tau[p], tau[q])
+            found.extend(
+                (p, q, int(candidates[ci[a]]), int(candidates[cj[b]])) for a, b in zip(*np.nonzero(ok)) if ci[a] != cj[b]
+            )
+    if not found:
+        return []
+    source = np.stack([np.stack([centre_local, u[p], u[q]]) for p, q, _, _ in found])
+    target = np.stack([np.stack([centre, points[i], points[j]]) for _, _, i, j in found])
+    rotation, c_s, c_t = rigid_transform(source, target, np.ones((len(found), 3)))
+    return [Pose(r, t - r @ c) for r, c, t in zip(rotation, c_s, c_t)]

@@ -1,0 +1,103 @@
+"""One pose hypothesis (or none) per segment, jointly over the skeleton tree: exact max-sum.
+
+A constellation that is its own mirror image (four markers round a pelvis, three on a
+thigh), or three markers that happen to match three unrelated points, fits the cloud as
+well as the truth; only its joints tell them apart. So the choice is made for all segments
+at once: with x_s in H_s ∪ {none} and score(h) = inliers(h) - rms(h) / (2 mean tau_s),
+
+    max  sum_s score(x_s)   subject to, for every joint (s, t) with x_s, x_t both chosen:
+         |R_s c_s + d_s - (R_t c_t + d_t)| <= joint tolerance  and  no point shared.
+
+The joints form a forest (``skeleton`` keeps no loop), so dynamic programming from the
+leaves up is exact: best_s(x) = score(x) + sum_children max_{y compatible with x} best_c(y),
+where ``none`` is compatible with everything (an unseen segment does not constrain).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.subject.constellation import Hypothesis
+from formulations.subject.geometry import ModelGeometry
+
+Array = NDArray[np.float64]
+Mask = NDArray[np.bool_]
+
+
+def choose_hypotheses(geometry: ModelGeometry, by_segment: list[list[Hypothesis]], points: int) -> dict[int, Hypothesis]:
+    """The jointly best hypothesis of each segment that gets one."""
+    score = [_scores(geometry, s, h) for s, h in enumerate(by_segment)]
+    neighbours: dict[int, list[tuple[int, Mask]]] = {s: [] for s in range(len(by_segment))}
+    for joint in geometry.joints:
+        allowed = _compatible(by_segment[joint.a], by_segment[joint.b], joint.centre_a, joint.centre_b,
+                              joint.tolerance, points)
+        neighbours[joint.a].append((joint.b, allowed))
+        neighbours[joint.b].append((joint.a, allowed.T))
+    chosen: dict[int, Hypothesis] = {}
+    seen: set[int] = set()
+    for root in range(len(by_segment)):
+        if root in seen:
+            continue
+        order, parent = _tree(root, neighbours, seen)
+        best = {s: score[s].copy() for s in order}
+        pick: dict[int, dict[int, NDArray[np.int64]]] = {s: {} for s in order}
+        for s in reversed(order):  # leaves first
+            for child, allowed in neighbours[s]:
+                if parent.get(child) != s:
+                    continue
+                value = np.where(allowed, best[child][None], -np.inf)  # (|H_s| + 1, |H_c| + 1)
+                pick[s][child] = value.argmax(axis=1)
+                best[s] += value.max(axis=1)
+        state = {root: int(best[root].argmax())}
+        for s in order:
+            for child, argmax in pick[s].items():
+                state[child] = int(argmax[state[s]])
+        for s, x in state.items():
+            if x < len(by_segment[s]):
+                chosen[s] = by_segment[s][x]
+    return chosen
+
+
+def _scores(geometry: ModelGeometry, segment: int, hypotheses: list[Hypothesis]) -> Array:
+    """score(h) per hypothesis, and 0 for ``none`` (the last entry)."""
+    tau = float(geometry.segments[segment].tolerance.mean())
+    return np.array([h.inliers - h.rms / (2 * tau) for h in hypotheses] + [0.0])
+
+
+def _compatible(
+    a: list[Hypothesis], b: list[Hypothesis], centre_a: Array, centre_b: Array, tolerance: float, points: int,
+) -> NDArray[np.bool_]:
+    """``(|H_a| + 1, |H_b| + 1)`` pairs allowed across a joint; ``none`` (last row, column) goes with all."""
+    allowed = np.ones((len(a) + 1, len(b) + 1), bool)
+    if not a or not b:
+        return allowed
+    at_a = np.stack([h.pose.place(centre_a) for h in a])
+    at_b = np.stack([h.pose.place(centre_b) for h in b])
+    close = np.linalg.norm(at_a[:, None] - at_b[None], axis=2) <= tolerance
+    uses_a, uses_b = _uses(a, points), _uses(b, points)
+    disjoint = (uses_a.astype(np.int32) @ uses_b.T.astype(np.int32)) == 0
+    allowed[:-1, :-1] = close & disjoint
+    return allowed
+
+
+def _uses(hypotheses: list[Hypothesis], points: int) -> NDArray[np.bool_]:
+    uses = np.zeros((len(hypotheses), points), bool)
+    for k, h in enumerate(hypotheses):
+        uses[k, h.point[h.point >= 0]] = True
+    return uses
+
+
+def _tree(root: int, neighbours: dict[int, list[tuple[int, Mask]]], seen: set[int]) -> tuple[list[int], dict[int, int]]:
+    """Breadth-first order of ``root``'s tree and each node's parent; marks the nodes seen."""
+    order, parent, queue = [], {}, [root]
+    seen.add(root)
+    while queue:
+        s = queue.pop(0)
+        order.append(s)
+        for t, _ in neighbours[s]:
+            if t not in seen:
+                seen.add(t)
+                parent[t] = s
+                queue.append(t)
+    return order, parent

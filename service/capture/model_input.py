@@ -1,0 +1,75 @@
+"""A capture labeled from a subject model instead of a labeled first frame."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from formulations.errors import FormulationError
+from formulations.subject.geometry import ModelGeometry
+from formulations.subject.model import SubjectModel
+from service.capture.capture import Capture
+from service.errors import InputError
+
+MIN_SHARED = 0.5  # of a labeled take's names the model must know: less is another marker set
+
+
+def read_model(path: Path) -> SubjectModel:
+    """The subject model JSON at ``path``. Raises ``InputError`` (one line) when unreadable or not a model."""
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    return parse_model(text, str(path))
+
+
+def parse_model(text: str, source: str) -> SubjectModel:
+    try:
+        model = SubjectModel.from_json(text)
+        ModelGeometry.of(model)
+    except (FormulationError, ValueError) as error:
+        raise InputError(f"{source}: {error}") from None
+    return model
+
+
+def model_names(model: SubjectModel) -> list[str]:
+    """The markers the model names, in the order labels come out: segments' in order, then singles."""
+    return ModelGeometry.of(model).names
+
+
+def check_shared_names(take: list[str], model: SubjectModel, source: str) -> None:
+    """A labeled take must be of the model's marker set (model markers the take lacks are normal).
+
+    Raises:
+        InputError: Fewer than half of the take's names are the model's; the line lists them.
+    """
+    known = set(model_names(model))
+    shared = [name for name in take if name in known]
+    if len(shared) < MIN_SHARED * len(take):
+        foreign = [name for name in take if name not in known]
+        raise InputError(
+            f"{source}: only {len(shared)} of its {len(take)} markers are in the model "
+            f"(not in it: {', '.join(foreign[:12])}{' ...' if len(foreign) > 12 else ''})"
+        )
+
+
+def with_model(capture: Capture, model: SubjectModel, start: int = 0, end: int | None = None) -> Capture:
+    """The capture's frames ``start .. end - 1`` (3D points) under the model's names, frame ``start`` unlabeled.
+
+    Raises:
+        InputError: A camera capture, or an empty or out-of-range span.
+    """
+    if capture.points is None:
+        raise InputError("labeling from a subject model needs 3D points (camera mode needs a labeled first frame)")
+    stop = capture.n_frames if end is None else end
+    if not 0 <= start < capture.n_frames or not start + 2 <= stop <= capture.n_frames:
+        raise InputError(
+            f"--start {start} --end {stop}: needs 0 <= start, start + 2 <= end <= {capture.n_frames} frames"
+        )
+    names = model_names(model)
+    return replace(
+        capture, names=names, first_frame=np.full((len(names), 3), np.nan), points=capture.points[start:stop],
+        model=model,
+    )

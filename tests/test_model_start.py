@@ -1,0 +1,103 @@
+"""Labeling with no labeled frame: a subject model identifies the start and acquires late markers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_subject_model import chain
+from typer.testing import CliRunner
+
+from formulations.subject.fit import fit_subject
+from service.capture.capture import Capture, LabelingOptions
+from service.capture.document import read_capture_document
+from service.capture.model_input import check_shared_names, model_names, with_model
+from service.cli.app import app
+from service.errors import InputError
+from service.evaluation.scenario import Scenario
+from service.io.formats import write_labeled
+from service.io.recording import LabeledTrajectories
+from service.labeling.capture_labeling import CaptureLabeling
+
+FIT = 250
+
+
+def _take(seed: int = 0, frames: int = 400):
+    names, positions, _ = chain(seed, frames=frames)
+    return names, positions, fit_subject(names, positions[:FIT]).model
+
+
+def _cloud(positions: np.ndarray, absent: np.ndarray, seed: int = 0):
+    """Shuffled points per frame with 2 ghosts; each point's marker (-1 ghost)."""
+    rng = np.random.default_rng(seed)
+    frames, markers = [], []
+    for f, truth in enumerate(positions):
+        keep = np.flatnonzero(~absent[f])
+        points = np.concatenate([truth[keep], truth[rng.integers(0, len(truth), 2)] + rng.normal(0, 200, (2, 3))])
+        owner = np.concatenate([keep, [-1, -1]])
+        order = rng.permutation(len(points))
+        frames.append(points[order])
+        markers.append(owner[order])
+    return frames, markers
+
+
+def test_held_out_frames_are_labeled_from_the_model_and_a_late_marker_is_acquired() -> None:
+    names, positions, model = _take()
+    order = [names.index(n) for n in model_names(model)]
+    held = positions[FIT:, order]
+    absent = np.zeros(held.shape[:2], bool)
+    late = 5
+    absent[:30, late] = True  # not there when labeling starts
+    frames, owner = _cloud(held, absent)
+    capture = Capture(model_names(model), np.full((len(order), 3), np.nan), 100.0, points=frames, model=model)
+    result, _ = CaptureLabeling(capture, LabelingOptions(window=10)).label()
+    took = result.point_index
+    right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in range(len(order)) if took[f, m] >= 0)
+    visible = int((~absent).sum())
+    assert right >= 0.99 * visible
+    assert (took[40:, late] >= 0).all() and all(owner[f][took[f, late]] == late for f in range(40, len(frames)))
+
+
+def test_capture_json_takes_a_model_in_place_of_the_first_frame() -> None:
+    _, positions, model = _take(1, frames=300)
+    body = {"rate": 100, "model": json.loads(model.to_json()), "points": positions[FIT:FIT + 5].tolist()}
+    capture = read_capture_document(json.dumps(body), "c.json").capture()
+    assert capture.model == model and capture.names == model_names(model)
+    body["first_frame"] = positions[FIT].tolist()
+    with pytest.raises(InputError, match="model: give either a subject model or markers and first_frame"):
+        read_capture_document(json.dumps(body), "c.json")
+    del body["first_frame"]
+    body["model"]["version"] = 7
+    with pytest.raises(InputError, match="version 7 is not supported"):
+        read_capture_document(json.dumps(body), "c.json")
+
+
+def test_bad_spans_other_marker_sets_and_scenario_keys_are_one_line() -> None:
+    names, positions, model = _take(2, frames=300)
+    capture = Capture(names, positions[0], 100.0, points=list(positions[:10]))
+    with pytest.raises(InputError, match="--start 9 --end 10"):
+        with_model(capture, model, start=9)
+    with pytest.raises(InputError, match="only 0 of its 3 markers are in the model"):
+        check_shared_names(["X", "Y", "Z"], model, "take.trc")
+    with pytest.raises(InputError, match="scenario key 'first_frame' must be one of labeled, model"):
+        Scenario.from_dict({"first_frame": "guess"})
+
+
+def test_cli_tracks_a_labeled_file_from_the_model(tmp_path: Path) -> None:
+    names, positions, model = _take(3, frames=320)
+    take, subject = tmp_path / "take.trc", tmp_path / "subject.json"
+    write_labeled(take, LabeledTrajectories(names, positions, np.zeros(positions.shape[:2], bool), 100.0))
+    subject.write_text(model.to_json())
+    out = tmp_path / "labeled.csv"
+    runner = CliRunner()
+    result = runner.invoke(app, ["track", str(take), "--model", str(subject), "--start", str(FIT), "--out", str(out),
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.output.strip().splitlines()[-1])["frames"] == 320 - FIT
+    subject.write_text("{")
+    result = runner.invoke(app, ["track", str(take), "--model", str(subject), "--out", str(out)])
+    assert result.exit_code == 2 and "subject model is not JSON" in result.output
+    result = runner.invoke(app, ["track", str(take), "--start", "3", "--out", str(out)])
+    assert result.exit_code == 2 and "--start and --end need --model" in result.output
