@@ -1,0 +1,109 @@
+"""Each segment's pose in every frame from the markers labeled there, and where it puts the rest.
+
+A segment with three or more labeled markers is posed by Kabsch from its model coordinates
+u_p to the labeled positions x_p:
+
+    (R, d) = argmin sum_p |R u_p + d - x_p|^2.
+
+A segment with fewer is posed through the joint chain: each joint to a posed segment t adds
+the correspondence c_s -> R_t c_t + d_t (the centre as the posed side sees it), so two
+labeled markers and one joint, or one marker and two joints, pose it; the passes repeat, so
+a chain is followed outwards. Correspondences that lie nearly on one line leave a rotation
+about that line free and pose nothing. With ``within`` a pose whose fit leaves some
+correspondence farther than ``within`` times its tolerance (tau_p for a marker, the joint's
+for a centre) is refused: the segment does not move rigidly there (a label is wrong, or the
+model's segment bends), and what it would place is not to be trusted. R u_p + d is where the model puts marker p: its
+prediction and its fill while it is occluded, and what its labeled position is checked against.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.rigid import rigid_transform
+from formulations.subject.geometry import ModelGeometry
+
+Array = NDArray[np.float64]
+Mask = NDArray[np.bool_]
+RIGID_WITHIN = 2.0  # a fit within twice every tolerance is a segment moving as the model says
+MIN_SPAN_MM = 10.0  # RMS spread across the best-fit line below which a rotation is left free
+
+
+@dataclass(frozen=True)
+class SegmentPoses:
+    """``rotation`` ``(F, S, 3, 3)`` and ``origin`` ``(F, S, 3)``: segment s in frame f puts u at
+    R u + d; ``posed`` ``(F, S)`` says where a pose was found."""
+
+    rotation: Array
+    origin: Array
+    posed: Mask
+
+    def place(self, geometry: ModelGeometry) -> Array:
+        """``(F, N, 3)`` where each marker's segment puts it; NaN unposed, and for singles."""
+        placed = np.full((len(self.posed), len(geometry.names), 3), np.nan)
+        for s, segment in enumerate(geometry.segments):
+            at = np.einsum("fij,pj->fpi", self.rotation[:, s], segment.coordinates) + self.origin[:, s, None]
+            placed[:, segment.markers] = np.where(self.posed[:, s, None, None], at, np.nan)
+        return placed
+
+
+def segment_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
+    """Poses from ``positions`` ``(F, N, 3)`` in the model's marker order, NaN where not labeled."""
+    frames, count = len(positions), len(geometry.segments)
+    poses = SegmentPoses(np.tile(np.eye(3), (frames, count, 1, 1)), np.zeros((frames, count, 3)),
+                         np.zeros((frames, count), bool))
+    for s, segment in enumerate(geometry.segments):
+        target = positions[:, segment.markers]
+        source = np.broadcast_to(segment.coordinates, target.shape)
+        labeled = np.asarray(np.isfinite(target).all(axis=2), dtype=bool)
+        _pose(poses, s, source, target, labeled, within * segment.tolerance)
+    for _ in range(count):
+        if not any(_pose_by_joints(geometry, poses, s, positions, within) for s in range(count)):
+            break
+    return poses
+
+
+def _pose_by_joints(geometry: ModelGeometry, poses: SegmentPoses, s: int, positions: Array, within: float) -> bool:
+    """Pose segment ``s`` where it has no pose yet from its labeled markers and posed neighbours' joints."""
+    todo = ~poses.posed[:, s]
+    joints = [j for j in geometry.joints if s in (j.a, j.b)]
+    ends = [(j.centre_a, j.b, j.centre_b) if j.a == s else (j.centre_b, j.a, j.centre_a) for j in joints]
+    if not ends or not todo.any():
+        return False
+    segment = geometry.segments[s]
+    local = np.concatenate([segment.coordinates, np.stack([own for own, _, _ in ends])])
+    seen = [np.einsum("fij,j->fi", poses.rotation[:, t], c) + poses.origin[:, t] for _, t, c in ends]
+    target = np.concatenate([positions[:, segment.markers], np.stack(seen, axis=1)], axis=1)
+    weight = np.concatenate([np.isfinite(positions[:, segment.markers]).all(axis=2),
+                             np.stack([poses.posed[:, t] for _, t, _ in ends], axis=1)], axis=1)
+    limit = within * np.concatenate([segment.tolerance, [j.tolerance for j in joints]])
+    return _pose(poses, s, np.broadcast_to(local, target.shape), target, weight & todo[:, None], limit)
+
+
+def _pose(poses: SegmentPoses, s: int, source: Array, target: Array, weight: Mask, limit: Array) -> bool:
+    """Kabsch pose of segment ``s`` in the frames with three well-spread correspondences, each
+    fitted within ``limit`` ``(K,)`` mm; in place."""
+    frames = np.flatnonzero((weight.sum(axis=1) >= 3) & ~poses.posed[:, s])
+    if not len(frames):
+        return False
+    w = weight[frames].astype(float)
+    a, b = source[frames], np.where(weight[frames, :, None], target[frames], 0.0)
+    centred = a - (np.einsum("fk,fkd->fd", w, a) / w.sum(axis=1, keepdims=True))[:, None]
+    scatter = np.einsum("fk,fki,fkj->fij", w, centred, centred) / w.sum(axis=1)[:, None, None]
+    spread = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter)[:, 1], 0.0))  # across the best line
+    keep = spread >= MIN_SPAN_MM
+    if not keep.any():
+        return False
+    frames, a, b, w = frames[keep], a[keep], b[keep], w[keep]
+    rotation, c_s, c_t = rigid_transform(a, b, w)
+    origin = c_t - np.einsum("fij,fj->fi", rotation, c_s)
+    residual = np.linalg.norm(np.einsum("fij,fkj->fki", rotation, a) + origin[:, None] - b, axis=2)
+    fits = ~((residual > limit) & (w > 0)).any(axis=1)
+    frames = frames[fits]
+    poses.rotation[frames, s] = rotation[fits]
+    poses.origin[frames, s] = origin[fits]
+    poses.posed[frames, s] = True
+    return bool(fits.any())
