@@ -7,9 +7,10 @@ translation t_b and centre C_b = -R_b^T t_b:
   about f_b D / z_b pixels. D is the same in every camera and cancels in the relative
   costs (``costs``), so s_b = f_b / z_b; s_b = 0 behind the camera (z_b <= 0) or when X
   projects outside the image.
-- visibility: v_b in [0, 1], the probability that camera b detects the marker. The
-  occlusion-aware detection probability P_D belongs here; until it exists, the
-  callers pass whether the marker was detected in camera b (1 or 0).
+- visibility: v_b in [0, 1], the probability that camera b detects the marker: the
+  occlusion-aware P_D of ``formulations.cameras.visibility.detection_probability``
+  (Ringer & Lasenby 2002, eq. 8), or whether the marker was detected in camera b (1 or
+  0), which is what the service passes today.
 - viewing angle: a marker sits on the skin, facing away from the body. Its outward
   normal is estimated as n = (X - X_bar) / |X - X_bar|, X_bar the centroid of the
   frame's markers, and the camera sees it at the angle theta_b with

@@ -27,7 +27,10 @@ lambda_FA and lambda_D of eq. 8 are not parameters here: within the contract a p
 object takes costs nothing and there is no image area A for p_FA = 1/A, so a false-alarm
 price would only shift every observation's cost against the occlusion arcs, which
 already carry the miss price (the window's ``reappear``/``disappear`` weights, -log(1 -
-P_D) in the paper's terms). They are set where the window is posed.
+P_D) in the paper's terms). They are set where the window is posed, and so is the
+occlusion-aware P_D of eq. 8 (``formulations.cameras.visibility``): a chain that prices a
+marker's arcs in camera c by -log P_D and -log(1 - P_D) hands ``mht`` the paper's F
+(tests/test_mht_figure.py poses the paper's Figs 3-5 that way).
 
 Bound: -inf, unless the search was exhaustive: every hypothesis's associations all
 ranked (fewer than J + 1 exist), no hypothesis dropped by the I cut, ``noise`` None and
