@@ -1,0 +1,131 @@
+"""``markerflow pose``: articulated pose from per-camera OpenPose keypoints or images, written as TRC and a PNG overlay."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from formulations.cameras.rig import Rig
+from formulations.errors import FormulationError
+from formulations.pose.apf import AnnealingSchedule
+from formulations.pose.body import BodyModel
+from formulations.pose.from_subject import subject_body
+from formulations.pose.human import human_model
+from formulations.pose.kinematics import forward_kinematics
+from formulations.subject.model import SubjectModel
+from service.cli import report
+from service.cli.output import check_writable_output
+from service.errors import InputError
+from service.io.calibration import METRES_PER_UNIT, load_calibration
+from service.io.formats import write_labeled
+from service.io.recording import LabeledTrajectories, SourceFile
+from service.pose.images import fit_images, image_folders, read_frame
+from service.pose.openpose import camera_folders, match_cameras, read_keypoint_frames
+from service.pose.overlay import write_overlay
+from service.pose.participant import choose_participant
+from service.pose.run import PoseFit, fit_keypoints
+
+
+def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | None, particles: int, layers: int,
+             rate: float, seed: int) -> None:
+    """Fit the body to INPUT's keypoints frame by frame; write the joints as TRC and the overlay PNG beside it."""
+    if output.suffix.lower() != ".trc":
+        raise InputError(f"{output}: the pose is written as .trc")
+    check_writable_output(output)
+    if not rate > 0:
+        raise InputError(f"--rate must be positive, got {rate}")
+    try:
+        schedule = AnnealingSchedule(particles, layers)
+    except FormulationError as error:
+        raise InputError(f"--particles/--layers: {error}") from None
+    unit = _calibration_unit(calibration)
+    metres = METRES_PER_UNIT[unit]
+    model = _subject_body(model_path, metres) if model_path else None
+    picture = output.with_suffix(".png")
+    if camera_folders(input):
+        frames = read_keypoint_frames(input)
+        cameras = match_cameras(frames.cameras, load_calibration(calibration), calibration)
+        detections = choose_participant(Rig.of(cameras), frames.people)
+        with frame_progress(f"fitting {input.name}") as progress:
+            fit = fit_keypoints(cameras, detections, metres, model, schedule, seed, progress)
+        best = int(np.argmax((detections[..., 2] > 0).sum(axis=(0, 2))))
+        write_overlay(picture, cameras[best], fit.model, fit.positions, input.name, detections=detections[:, best])
+    else:
+        folders = image_folders(input)
+        if not folders:
+            raise InputError(f"{input}: neither per-camera OpenPose folders (camNN_json) nor per-camera image folders")
+        cameras = match_cameras(list(folders), load_calibration(calibration), calibration)
+        files = list(folders.values())
+        with frame_progress(f"fitting {input.name}") as progress:
+            fit = fit_images(cameras, files, model or human_model().scaled(1.0 / metres), metres, schedule, seed, progress)
+        write_overlay(picture, cameras[0], fit.model, fit.positions, input.name,
+                      image=lambda f: read_frame(files[0][f], cameras[0]))
+    write_labeled(output, _trajectories(fit, metres, rate), SourceFile(unit=unit))
+    _print(fit, output, picture)
+
+
+def _calibration_unit(calibration: Path) -> str:
+    """Pose2Sim and caliscope TOML are in metres; markerflow JSON names its unit."""
+    if calibration.suffix.lower() != ".json":
+        return "m"
+    try:
+        unit = json.loads(calibration.read_text()).get("units")
+    except (OSError, ValueError, AttributeError):
+        unit = None  # load_calibration names the problem
+    return unit if unit in METRES_PER_UNIT else "mm"
+
+
+def _subject_body(path: Path, metres_per_unit: float) -> BodyModel:
+    try:
+        return subject_body(SubjectModel.from_json(path.read_text()), metres_per_unit)
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    except FormulationError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
+def _trajectories(fit: PoseFit, metres_per_unit: float, rate: float) -> LabeledTrajectories:
+    """The joints that are points of their own (not a second set of DOF at an earlier joint's place, as the
+    spine at the pelvis or a clavicle at the neck), in mm."""
+    rest = forward_kinematics(fit.model, np.zeros((1, fit.model.dof))).positions[0]
+    kept = [i for i in range(len(rest)) if not any(np.allclose(rest[i], rest[j]) for j in range(i))]
+    positions = fit.positions[:, kept] * metres_per_unit * 1000.0
+    occluded = np.zeros(positions.shape[:2], dtype=bool)
+    return LabeledTrajectories([fit.names[i] for i in kept], positions, occluded, rate)
+
+
+def _print(fit: PoseFit, output: Path, picture: Path) -> None:
+    unobserved = int((~fit.observed).sum())
+    checked = int(np.isfinite(fit.reprojection).sum())
+    error = (f"median reprojection error {np.nanmedian(fit.reprojection):.1f} px over {checked} detections" if checked
+             else "fitted to edges + foreground")
+    report.out.print(f"{len(fit.positions)} frames, {unobserved} without data (predicted); {error}; "
+                     f"{fit.seconds_per_frame:.2f} s/frame -> {output}, {picture}", highlight=False)
+
+
+@contextmanager
+def frame_progress(description: str) -> Iterator[Callable[[int, int], None] | None]:
+    """Progress over frames on stderr, as ``report.window_progress`` does over windows."""
+    if report.quiet:
+        yield None
+    elif report.err.is_terminal:
+        columns = (TextColumn(description), BarColumn(), MofNCompleteColumn(), TextColumn("frames"), TimeRemainingColumn())
+        with Progress(*columns, console=report.err, transient=True) as progress:
+            task = progress.add_task(description, total=None)
+            yield lambda done, total: progress.update(task, completed=done, total=total)
+    else:
+        began, step = time.monotonic(), [0]
+
+        def advance(done: int, total: int) -> None:
+            if done == total or done - step[0] >= max(1, total // report.PLAIN_LINES):
+                print(f"{description}: {done}/{total} frames, {time.monotonic() - began:.0f} s", file=sys.stderr, flush=True)
+                step[0] = done
+
+        yield advance

@@ -1,0 +1,137 @@
+"""``markerflow pose`` end to end on a small synthetic take, and its one-line errors on bad input."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from pose_scenes import background, keypoints, walking
+from typer.testing import CliRunner
+
+from formulations.pose.human import human_model
+from formulations.pose.kinematics import forward_kinematics
+from formulations.pose.render import render_silhouette
+from service.cli.app import app
+from service.io.calibration import load_calibration
+from service.io.formats.trc import read_trc
+from service.pose.openpose import write_openpose_file
+
+REPO = Path(__file__).resolve().parents[1]
+CALIBRATION = pytest.importorskip("conftest").DATA / "multicam2d_pose2sim_demo" / "calibration" / "Calib_qualisys.toml"
+pytestmark = pytest.mark.skipif(not CALIBRATION.exists(), reason="Pose2Sim demo calibration not present")
+FRAMES = 4
+
+
+def run_cli(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """``markerflow -q pose ARGS`` as a user runs it, in a process of its own."""
+    command = [sys.executable, "-m", "service.cli", "-q", "pose", *map(str, args)]
+    return subprocess.run(command, cwd=REPO, env={**os.environ, "COLUMNS": "50"}, capture_output=True, text=True, timeout=120)
+
+
+def run_inline(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """The same in this process (the bad-input cases: no process start-up per case)."""
+    result = CliRunner(env={"COLUMNS": "50"}).invoke(app, ["-q", "pose", *map(str, args)])
+    return subprocess.CompletedProcess(args, result.exit_code, result.stdout, result.stderr)
+
+
+def write_take(folder: Path, blank_frame: int | None = None) -> Path:
+    """Four cameras x FRAMES frames of a walking body's keypoints in Pose2Sim's layout; nobody in ``blank_frame``."""
+    model = human_model()
+    detections = keypoints(model, walking(model, FRAMES), load_calibration(CALIBRATION), 1.0, np.random.default_rng(0))
+    for c in range(detections.shape[1]):
+        camera = folder / f"cam{c + 1:02d}_json"
+        camera.mkdir(parents=True)
+        for f in range(FRAMES):
+            people = detections[f, c][None] if f != blank_frame else np.empty((0, 25, 3))
+            write_openpose_file(camera / f"cam{c + 1:02d}.{f:04d}.json", people)
+    return folder
+
+
+def test_a_take_is_fitted_and_written_in_the_calibrations_units_with_a_person_missing_for_a_frame(tmp_path) -> None:
+    take = write_take(tmp_path / "take", blank_frame=2)
+    result = run_cli(take, "--calibration", CALIBRATION, "--out", tmp_path / "pose.trc", "--particles", "100", "--layers", "4")
+    assert result.returncode == 0, result.stderr
+    assert "1 without data" in result.stdout
+    trc = read_trc(tmp_path / "pose.trc")
+    assert trc.source is not None and trc.source.unit == "m" and trc.n_frames == FRAMES
+    assert {"RHip", "RKnee", "RAnkle", "Neck"} <= set(trc.names) and "RClavicle" not in trc.names
+    assert np.isfinite(trc.positions).all()
+    assert (tmp_path / "pose.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def one_line_error(result: subprocess.CompletedProcess[str], *words: str) -> None:
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    for word in words:
+        assert word in lines[0]
+
+
+def test_a_camera_missing_from_the_calibration_is_one_line(tmp_path) -> None:
+    take = write_take(tmp_path / "take")
+    tables = tomllib.loads(CALIBRATION.read_text())
+    three = [f"[{name}]\n" + "".join(f"{key} = {json.dumps(value)}\n" for key, value in table.items())
+             for name, table in tables.items() if name not in ("cam_04", "metadata")]
+    (tmp_path / "three.toml").write_text("\n".join(three))
+    one_line_error(run_inline(take, "--calibration", tmp_path / "three.toml", "--out", tmp_path / "p.trc"), "cam04_json")
+
+
+def test_cameras_with_different_frame_counts_are_one_line(tmp_path) -> None:
+    take = write_take(tmp_path / "take")
+    (take / "cam03_json" / "cam03.0003.json").unlink()
+    one_line_error(run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc"), "different", "cam03_json 3")
+
+
+def test_a_json_that_is_not_openpose_is_one_line(tmp_path) -> None:
+    take = write_take(tmp_path / "take")
+    (take / "cam02_json" / "cam02.0001.json").write_text('{"frames": []}')
+    one_line_error(run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc"), "cam02.0001.json", "OpenPose")
+    (take / "cam02_json" / "cam02.0001.json").write_text('{"people": [{"pose_keypoints_2d": [1, 2, 3]}]}')
+    one_line_error(run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc"), "BODY_25B has 75")
+
+
+def test_a_folder_without_camera_folders_and_a_wrong_suffix_are_one_line(tmp_path) -> None:
+    one_line_error(run_inline(tmp_path, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc"), "camNN_json")
+    one_line_error(run_inline(tmp_path, "--calibration", CALIBRATION, "--out", tmp_path / "p.c3d"), ".trc")
+
+
+def test_per_camera_image_folders_are_fitted_by_edges_and_foreground(tmp_path) -> None:
+    """Rendered silhouettes (real video of the demo is not available): the body is found near the truth."""
+    cameras = load_calibration(CALIBRATION)
+    model = human_model()
+    X = walking(model, 1)
+    rng = np.random.default_rng(0)
+    for c, camera in enumerate(cameras):
+        folder = tmp_path / "take" / f"cam{c + 1:02d}"
+        folder.mkdir(parents=True)
+        back = background(camera, rng)
+        cv2.imwrite(str(folder / "background.png"), back)
+        for f in range(len(X)):
+            image = render_silhouette(model, X[f], camera, back)
+            cv2.imwrite(str(folder / f"{f:04d}.png"), np.clip(image + rng.normal(0, 4, image.shape), 0, 255).astype(np.uint8))
+    result = run_cli(tmp_path / "take", "--calibration", CALIBRATION, "--out", tmp_path / "pose.trc",
+                     "--particles", "100", "--layers", "4")
+    assert result.returncode == 0, result.stderr
+    trc = read_trc(tmp_path / "pose.trc")
+    truth = forward_kinematics(model, X).positions[:, [model.index(n) for n in trc.names]] * 1000.0
+    trunk = [trc.names.index("CHip"), trc.names.index("Neck")]  # limbs need the bench's budget, 600 x 15
+    assert (np.linalg.norm(trc.positions[:, trunk] - truth[:, trunk], axis=2) < 100.0).all()
+
+
+def test_a_subject_model_without_keypoint_names_is_one_line_for_keypoint_input(tmp_path) -> None:
+    from test_pose_markers import leg
+
+    take = write_take(tmp_path / "take")
+    (tmp_path / "subject.json").write_text(leg().to_json())
+    result = run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", "--model", tmp_path / "subject.json")
+    one_line_error(result, "no joint of the model is named like a keypoint")
+    (tmp_path / "subject.json").write_text("{}")
+    result = run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", "--model", tmp_path / "subject.json")
+    one_line_error(result, "subject.json", "version")
