@@ -9,6 +9,8 @@ births and deaths), and for reference published tracker outputs scored as they a
 - MOT17-02/05/09: MPNTrack's published output with its ids dropped as detections
   (MOTChallenge's public det.txt is not in ../shared/data); MPNTrack and Lif_T as they are.
 
+The cost constants were chosen on TUD-Campus and MOT17-02; the other three are held out.
+
     .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian]
 """
 

@@ -1,9 +1,9 @@
 """One window of box tracking posed as Jiang's network: candidates near each prediction.
 
 Frame t0 is the template (Sec. II-E: windows overlap by it); frames t0+1..t0+M hold the
-candidates. Every detection inside an object's gate (``BoxCostModel.gate``) is one of its
-candidate nodes with location its corners (Jiang's 4-vector p), template cost g(s_n, v)
-(``BoxCostModel.template_cost``) and, as resources, the conflict sets it belongs to
+candidates. Every detection inside an object's gate around its Kalman forecast
+(``BoxCostModel.gate_and_cost``) is one of its candidate nodes with location its corners
+(Jiang's 4-vector p) in the object's heights, template cost g(s_n, v) and, as resources, the conflict sets it belongs to
 (``conflicts.conflict_resources``): a detection is never taken twice, nor two boxes that
 are one spatial location. An object not seen at t0 starts from its prediction with an
 occluded template, so its first arc costs like leaving an occlusion.
@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel, histogram_distance
 from formulations.boxes.geometry import centre, height
+from formulations.boxes.kalman import box_corners, corner_rates
 from formulations.boxes.objects import BoxObjects
 from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights
@@ -34,7 +35,7 @@ class BoxWindow:
 
     Attributes:
         candidates: The window's candidates.
-        weights: Arc cost weights (lambda_2 already divided by the median height).
+        weights: Arc cost weights.
         layout_pairs: ``(P, 2)`` neighbouring objects.
         layout_weight: mu per pair.
         detection: ``(C,)`` index, into the detections handed in, of each candidate.
@@ -49,9 +50,12 @@ class BoxWindow:
 
 def box_window(
     objects: BoxObjects, template_frame: int, n_frames: int, frame: Ints, boxes: Array, histograms: Array | None,
-    model: BoxCostModel, rule: ConflictRule, median_height: float,
+    model: BoxCostModel, rule: ConflictRule,
 ) -> BoxWindow:
     """Pose frames ``template_frame+1 .. template_frame+n_frames`` for ``objects``.
+
+    Locations are corners in units of each object's height at the template frame, so that
+    lambda_2 and mu weigh a near and a far person alike.
 
     Args:
         objects: Objects alive at the template frame.
@@ -61,43 +65,42 @@ def box_window(
             histograms (None without frames).
         model: Gate and costs.
         rule: When two boxes conflict.
-        median_height: Box height that sets the unit of lambda_2 and mu.
     """
     frames = template_frame + np.arange(1, n_frames + 1)
-    predicted = objects.predict(frames)  # (N, M, 4)
-    objs, dets = [], []
-    distances, gaps = [], []
+    predicted, spread = objects.forecast(n_frames)  # (N, M, 4), (N, M, 4, 4)
+    objs, dets, costs = [], [], []
     for m, f in enumerate(frames):
         index = np.flatnonzero(frame == f)
-        gap = (f - objects.last_seen).astype(float)
-        inside, distance = model.gate(predicted[:, m], gap, boxes[index])
+        inside, cost = model.gate_and_cost(predicted[:, m], spread[:, m], boxes[index])
+        inside &= (f > objects.last_seen)[:, None]  # a newborn takes nothing before its first box
         n, b = np.nonzero(inside)
         objs.append(n)
         dets.append(index[b])
-        distances.append(distance[n, b])
-        gaps.append(gap[n])
+        costs.append(cost[n, b])
     obj, det = np.concatenate(objs).astype(int), np.concatenate(dets).astype(int)
+    template_cost = np.concatenate(costs)
     hist_dist = None
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
-    template_cost = model.template_cost(np.concatenate(distances), np.concatenate(gaps), objects.box[obj], boxes[det], hist_dist)
+        template_cost = template_cost + model.histogram * hist_dist
+    unit = np.maximum(objects.mean[:, 3], 1.0)  # each object's height at t0
     resources = sp.csr_matrix(conflict_resources(rule, frame, boxes)[det])
-    start = objects.predict(np.array([template_frame]))[:, 0]
-    velocity = np.repeat(objects.velocity[:, None, :], n_frames, axis=1)
+    start = objects.box
+    velocity = np.repeat((corner_rates(objects.mean) / unit[:, None])[:, None, :], n_frames, axis=1)
     candidates = WindowCandidates(
-        template_location=start, template_occluded=objects.last_seen < template_frame, n_frames=n_frames,
-        object=obj, frame=frame[det] - template_frame, location=boxes[det], template_cost=template_cost,
-        resources=resources, occlusion_location=predicted, motion=velocity,
-        appearance=None if hist_dist is None or histograms is None else histograms[det],
+        template_location=start / unit[:, None], template_occluded=objects.last_seen < template_frame,
+        n_frames=n_frames, object=obj, frame=frame[det] - template_frame, location=boxes[det] / unit[obj, None],
+        template_cost=template_cost, resources=resources, occlusion_location=box_corners(predicted) / unit[:, None, None],
+        motion=velocity, appearance=None if hist_dist is None or histograms is None else histograms[det],
         template_appearance=None if hist_dist is None else objects.histogram,
     )
-    weights = ArcCostWeights(
-        appearance_change=model.histogram_change if hist_dist is not None else 0.0,
-        displacement=model.displacement / median_height, reappear=model.reappear, disappear=model.disappear,
-        template_on_track=model.template_on_track,
+    weights = ArcCostWeights(  # floats: integer weights would make the arc cost array integer
+        appearance_change=float(model.histogram_change) if hist_dist is not None else 0.0,
+        displacement=float(model.displacement), reappear=float(model.reappear), disappear=float(model.disappear),
+        template_on_track=float(model.template_on_track),
     )
     return BoxWindow(candidates, weights, _neighbours(start, model) if model.layout > 0 else np.zeros((0, 2), int),
-                     model.layout / median_height, det)
+                     model.layout, det)
 
 
 def _neighbours(start: Array, model: BoxCostModel) -> Ints:

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
+from formulations.boxes import kalman
 from formulations.boxes.geometry import iou
 from formulations.boxes.objects import BoxObjects, fitted_velocity
 
@@ -74,7 +75,7 @@ class Lifecycle:
     def leaving(self, objects: BoxObjects, now: int, image: Array) -> NDArray[np.bool_]:
         """True for the objects that leave at frame ``now``; ``image`` is (x1, y1, x2, y2)."""
         gap = now - objects.last_seen
-        predicted = objects.predict(np.array([now]))[:, 0]
+        predicted = objects.box  # the objects are at frame ``now``
         outside = (predicted[:, :2] < image[:2]).any(axis=1) | (predicted[:, 2:] > image[2:]).any(axis=1)
         result: NDArray[np.bool_] = (gap > self.max_occluded) | (outside & (gap > self.border_occluded))
         return result
@@ -84,14 +85,16 @@ def born(chains: list[Ints], frame: Ints, boxes: Array, histograms: Array | None
          template_frame: int) -> BoxObjects:
     """New objects from chains, numbered from ``first_ident``, posed to enter the window again.
 
-    A chain that starts at the template frame t0 starts there, seen; one that starts at
-    frame s > t0 is last seen one velocity step before its first box, at s - 1, so that
-    the window, solved again with it, can take its first box at s and none before.
+    Each starts a Kalman state (``kalman.start``) at its chain's first box, frame s, with the
+    chain's fitted velocity, moved back to the template frame t0 along that velocity; it is
+    last seen at s if s = t0, else at s - 1, so that the window, solved again with it, can
+    take its first box at s and none before.
     """
     n = len(chains)
     hist = None if histograms is None else np.array([histograms[c].mean(axis=0) for c in chains]).reshape(n, -1)
-    velocity = np.array([fitted_velocity(frame[c], boxes[c]) for c in chains]).reshape(n, 4)
+    velocity = kalman.measurement(np.array([fitted_velocity(frame[c], boxes[c]) for c in chains]).reshape(n, 4))
     first = np.array([frame[c[0]] for c in chains], dtype=int)
-    at_template = first == template_frame
-    box = np.array([boxes[c[0]] for c in chains]).reshape(n, 4) - np.where(at_template, 0.0, 1.0)[:, None] * velocity
-    return BoxObjects(np.arange(first_ident, first_ident + n), box, velocity, first - (~at_template).astype(int), hist)
+    z = kalman.measurement(np.array([boxes[c[0]] for c in chains]).reshape(n, 4))
+    mean, covariance = kalman.start(z - (first - template_frame)[:, None] * velocity, velocity)
+    last_seen = np.where(first == template_frame, first, first - 1)
+    return BoxObjects(np.arange(first_ident, first_ident + n), mean, covariance, last_seen, hist)

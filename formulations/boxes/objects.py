@@ -1,12 +1,11 @@
 """The tracked boxes between windows: Jiang's object list with its templates (Sec. II-E).
 
-Each object keeps its last seen box (corners), a velocity per frame, the frame it was last
-seen, and, when frames are given, its template histogram. Its prediction for frame f is
-constant-velocity extrapolation from the last seen box,
-
-    p_n(f) = box_n + (f - last_seen_n) v_n,
-
-(no Kalman filter: the window LP, not a filter, decides which detections are an object's).
+Each object carries a constant-velocity Kalman state (``kalman``) at the window's template
+frame t0: after a window its state is filtered through the boxes its path took and
+predicted through the frames it was occluded, so the prediction of the next window starts
+from the object's own last box and its velocity over its whole track, with an uncertainty
+that grows with every frame since the object was last seen, whichever window that was in.
+It also keeps the frame it was last seen and, when frames are given, its template histogram.
 """
 
 from __future__ import annotations
@@ -15,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+
+from formulations.boxes import kalman
 
 Array = NDArray[np.float64]
 Ints = NDArray[np.int_]
@@ -26,15 +27,15 @@ class BoxObjects:
 
     Attributes:
         ident: ``(N,)`` identity of each object (1, 2, ... in order of birth).
-        box: ``(N, 4)`` corners where each was last seen.
-        velocity: ``(N, 4)`` corner displacement per frame.
-        last_seen: ``(N,)`` frame of ``box``.
+        mean: ``(N, 8)`` Kalman state at the template frame (``kalman``).
+        covariance: ``(N, 8, 8)`` its covariance.
+        last_seen: ``(N,)`` frame each object last took a box (a newborn: the frame before its first).
         histogram: ``(N, H)`` template histograms, or None without frames.
     """
 
     ident: Ints
-    box: Array
-    velocity: Array
+    mean: Array
+    covariance: Array
     last_seen: Ints
     histogram: Array | None
 
@@ -42,26 +43,37 @@ class BoxObjects:
     def n_objects(self) -> int:
         return len(self.ident)
 
-    def predict(self, frames: Ints) -> Array:
-        """``(N, F, 4)`` predicted corners in each of ``frames``."""
-        gap = (np.asarray(frames)[None, :] - self.last_seen[:, None]).astype(float)
-        result: Array = self.box[:, None, :] + gap[:, :, None] * self.velocity[:, None, :]
-        return result
+    @property
+    def box(self) -> Array:
+        """``(N, 4)`` corners at the template frame (predicted where the object was not seen there)."""
+        return kalman.box_corners(self.mean[:, :4])
+
+    def forecast(self, steps: int) -> tuple[Array, Array]:
+        """Predicted measurements ``(N, steps, 4)`` and their covariances ``(N, steps, 4, 4)``, 1..steps frames ahead."""
+        mean, covariance = self.mean, self.covariance
+        z, s = [], []
+        for _ in range(steps):
+            mean, covariance = kalman.predict(mean, covariance)
+            predicted, spread = kalman.innovation(mean, covariance)
+            z.append(predicted)
+            s.append(spread)
+        n = self.n_objects
+        return np.stack(z, axis=1).reshape(n, steps, 4), np.stack(s, axis=1).reshape(n, steps, 4, 4)
 
     def subset(self, keep: NDArray[np.bool_]) -> BoxObjects:
         hist = None if self.histogram is None else self.histogram[keep]
-        return BoxObjects(self.ident[keep], self.box[keep], self.velocity[keep], self.last_seen[keep], hist)
+        return BoxObjects(self.ident[keep], self.mean[keep], self.covariance[keep], self.last_seen[keep], hist)
 
     @staticmethod
     def empty(bins: int | None) -> BoxObjects:
         hist = None if bins is None else np.zeros((0, bins))
-        return BoxObjects(np.zeros(0, int), np.zeros((0, 4)), np.zeros((0, 4)), np.zeros(0, int), hist)
+        return BoxObjects(np.zeros(0, int), np.zeros((0, 8)), np.zeros((0, 8, 8)), np.zeros(0, int), hist)
 
     def joined(self, other: BoxObjects) -> BoxObjects:
         hist = None if self.histogram is None or other.histogram is None else np.vstack([self.histogram, other.histogram])
         return BoxObjects(
-            np.r_[self.ident, other.ident], np.vstack([self.box, other.box]), np.vstack([self.velocity, other.velocity]),
-            np.r_[self.last_seen, other.last_seen], hist,
+            np.r_[self.ident, other.ident], np.vstack([self.mean, other.mean]),
+            np.concatenate([self.covariance, other.covariance]), np.r_[self.last_seen, other.last_seen], hist,
         )
 
 
@@ -74,25 +86,31 @@ def fitted_velocity(frames: Ints, boxes: Array) -> Array:
     return result
 
 
-def advance(
-    objects: BoxObjects, seen_frames: list[Ints], seen_boxes: list[Array], seen_histograms: list[Array] | None,
-    smoothing: float, histogram_rate: float,
-) -> BoxObjects:
-    """The objects after a window: last seen box, velocity and template updated from the boxes each took.
+def advance(objects: BoxObjects, template_frame: int, taken: Ints, boxes: Array, histograms: Array | None,
+            histogram_rate: float) -> BoxObjects:
+    """The objects at the window's last frame, filtered through the boxes their paths took.
 
-    The new velocity is ``smoothing`` times the old plus the rest times the least-squares
-    fit over the window's seen boxes and the previous last seen box; the template
-    histogram moves towards the mean of the taken ones at ``histogram_rate``.
+    Args:
+        objects: The objects at the template frame.
+        template_frame: t0.
+        taken: ``(N, M)`` row into ``boxes`` of the box each object took in frames t0+1..t0+M, -1 occluded.
+        boxes: Corners of the detections ``taken`` points into.
+        histograms: Their histograms (None without frames): a template histogram moves
+            towards the mean of the taken ones at ``histogram_rate``.
+        histogram_rate: See ``histograms``.
     """
-    box, velocity, last = objects.box.copy(), objects.velocity.copy(), objects.last_seen.copy()
+    mean, covariance, last = objects.mean, objects.covariance, objects.last_seen.copy()
+    for m in range(taken.shape[1]):
+        mean, covariance = kalman.predict(mean, covariance)
+        seen = taken[:, m] >= 0
+        last[seen] = template_frame + m + 1
+        if seen.any():
+            mean, covariance = mean.copy(), covariance.copy()
+            mean[seen], covariance[seen] = kalman.update(mean[seen], covariance[seen],
+                                                         kalman.measurement(boxes[taken[seen, m]]))
     hist = None if objects.histogram is None else objects.histogram.copy()
     for n in range(objects.n_objects):
-        if len(seen_frames[n]) == 0:
-            continue
-        frames = np.r_[objects.last_seen[n], seen_frames[n]]
-        boxes = np.vstack([objects.box[n], seen_boxes[n]])
-        velocity[n] = smoothing * velocity[n] + (1.0 - smoothing) * fitted_velocity(frames, boxes)
-        box[n], last[n] = seen_boxes[n][-1], seen_frames[n][-1]
-        if hist is not None and seen_histograms is not None:
-            hist[n] = (1.0 - histogram_rate) * hist[n] + histogram_rate * seen_histograms[n].mean(axis=0)
-    return BoxObjects(objects.ident, box, velocity, last, hist)
+        rows = taken[n][taken[n] >= 0]
+        if hist is not None and histograms is not None and len(rows):
+            hist[n] = (1.0 - histogram_rate) * hist[n] + histogram_rate * histograms[rows].mean(axis=0)
+    return BoxObjects(objects.ident, mean, covariance, last, hist)

@@ -6,15 +6,16 @@ Windows of ``window`` frames overlap by one frame, the template. For each window
    (``formulations.boxes.candidates``), the window is built (``formulations.window``) and
    solved by the chosen formulation (``lp-l1``, ``ilp``, ``nn-hungarian``, ...: any name
    ``formulations.get_formulation`` knows, so every one sees the same costs);
-2. each object's taken boxes become its track; its last box, velocity and template
-   histogram move on (``formulations.boxes.objects.advance``);
+2. each object's taken boxes become its track; its Kalman state is filtered through them
+   and predicted through its occlusions, and its template histogram moves on
+   (``formulations.boxes.objects.advance``);
 3. the detections no object explains (neither taken nor in the conflict set of a taken
    box) are chained into new objects, and the window is solved again with them; objects
    unseen too long leave (``formulations.boxes.lifecycle``).
 
 With ``formulation="nn-hungarian"`` the same loop runs frame-by-frame optimal assignment on
-the same costs: SORT's association (Hungarian, gated) with a constant-velocity
-prediction and no Kalman filter.
+the same costs: SORT's association (Hungarian, gated) on the same Kalman forecast, which,
+unlike SORT's, is filtered once per window rather than once per frame.
 
 Public entry point (also used for people seen by several cameras, one call per camera):
 
@@ -33,7 +34,7 @@ from formulations import build_window, get_formulation
 from formulations.boxes.candidates import box_window
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel
-from formulations.boxes.geometry import corners, height
+from formulations.boxes.geometry import corners
 from formulations.boxes.lifecycle import Lifecycle, born
 from formulations.boxes.objects import BoxObjects, advance
 from formulations.errors import FormulationError
@@ -42,7 +43,6 @@ from formulations.window.build import taken_candidates
 from service.boxes.detections import BoxDetections, BoxTracks
 from service.errors import InputError
 
-VELOCITY_SMOOTHING = 0.5  # weight of the old velocity against the window's fit
 HISTOGRAM_RATE = 0.2  # how fast a template histogram follows the taken boxes
 
 
@@ -91,7 +91,6 @@ def track_boxes(
     if histograms is not None and histograms.shape[0] != len(detections.frame):
         raise InputError(f"{histograms.shape[0]} histograms for {len(detections.frame)} detections")
     frame, boxes = detections.frame.astype(int), corners(detections.box)
-    median_height = float(np.median(height(boxes))) if len(boxes) else 1.0
     conflicting = conflict_resources(rule, frame, boxes)  # symmetric: row k is O(k), what taking k explains
     image = _image(detections, boxes)
     objects = BoxObjects.empty(None if histograms is None else histograms.shape[1])
@@ -103,7 +102,7 @@ def track_boxes(
         inside = (frame > t0) & (frame <= t0 + m)
         before = objects
         if objects.n_objects:
-            objects, certified = _solve(solver, before, t0, m, frame, boxes, histograms, model, rule, median_height, owner)
+            objects, certified = _solve(solver, before, t0, m, frame, boxes, histograms, model, rule, owner)
             windows, integral = windows + 1, integral + certified
         chains = lifecycle.chains(frame, boxes, (frame >= t0) & (frame <= t0 + m) & ~_explained(owner, conflicting))
         if chains:
@@ -112,8 +111,7 @@ def track_boxes(
             at_template = [c[0] for c in chains if frame[c[0]] == t0]
             owner[at_template] = new.ident[[i for i, c in enumerate(chains) if frame[c[0]] == t0]]
             owner[inside] = 0  # the window again, with the new objects competing from their first box
-            objects, certified = _solve(solver, before.joined(new), t0, m, frame, boxes, histograms, model, rule,
-                                        median_height, owner)
+            objects, certified = _solve(solver, before.joined(new), t0, m, frame, boxes, histograms, model, rule, owner)
             windows, integral = windows + 1, integral + certified
         objects = objects.subset(~lifecycle.leaving(objects, t0 + m, image))
         t0 += m
@@ -125,24 +123,18 @@ def track_boxes(
 
 def _solve(
     solver: Formulation, objects: BoxObjects, t0: int, m: int, frame: np.ndarray, boxes: np.ndarray,
-    histograms: np.ndarray | None, model: BoxCostModel, rule: ConflictRule, median_height: float, owner: np.ndarray,
+    histograms: np.ndarray | None, model: BoxCostModel, rule: ConflictRule, owner: np.ndarray,
 ) -> tuple[BoxObjects, bool]:
     """Solve one window; write each taken detection's owner; return the objects moved on and the certificate."""
     index = np.flatnonzero((frame > t0) & (frame <= t0 + m))
     hist = None if histograms is None else histograms[index]
-    posed = box_window(objects, t0, m, frame[index], boxes[index], hist, model, rule, median_height)
+    posed = box_window(objects, t0, m, frame[index], boxes[index], hist, model, rule)
     problem, node_candidate = build_window(posed.candidates, posed.weights, posed.layout_pairs, posed.layout_weight)
     solution = solver.solve(problem)
     taken = taken_candidates(node_candidate, solution.path, index[posed.detection])  # (N, M), -1 occluded
-    seen_frames, seen_boxes, seen_hists = [], [], []
     for n in range(objects.n_objects):
-        dets = taken[n][taken[n] >= 0]
-        owner[dets] = objects.ident[n]
-        seen_frames.append(frame[dets])
-        seen_boxes.append(boxes[dets])
-        seen_hists.append(histograms[dets] if histograms is not None else np.zeros((0, 0)))
-    moved = advance(objects, seen_frames, seen_boxes, seen_hists if histograms is not None else None,
-                    VELOCITY_SMOOTHING, HISTOGRAM_RATE)
+        owner[taken[n][taken[n] >= 0]] = objects.ident[n]
+    moved = advance(objects, t0, taken, boxes, histograms, HISTOGRAM_RATE)
     return moved, bool(solution.integral)
 
 
