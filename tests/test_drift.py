@@ -14,7 +14,6 @@ and when the wrist reappears it must take its own point, not lend it to the ulna
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from scipy.spatial.transform import Rotation
 
 from service import Capture, CaptureLabeling
@@ -61,10 +60,6 @@ def _label() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return truth, present, index, labels.filled
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 11: the occluded wrist follows a blend of thigh and forearm (fill error ~250 mm) and the ulnar "
-    "marker takes its point; a robust (Cauchy IRLS) follow fixed this case but cost CMU 85_02 accuracy"
-))
 def test_lost_wrist_follows_its_forearm_and_takes_its_own_point_back():
     truth, present, marker_taken, filled = _label()
     # (a) While occluded the fill follows the lifting forearm (the wrist rises ~330 mm).

@@ -18,14 +18,15 @@ SMALL = [(seed, n, m) for seed in range(8) for n, m in ((2, 4), (3, 3))]
 MU = [0.0, 0.4]
 
 
-def window(seed, n_objects, n_frames, mu):
-    return random_window(seed, n_objects=n_objects, n_frames=n_frames, n_points=3, per_object=2, mu=mu)
+def window(seed, n_objects, n_frames, mu, likelihood=False):
+    return random_window(seed, n_objects=n_objects, n_frames=n_frames, n_points=3, per_object=2, mu=mu, likelihood=likelihood)
 
 
 @pytest.mark.parametrize("seed,n_objects,n_frames", SMALL)
 @pytest.mark.parametrize("mu", MU)
-def test_exact_formulations_reach_the_brute_force_optimum(seed, n_objects, n_frames, mu):
-    problem = window(seed, n_objects, n_frames, mu)
+@pytest.mark.parametrize("likelihood", [False, True], ids=["weights", "likelihood"])
+def test_exact_formulations_reach_the_brute_force_optimum(seed, n_objects, n_frames, mu, likelihood):
+    problem = window(seed, n_objects, n_frames, mu, likelihood)
     optimum, _ = brute_force(problem)
     exact = (Ilp(), Ilp(decompose=False), Ilp(decompose=False, lp_first=False), DpExtended(), DpExtended(decompose=False))
     for formulation in exact:

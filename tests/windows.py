@@ -15,14 +15,19 @@ import scipy.sparse as sp
 from formulations.window.build import build_window
 from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights
+from formulations.window.likelihood import CandidateLikelihood
 from formulations.window.problem import WindowProblem
 
 
 def random_window(
     seed: int, n_objects: int = 3, n_frames: int = 3, n_points: int = 4, per_object: int = 2,
-    mu: float = 0.0, dim: int = 2,
+    mu: float = 0.0, dim: int = 2, likelihood: bool = False,
 ) -> WindowProblem:
-    """Objects drawing ``per_object`` candidates each frame from ``n_points`` shared points."""
+    """Objects drawing ``per_object`` candidates each frame from ``n_points`` shared points.
+
+    ``likelihood``: price arcs by random negative log-likelihood terms
+    (``formulations.window.likelihood``) instead of Jiang's weights.
+    """
     rng = np.random.default_rng(seed)
     points = rng.uniform(0, 10, size=(n_frames, n_points, dim))
     objects, frames, ids = [], [], []
@@ -42,6 +47,10 @@ def random_window(
         resources=sp.csr_matrix((np.ones(len(ids)), (np.arange(len(ids)), ids)), shape=(len(ids), n_frames * n_points)),
         occlusion_location=rng.uniform(0, 10, size=(n_objects, n_frames, dim)),
         motion=np.zeros((n_objects, n_frames, dim)),
+        likelihood=CandidateLikelihood(
+            step_sigma=rng.uniform(0.5, 3, len(ids)), step_offset=rng.uniform(0, 2, len(ids)),
+            reappear_cost=rng.uniform(0, 6, len(ids)), miss_cost=rng.uniform(1, 4, (n_objects, n_frames)),
+        ) if likelihood else None,
     )
     pairs = np.array(list(itertools.combinations(range(n_objects), 2))) if mu > 0 else None
     weights = ArcCostWeights(displacement=1.0, reappear=3.0, disappear=3.0)

@@ -30,6 +30,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from formulations.markers.guide import Gate, GuideTrack, guide_track
+from formulations.markers.likelihood import marker_likelihood
 from formulations.markers.state import MarkerState
 from formulations.window.candidates import WindowCandidates
 
@@ -48,6 +49,9 @@ class CloudGating:
         prediction_sigma_growth_mm: sigma_1, added per frame unseen.
         prediction_cap_sigmas: cap, in sigmas, beyond which the prediction term stops growing.
         shape_weight: w_s, cost per mm of mean deviation from the learned neighbour distances.
+        likelihood: Price steps, reappearances and occlusions as negative log-likelihoods
+            learned from the take (``markers.likelihood``); the prediction term above and
+            the arc weights' constants are then not used.
     """
 
     gate: Gate = field(default_factory=Gate)
@@ -56,6 +60,7 @@ class CloudGating:
     prediction_sigma_growth_mm: float = 2.5
     prediction_cap_sigmas: float = 6.0
     shape_weight: float = 0.5
+    likelihood: bool = True
 
 
 @dataclass(frozen=True)
@@ -95,16 +100,19 @@ def cloud_candidates(
     obj, frame, point = (np.concatenate(a) if a else np.zeros(0, int) for a in (objects, frame_of, points))
     offsets = np.cumsum([0] + [len(c) for c in frames])
     location = np.concatenate(frames)[offsets[frame - 1] + point] if len(point) else np.zeros((0, 3))
-    off_prediction = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1)
-    sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[frame - 1, obj]
-    template_cost = gating.prediction_weight * np.minimum(off_prediction / sigma, gating.prediction_cap_sigmas)
-    template_cost += gating.shape_weight * _shape_deviation(state, guide, obj, frame, location)
+    template_cost = gating.shape_weight * _shape_deviation(state, guide, obj, frame, location)
+    likelihood = marker_likelihood(state, guide, frames, obj, frame, location) if gating.likelihood else None
+    if likelihood is None:
+        off_prediction = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1)
+        sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[frame - 1, obj]
+        template_cost += gating.prediction_weight * np.minimum(off_prediction / sigma, gating.prediction_cap_sigmas)
     candidates = WindowCandidates(
         template_location=state.position, template_occluded=~state.visible, n_frames=len(frames),
         object=obj, frame=frame, location=location,
         template_cost=template_cost,
         resources=_window_resources(frames, point_resources)[offsets[frame - 1] + point],
         occlusion_location=guide.predicted.transpose(1, 0, 2), motion=guide.velocity.transpose(1, 0, 2),
+        likelihood=likelihood,
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)
 

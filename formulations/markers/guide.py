@@ -30,16 +30,36 @@ class Gate:
         max_radius_mm: Upper limit while unseen.
         unknown_velocity_radius_mm: Radius while a marker's velocity is unknown (just
             after the labeled first frame): it must cover one frame of fast motion.
+        motion_sigmas: Gate half-width in sds of the marker's motion residual (3D).
     """
 
     radius_mm: float = 60.0
     growth_mm: float = 20.0
     max_radius_mm: float = 400.0
     unknown_velocity_radius_mm: float = 100.0
+    motion_sigmas: float = 5.0
+
+    def miss_cost(self, state: MarkerState) -> np.ndarray:
+        """``(N,)`` cost of leaving a marker without a point in the nearest-neighbour track.
+
+        ``radius_mm`` for a marker unseen last frame (after an occlusion the prediction from
+        its neighbours beats a far point, and a wrong pick here moves every later gate); a
+        marker seen last frame may move as far as its own motion says
+        (``motion_sigmas`` sd of its learned residual): a fast limb must not be dropped.
+        """
+        own = self.motion_sigmas * np.sqrt(3 * state.motion_var)
+        miss: np.ndarray = np.where(state.visible & state.velocity_known, np.maximum(own, self.radius_mm), self.radius_mm)
+        return miss
 
     def radius(self, state: MarkerState) -> np.ndarray:
+        """The fixed rule above, widened to ``motion_sigmas`` sd (3D) of the marker's learned
+        prediction error (``MarkerState.prediction_var``): a marker on a
+        fast limb, or in a take at a low frame rate, keeps its points inside its gate."""
         grown = np.minimum(self.radius_mm + self.growth_mm * state.unseen, max(self.max_radius_mm, self.radius_mm))
-        return np.where(state.velocity_known, grown, np.maximum(grown, self.unknown_velocity_radius_mm))
+        motion = self.motion_sigmas * np.sqrt(3 * state.prediction_var(state.unseen))
+        grown = np.maximum(grown, np.minimum(motion, 2 * self.max_radius_mm))
+        radius: np.ndarray = np.where(state.velocity_known, grown, np.maximum(grown, self.unknown_velocity_radius_mm))
+        return radius
 
 
 @dataclass(frozen=True)
@@ -80,7 +100,13 @@ def guide_track(
         unknown = state.visible & ~state.velocity_known
         velocity[f] = np.where(unknown[:, None], np.nan, predicted[f] - state.position)
         radius[f] = gate.radius(state)
-        assigned = assign_nearest(predicted[f], points, radius[f], miss_cost=gate.radius_mm)
+        miss = gate.miss_cost(state)
+        assigned = assign_nearest(predicted[f], points, radius[f], miss)
+        shared = shared_motion(state, predicted[f], points, assigned)
+        if shared is not None:
+            predicted[f] += shared
+            velocity[f] += shared
+            assigned = assign_nearest(predicted[f], points, radius[f], miss)
         seen = assigned >= 0
         taken = np.zeros((n, 3))
         taken[seen] = points[assigned[seen]]
@@ -90,7 +116,28 @@ def guide_track(
     )
 
 
-def assign_nearest(predicted: np.ndarray, points: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+def shared_motion(state: MarkerState, predicted: np.ndarray, points: np.ndarray, assigned: np.ndarray) -> np.ndarray | None:
+    """``(N, 3)`` the acceleration each marker shares with its rigid neighbours this frame.
+
+    A limb that speeds up moves all its markers off their constant-velocity predictions
+    together; the weighted mean offset of a marker's neighbours that found a point
+    (weights 1 / (var + 1), rigid neighbours first) is added to its prediction before a
+    second assignment. None when no marker found a point.
+    """
+    found = assigned >= 0
+    if not found.any():
+        return None
+    offset = np.zeros_like(predicted)
+    offset[found] = points[assigned[found]] - predicted[found]
+    weight = found[state.neighbours] / (state.distance_var + 1.0)
+    total = weight.sum(axis=1)
+    shared: np.ndarray = np.einsum("nk,nkd->nd", weight, offset[state.neighbours]) / np.maximum(total, 1e-12)[:, None]
+    return np.where((total > 0)[:, None], shared, 0.0)
+
+
+def assign_nearest(
+    predicted: np.ndarray, points: np.ndarray, radius: np.ndarray, miss_cost: float | np.ndarray
+) -> np.ndarray:
     """Optimal one-to-one assignment of points to predictions within each gate.
 
     Returns:
@@ -101,14 +148,14 @@ def assign_nearest(predicted: np.ndarray, points: np.ndarray, radius: np.ndarray
     return assign_within_gates(cdist(predicted, points), radius, miss_cost)
 
 
-def assign_within_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float) -> np.ndarray:
+def assign_within_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: float | np.ndarray) -> np.ndarray:
     """min sum of distances over one-to-one assignments, a marker taking only what lies
     inside its gate, with a miss of cost ``miss_cost`` allowed for every marker.
 
     Args:
         distance: ``(N, D)`` distance from each marker's prediction to each detection.
         radius: ``(N,)`` gate radius of each marker.
-        miss_cost: Cost of leaving a marker unassigned.
+        miss_cost: Cost of leaving a marker unassigned, one for all or ``(N,)``.
 
     Returns:
         ``(N,)`` detection index per marker, -1 for a miss.
@@ -117,7 +164,7 @@ def assign_within_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: flo
     blocked = 1e9
     cost = np.where(distance <= radius[:, None], distance, blocked)
     miss = np.full((n, n), blocked)
-    np.fill_diagonal(miss, miss_cost)
+    np.fill_diagonal(miss, np.broadcast_to(miss_cost, (n,)))
     rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
     result = np.full(n, -1)
     hit = cols < d

@@ -29,3 +29,33 @@ def rigid_transform(source: np.ndarray, target: np.ndarray, weight: np.ndarray) 
     fix[:, 2] = np.where(sign == 0, 1.0, sign)
     rotation = np.einsum("sji,sj,skj->sik", vt, fix, u)  # V diag(fix) U^T
     return rotation, c_s, c_t
+
+
+FOLLOW_ITERATIONS = 3
+
+
+def follow_neighbours(
+    source: np.ndarray, target: np.ndarray, prior: np.ndarray, motion_var: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rigid motion of the neighbours that really move with an occluded marker.
+
+    A weighted fit over every neighbour averages segments that move differently (a still
+    thigh and a lifting forearm around a lost wrist). Iteratively reweighted least squares
+    with Cauchy weights w_k = p_k / (1 + (e_k / c)^2), e_k the neighbour's residual under
+    the current fit, drops the neighbours that do not share the motion; c is 3 sd of the
+    marker's own motion residual (``MarkerState.motion_var``), so it scales with the take.
+    The first fit is the prior-weighted one: the prior favours near, rigid neighbours.
+
+    Args:
+        source, target: ``(S, K, 3)`` neighbours at the anchor frame and now.
+        prior: ``(S, K)`` prior weights (0 for unusable neighbours).
+        motion_var: ``(S,)`` per-axis motion residual variance of each marker (mm^2).
+    """
+    scale2 = 9.0 * 3.0 * motion_var[:, None]
+    weight = prior
+    for _ in range(FOLLOW_ITERATIONS):
+        rotation, c_s, c_t = rigid_transform(source, target, weight)
+        moved = np.einsum("sij,skj->ski", rotation, source - c_s[:, None]) + c_t[:, None]
+        error2 = ((moved - target) ** 2).sum(axis=2)
+        weight = prior / (1.0 + error2 / scale2)
+    return rigid_transform(source, target, weight)

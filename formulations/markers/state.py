@@ -7,7 +7,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial import cKDTree
 
-from formulations.markers.rigid import rigid_transform
+from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_drift, learn_motion
+from formulations.markers.rigid import follow_neighbours
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,14 @@ class MarkerState:
             marker-neighbour distance (mm, mm^2). Neighbours on the same rigid segment keep
             their distance and are trusted most: Ringer & Lasenby's (2004) grouping by the
             variance of inter-marker distances, kept online.
+        motion_var: ``(N,)`` variance per axis (mm^2) of each marker's constant-velocity
+            residual x_t - 2 x_(t-1) + x_(t-2), i.e. 6 sigma^2 + q_n^2 (``noise.TakeNoise``):
+            the take's own noise and the marker's own acceleration, learned as it is labeled.
+        motion_samples: ``(N,)`` residuals that went into ``motion_var``.
+        drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) the
+            prediction of an occluded marker drifts from where it reappears, and the
+            reappearances it was learned from (``motion.learn_drift``; one value for all
+            markers, as reappearances are too rare to learn it per marker).
     """
 
     position: np.ndarray
@@ -43,6 +52,10 @@ class MarkerState:
     anchor_valid: np.ndarray
     distance_mean: np.ndarray
     distance_var: np.ndarray
+    motion_var: np.ndarray
+    motion_samples: np.ndarray
+    drift_var: np.ndarray
+    drift_samples: np.ndarray
 
     @classmethod
     def from_first_frame(cls, position: np.ndarray, n_neighbours: int = 16) -> MarkerState:
@@ -58,6 +71,8 @@ class MarkerState:
             anchor_neighbours=position[neighbours], anchor_valid=np.ones(neighbours.shape, bool),
             distance_mean=np.linalg.norm(position[:, None] - position[neighbours], axis=2),
             distance_var=np.full(neighbours.shape, 100.0),
+            motion_var=np.full(n, MOTION_VAR_PRIOR_MM2), motion_samples=np.zeros(n, int),
+            drift_var=np.full(n, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(n, int),
         )
 
     @property
@@ -83,17 +98,37 @@ class MarkerState:
         # velocity from before a gap is wrong for a fast limb), else damped.
         implied = np.where(followed[:, None], predicted - self.position, self.velocity * damping)
         velocity = np.where(was_seen[:, None], observed - self.position, implied)
-        both = seen[:, None] & seen[self.neighbours]
+        residual = observed - predicted
+        motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, seen & (self.streak >= 2))
+        drift_var, drift_samples = learn_drift(
+            self.drift_var, self.drift_samples, residual, seen & ~self.visible, self.unseen, self.motion_var,
+        )
+        # A followed marker re-anchors at its prediction when a neighbour it followed is
+        # lost: the rest carry it on from where it is now, not from where it was lost
+        # (the lost neighbour may have been the only one on its segment).
+        anchored = seen | (followed & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
+        # Distances learn from seen pairs, and from a seen marker and a followed one: the
+        # followed marker moves with the neighbours it follows, so what it learns to be
+        # rigid with stays rigid with them when they too are lost.
+        known = seen | followed
+        both = known[:, None] & known[self.neighbours] & (seen[:, None] | seen[self.neighbours])
         deviation = np.linalg.norm(position[:, None] - position[self.neighbours], axis=2) - self.distance_mean
         return replace(
             self, position=position, velocity=velocity, velocity_known=self.velocity_known | was_seen,
             unseen=np.where(seen, 0, self.unseen + 1), streak=np.where(seen, self.streak + 1, 0),
-            anchor=np.where(seen[:, None], position, self.anchor),
-            anchor_neighbours=np.where(seen[:, None, None], position[self.neighbours], self.anchor_neighbours),
-            anchor_valid=np.where(seen[:, None], seen[self.neighbours], self.anchor_valid),
+            anchor=np.where(anchored[:, None], position, self.anchor),
+            anchor_neighbours=np.where(anchored[:, None, None], position[self.neighbours], self.anchor_neighbours),
+            anchor_valid=np.where(anchored[:, None], seen[self.neighbours], self.anchor_valid),
             distance_mean=np.where(both, self.distance_mean + rate * deviation, self.distance_mean),
             distance_var=np.where(both, (1 - rate) * (self.distance_var + rate * deviation**2), self.distance_var),
+            motion_var=motion_var, motion_samples=motion_samples, drift_var=drift_var, drift_samples=drift_samples,
         )
+
+    def prediction_var(self, unseen: np.ndarray) -> np.ndarray:
+        """Per-axis variance (mm^2) of a prediction ``unseen + 1`` frames past the last sighting:
+        one frame's motion residual plus the learned drift per further frame."""
+        var: np.ndarray = self.motion_var + self.drift_var * unseen
+        return var
 
     def predict(self) -> np.ndarray:
         """``(N, 3)`` predicted position one frame ahead (see ``_predict``)."""
@@ -121,13 +156,16 @@ class MarkerState:
         """
         ahead = self.position + self.velocity
         usable = self._followable()
-        weight = usable / (self.distance_var + 1.0)
         followed = ~self.visible & usable.any(axis=1)
         follow = np.flatnonzero(followed)
         if len(follow) == 0:
             return ahead, followed
-        w, source, target = weight[follow], self.anchor_neighbours[follow], ahead[self.neighbours[follow]]
-        rotation, c_s, c_t = rigid_transform(source, target, w)
+        # Rigidity prior: the learned distance variance, and nearness (a neighbour twice as
+        # far is a quarter as likely to share the marker's segment); see ``follow_neighbours``.
+        spacing = np.maximum(self.distance_mean[follow], 1.0)
+        prior = usable[follow] / ((self.distance_var[follow] + 1.0) * spacing**2)
+        source, target = self.anchor_neighbours[follow], ahead[self.neighbours[follow]]
+        rotation, c_s, c_t = follow_neighbours(source, target, prior, self.motion_var[follow])
         rotation[usable[follow].sum(axis=1) < 3] = np.eye(3)
         predicted = ahead.copy()
         predicted[follow] = np.einsum("sij,sj->si", rotation, self.anchor[follow] - c_s) + c_t

@@ -8,6 +8,7 @@ from scipy.spatial.distance import cdist
 
 from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights, arc_costs
+from formulations.window.likelihood import likelihood_arc_costs
 from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE, WindowProblem
 
 
@@ -58,10 +59,16 @@ def build_window(
     motion[inner] = candidates.motion[node_object[inner], node_frame[inner] - 1]
     source_occluded = np.zeros(len(order), dtype=bool)
     source_occluded[source_of >= 0] = candidates.template_occluded[source_of[source_of >= 0]]
-    cost = arc_costs(
-        weights, tail, head, node_kind, location, template_cost, motion,
-        _appearance_change(_node_appearance(candidates, order), block_pairs), source_occluded,
-    )
+    if candidates.likelihood is None:
+        cost = arc_costs(
+            weights, tail, head, node_kind, location, template_cost, motion,
+            _appearance_change(_node_appearance(candidates, order), block_pairs), source_occluded,
+        )
+    else:
+        cost = likelihood_arc_costs(
+            weights.template_on_track, _node_likelihood(candidates, candidate_of, node_object, node_frame, node_kind),
+            tail, head, node_kind, location, template_cost, motion, source_occluded,
+        )
     problem = WindowProblem(
         n_objects=n, n_frames=m, node_kind=node_kind, node_object=node_object,
         node_frame=node_frame, node_location=location,
@@ -109,6 +116,26 @@ def _layer_arcs(node_object: np.ndarray, node_frame: np.ndarray) -> tuple[np.nda
     tail = np.repeat(starts[linked], counts) + local // b_rep
     head = np.repeat(starts[linked + 1], counts) + local % b_rep
     return tail, head, np.column_stack([starts[linked], a, starts[linked + 1], b])
+
+
+def _node_likelihood(
+    candidates: WindowCandidates, candidate_of: np.ndarray, node_object: np.ndarray, node_frame: np.ndarray,
+    node_kind: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """The candidates' likelihood terms spread over nodes (zero where a term does not apply)."""
+    assert candidates.likelihood is not None
+    like, v = candidates.likelihood, len(candidate_of)
+    is_candidate = candidate_of >= 0
+    spread = {}
+    for name in ("step_sigma", "step_offset", "reappear_cost"):
+        values = np.ones(v) if name == "step_sigma" else np.zeros(v)
+        values[is_candidate] = getattr(like, name)[candidate_of[is_candidate]]
+        spread[name] = values
+    miss = np.zeros(v)
+    occlusion = node_kind == OCCLUSION
+    miss[occlusion] = like.miss_cost[node_object[occlusion], node_frame[occlusion] - 1]
+    spread["miss_cost"] = miss
+    return spread
 
 
 def _appearance_change(appearance: np.ndarray | None, block_pairs: np.ndarray) -> np.ndarray | None:

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from formulations.window.likelihood import CandidateLikelihood
+
 
 @dataclass(frozen=True)
 class WindowCandidates:
@@ -30,6 +32,8 @@ class WindowCandidates:
             where unknown (the displacement term is then left out).
         appearance: ``(C, H)`` normalised histograms, or None.
         template_appearance: ``(N, H)`` histograms of the templates, or None.
+        likelihood: Negative log-likelihood costs that replace the weights' constants
+            (``likelihood``), or None for Jiang's weighted costs.
     """
 
     template_location: np.ndarray
@@ -44,6 +48,7 @@ class WindowCandidates:
     motion: np.ndarray
     appearance: np.ndarray | None = None
     template_appearance: np.ndarray | None = None
+    likelihood: CandidateLikelihood | None = None
 
     @property
     def n_objects(self) -> int:

@@ -87,7 +87,7 @@ def arc_costs(
     from_gap = (tail_kind == OCCLUSION) | ((tail_kind == SOURCE) & source_occluded[tail])
     observed = (head_kind == OBSERVATION) & ~from_gap
 
-    cost = np.full(len(tail), c_ab)
+    cost = np.full(len(tail), float(c_ab))  # integer weights must not make integer costs
     reappearing = (head_kind == OBSERVATION) & from_gap
     cost[reappearing] = weights.reappear + template_cost[head[reappearing]]
 

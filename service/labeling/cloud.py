@@ -26,6 +26,9 @@ from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.loop import WindowLabels
 from service.labeling.outcome import WindowOutcome
 
+# Jiang's weighted costs for markers: the per-camera chain prices its arcs with them. Cloud
+# candidates carry negative log-likelihoods (``formulations.markers.likelihood``), which
+# replace every weight here but ``template_on_track`` (the shape term's factor on a step).
 MARKER_COSTS = ArcCostWeights(
     appearance_change=0.0, displacement=1.0, reappear=15.0, disappear=15.0, template_on_track=0.3
 )

@@ -1,0 +1,64 @@
+"""What a take's labels teach about its markers' motion: residual and drift variances.
+
+Two running estimates feed the likelihood costs (``markers.likelihood``) and the gates:
+
+* the motion residual of a marker seen in three frames in a row,
+  e = x_t - (x_(t-1) + v), v = x_(t-1) - x_(t-2), of per-axis variance 6 sigma^2 + q_n^2
+  (``noise.TakeNoise``: the take's noise sigma and the marker's own acceleration q_n);
+* the drift of an occluded marker's prediction: reappearing h = unseen + 1 frames after
+  its last sighting at distance e from where it was predicted, it gives one sample of
+  (|e|^2 / 3 - motion_var) / (h - 1), the variance added per frame unseen.
+
+Each is a running mean of squares learned at rate 1 / (samples + 2) down to
+``MOTION_RATE``: the first samples replace the prior, later ones follow slow change.
+Each square is first limited to ``MOTION_CLIP`` times the current value, so a mislabeled
+frame cannot open every later gate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Before a marker's own motion is known its residual is taken as 10 mm per axis: wide
+# enough for one frame of a fast limb at 50 Hz, learned away within a few frames.
+MOTION_VAR_PRIOR_MM2 = 100.0
+# Prior drift, (2.5 mm)^2 per frame unseen: the old fixed prediction sd grew 2.5 mm a frame.
+DRIFT_VAR_PRIOR_MM2 = 6.25
+MOTION_RATE = 0.02  # weight of one new sample once learned: about the last 50
+MOTION_CLIP = 9.0  # a sample counts at most as a 3-sigma one
+
+
+def learn_motion(
+    var: np.ndarray, samples: np.ndarray, residual: np.ndarray, usable: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``motion_var`` and its sample count after one frame (module doc).
+
+    Args:
+        var, samples: ``(N,)`` current estimate and count.
+        residual: ``(N, 3)`` observed minus constant-velocity prediction.
+        usable: ``(N,)`` markers seen now and in the two frames before.
+    """
+    square = np.minimum((residual**2).mean(axis=1), MOTION_CLIP * var)
+    rate = np.maximum(1.0 / (samples + 2), MOTION_RATE)
+    return np.where(usable, var + rate * (square - var), var), samples + usable
+
+
+def learn_drift(
+    var: np.ndarray, samples: np.ndarray, residual: np.ndarray, reappearing: np.ndarray,
+    unseen: np.ndarray, motion_var: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``drift_var`` (one value for all markers) and its count after one frame (module doc).
+
+    Args:
+        residual: ``(N, 3)`` observed minus predicted position.
+        reappearing: ``(N,)`` markers seen now after ``unseen`` >= 1 frames unseen.
+    """
+    usable = reappearing & (unseen >= 1)
+    if not usable.any():
+        return var, samples
+    per_frame = np.maximum((residual[usable] ** 2).mean(axis=1) - motion_var[usable], 0.0) / unseen[usable]
+    current, count = float(var[0]), int(samples[0])
+    for sample in np.minimum(per_frame, MOTION_CLIP * current):
+        current += max(1.0 / (count + 2), MOTION_RATE) * (sample - current)
+        count += 1
+    return np.full_like(var, current), np.full_like(samples, count)

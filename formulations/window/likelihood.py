@@ -1,0 +1,86 @@
+"""Arc costs as negative log-likelihoods (Ringer & Lasenby 2002, eq. 10, in spirit).
+
+Jiang's constants c_a, c_b and lambda_2 weigh a step against an occlusion by hand. Here an
+object's path through frame m pays the negative log-likelihood of what its node says
+happened, against the same data explained without it:
+
+    observation j after an observation i:   rho(|d(i, j)| / s) + o_j
+    observation j after a gap (reappear):   r_j   (the candidate's own, from its prediction)
+    occlusion in frame m:                   -log(1 - P_D) + K
+
+with d(i, j) = r_j - r_i - delta as in ``costs``, s the sd per axis of that residual,
+o_j = 3 log s + (3/2) log 2 pi - log P_D + log lambda_FA + K the rest of a 3D Gaussian's
+log density against the point being a false alarm of density lambda_FA (per mm^3), and K
+one shift per window that keeps every cost >= 0 (every path crosses each frame once, so K
+changes no comparison). rho is Huber's loss at k = 3: a Gaussian core with Laplace tails,
+because real accelerations come in bursts a Gaussian would call impossible. The
+candidate generator supplies s, o, r and the occlusion costs (``CandidateLikelihood``);
+the template term g(s_n, j) is added to every arc into j, times t after an observation
+(as in ``costs``) and whole after a gap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE
+
+HUBER_K = 3.0
+
+
+@dataclass(frozen=True)
+class CandidateLikelihood:
+    """What the likelihood costs need, per candidate and per (object, frame).
+
+    Attributes:
+        step_sigma: ``(C,)`` s, sd per axis of the step residual into the candidate (mm).
+        step_offset: ``(C,)`` o_j (module doc).
+        reappear_cost: ``(C,)`` whole cost of entering the candidate after a gap, or where
+            the step residual is unknown.
+        miss_cost: ``(N, M)`` cost of each occlusion node.
+    """
+
+    step_sigma: np.ndarray
+    step_offset: np.ndarray
+    reappear_cost: np.ndarray
+    miss_cost: np.ndarray
+
+
+def huber(z: np.ndarray) -> np.ndarray:
+    """rho(z) = z^2 / 2 for z <= k, k z - k^2 / 2 beyond (k = ``HUBER_K``)."""
+    rho: np.ndarray = np.where(z <= HUBER_K, 0.5 * z**2, HUBER_K * z - 0.5 * HUBER_K**2)
+    return rho
+
+
+def likelihood_arc_costs(
+    template_on_track: float, node_likelihood: dict[str, np.ndarray], tail: np.ndarray, head: np.ndarray, kind: np.ndarray,
+    location: np.ndarray, template_cost: np.ndarray, motion: np.ndarray, source_occluded: np.ndarray,
+) -> np.ndarray:
+    """Cost of every arc (module doc), vectorised over arcs.
+
+    Args:
+        template_on_track: t, the factor of g(s_n, j) on an observation-to-observation arc
+            (1 on arcs out of a gap, where the template term is all that ties j to n).
+        node_likelihood: Per node ``step_sigma``, ``step_offset``, ``reappear_cost`` (read at
+            observation nodes) and ``miss_cost`` (read at occlusion nodes).
+        Others: as ``costs.arc_costs``.
+    """
+    tail_kind, head_kind = kind[tail], kind[head]
+    from_gap = (tail_kind == OCCLUSION) | ((tail_kind == SOURCE) & source_occluded[tail])
+    cost = np.zeros(len(tail))
+    into_occlusion = head_kind == OCCLUSION
+    cost[into_occlusion] = node_likelihood["miss_cost"][head[into_occlusion]]
+    into_observation = head_kind == OBSERVATION
+    cost[into_observation] = node_likelihood["reappear_cost"][head[into_observation]]
+    observed = into_observation & ~from_gap
+    t, h = tail[observed], head[observed]
+    step = location[h] - location[t] - motion[h]
+    z = np.sqrt(np.einsum("ad,ad->a", step, step)) / node_likelihood["step_sigma"][h]
+    known = np.isfinite(z)
+    stepped = np.flatnonzero(observed)[known]
+    cost[stepped] = huber(z[known]) + node_likelihood["step_offset"][h[known]]
+    cost[into_observation] += np.where(observed, template_on_track, 1.0)[into_observation] * template_cost[head[into_observation]]
+    cost[head_kind == SINK] = 0.0
+    return cost
