@@ -25,12 +25,24 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.c3d import read_c3d
+from service.io.formats.csv import read_csv_labeled
 from service.io.formats.trc import read_trc
 from service.io.recording import Recording
 
 _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload([__name__])
-_READERS = {".c3d": read_c3d, ".trc": read_trc}
+
+
+def _read_csv(path: Path, max_markers: int | None = None, max_frames: int | None = None) -> Recording:
+    """markerflow's own table: text parsed whole (no native code), then held to the same counts."""
+    table = read_csv_labeled(path)
+    for count, what, limit in ((len(table.names), "markers", max_markers), (table.n_frames, "frames", max_frames)):
+        if limit is not None and count > limit:
+            raise InputError(f"{path}: {count} {what} exceeds the limit of {limit} (limits.max_{what})")
+    return Recording(table.names, table.positions, table.rate)
+
+
+_READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": _read_csv}
 _RECORDING, _ERROR, _MEMORY = b"R", b"E", b"M"  # the first byte of the child's one message
 
 
@@ -45,7 +57,7 @@ class ReaderBounds:
 
 
 def read_isolated(data: bytes, suffix: str, bounds: ReaderBounds) -> Recording:
-    """The recording in ``data`` (a ``.c3d`` or ``.trc`` file's bytes), read in a bounded child.
+    """The recording in ``data`` (a ``.c3d``, ``.trc`` or markerflow ``.csv`` file's bytes), read in a bounded child.
 
     Raises:
         InputError: The file is malformed or over a limit, or the reader crashed, ran out of
