@@ -1,9 +1,10 @@
 """Solve the window LP of a (sub-)window: the relaxation behind lp-l1, ilp's LP-first
 step and qp-l2's bound.
 
-The LP (``window_lp``) is solved by HiGHS, with all columns on a small window and by
-column generation (``solve_with_pricing``) once the window has more than
-``pricing_min_arcs`` arcs. Its optimal value is a proven lower bound on min E, since
+The LP (``window_lp``) is solved by HiGHS, with all columns on a small window. Once the
+window has more than ``pricing_min_arcs`` arcs it is solved by column generation: over
+whole paths (``path_lp``) when it has no layout term, else over arcs
+(``solve_with_pricing``). Its optimal value is a proven lower bound on min E, since
 every feasible set of paths is an integral point of the LP with value E.
 """
 
@@ -15,6 +16,7 @@ import numpy as np
 
 from formulations.relaxation.certify import Relaxation
 from formulations.relaxation.lp_model import window_lp
+from formulations.relaxation.path_lp import solve_path_lp
 from formulations.relaxation.pricing import PRICING_MIN_ARCS, PRICING_SUCCESSORS, initial_columns, solve_with_pricing
 from formulations.solvers import create_backend
 from formulations.window.problem import WindowProblem
@@ -30,9 +32,16 @@ def solve_window_lp(
         problem: The (sub-)window.
         time_limit: Seconds per LP solve (None: no limit).
         pricing_min_arcs: Use column generation when the window has more arcs.
-        pricing_successors: Cheapest out-arcs per node in the first restricted LP.
+        pricing_successors: Cheapest out-arcs per node in the first restricted arc LP
+            (windows with a layout term).
     """
     start = time.perf_counter()
+    if problem.n_arcs > pricing_min_arcs and not np.any(problem.layout_weight > 0):
+        result, n_paths = solve_path_lp(problem, time_limit)
+        return Relaxation(
+            xi=result.x, bound=result.bound, optimal=result.optimal,  # L(pi) is proven in any round
+            status=result.status, n_variables=n_paths, build_seconds=0.0, solve_seconds=time.perf_counter() - start,
+        )
     model = window_lp(problem)
     build = time.perf_counter() - start
     backend = create_backend("highs")

@@ -1,0 +1,62 @@
+"""The path LP (column generation over whole paths) against the arc LP it replaces on large windows."""
+
+import numpy as np
+import pytest
+from windows import brute_force, random_window
+
+from formulations.relaxation.lp_model import window_lp
+from formulations.relaxation.path_lp import solve_path_lp
+from formulations.relaxation.viterbi import ArcLayers, shortest_path_arcs, shortest_paths
+from formulations.solvers import create_backend
+from formulations.window.objective import path_arcs
+
+CASES = [(seed, n, per, likelihood) for seed in range(10) for n, per in ((3, 2), (4, 3), (6, 3)) for likelihood in (False, True)]
+
+
+def arc_lp_value(problem):
+    backend = create_backend("highs")
+    backend.set_model(window_lp(problem))
+    result = backend.solve()
+    assert result.optimal
+    return result.objective
+
+
+@pytest.mark.parametrize("seed,n_objects,per_object,likelihood", CASES)
+def test_same_optimum_as_the_arc_lp_and_a_flow_in_each_object(seed, n_objects, per_object, likelihood):
+    problem = random_window(seed, n_objects=n_objects, n_frames=4, n_points=4, per_object=per_object, likelihood=likelihood)
+    result, _ = solve_path_lp(problem)
+    assert result.optimal
+    value = arc_lp_value(problem)
+    assert result.bound == pytest.approx(value, abs=1e-7)
+    assert problem.arc_cost @ result.x == pytest.approx(value, abs=1e-7)
+    # xi is a unit flow per object: out of each source 1, conserved at every inner node
+    into = np.bincount(problem.arc_head, weights=result.x, minlength=problem.n_nodes)
+    out = np.bincount(problem.arc_tail, weights=result.x, minlength=problem.n_nodes)
+    assert np.allclose(out[problem.source_nodes()], 1.0)
+    inner = (problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames)
+    assert np.allclose(into[inner], out[inner])
+    assert np.all(problem.conflict_groups @ into <= 1 + 1e-7)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_bound_never_above_the_exhaustive_optimum(seed):
+    problem = random_window(seed, n_objects=3, n_frames=3, n_points=3, per_object=3)
+    optimum, _ = brute_force(problem)
+    result, _ = solve_path_lp(problem)
+    assert result.bound <= optimum + 1e-7
+
+
+def test_refuses_a_layout_term():
+    with pytest.raises(ValueError, match="layout"):
+        solve_path_lp(random_window(0, mu=0.5))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_viterbi_arcs_are_the_paths_and_their_costs(seed):
+    problem = random_window(seed, n_objects=4, n_frames=4, n_points=4, per_object=3)
+    cost = problem.arc_cost + np.random.default_rng(seed).uniform(0, 3, problem.n_arcs)
+    arcs, distance = shortest_path_arcs(problem, cost, ArcLayers.of(problem))
+    path, same = shortest_paths(problem, cost)
+    assert np.array_equal(arcs, path_arcs(problem, path))
+    assert np.allclose(cost[arcs].sum(axis=1), distance)
+    assert np.array_equal(distance, same)
