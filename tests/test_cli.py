@@ -21,6 +21,7 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 SUMMARY_KEYS = {
     "label_accuracy", "swaps", "ghost_precision", "ghost_recall", "integral_window_fraction",
     "gap_median", "gap_max", "seconds_per_frame", "frames", "markers", "formulation", "doubtful_fraction",
+    "doubtful_share", "doubtful_recall",
 }  # fmt: skip
 
 

@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from service.labeling.stats import DOUBTFUL_WARNING, REACQUIRED_FRAMES
+from service.labeling.stats import DOUBTFUL_BELOW, DOUBTFUL_WARNING
 
 # Piped output (files, CI logs) has no width to detect: give tables room rather than 80
 # columns, and never break a line of text (a script reads the summary as one line).
@@ -30,6 +30,8 @@ LABELS = {
     "ghost_recall": ("ghost recall", "{:.3f}"),
     "integral_window_fraction": (f"windows {CERTIFICATE}", "{:.1%}"),
     "doubtful_fraction": ("doubtful labels", "{:.1%}"),
+    "doubtful_share": ("doubtful labels (scored frames)", "{:.2%}"),
+    "doubtful_recall": ("wrong labels flagged doubtful", "{:.1%}"),
     "gap_median": ("median gap", "{:.2e}"),
     "gap_max": ("max gap", "{:.2e}"),
     "seconds_per_frame": ("ms per frame", None),
@@ -61,9 +63,15 @@ def warn_doubtful(fraction: float | None) -> None:
     """One stderr line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
     if fraction is not None and fraction > DOUBTFUL_WARNING:
         sys.stdout.flush()  # after the figures it qualifies, also when both go to one terminal
-        print(f"warning: {fraction:.1%} of the labels are doubtful (within {REACQUIRED_FRAMES} frames of a "
-              f"re-acquisition after an occlusion, or in a window not proven {CERTIFICATE}); check them",
-              file=sys.stderr, flush=True)
+        print(f"warning: {fraction:.1%} of the labels are doubtful (confidence below {DOUBTFUL_BELOW:.0%}: "
+              f"another reading of their window is nearly as likely); check them", file=sys.stderr, flush=True)
+
+
+def warn(line: str | None) -> None:
+    """A warning line on stderr (none for None), after the figures it qualifies."""
+    if line is not None:
+        sys.stdout.flush()
+        print(line, file=sys.stderr, flush=True)
 
 
 @contextmanager

@@ -6,6 +6,7 @@ import time
 from dataclasses import dataclass
 
 from formulations.methods.formulation import Formulation
+from service.evaluation.doubt_scores import doubt_scores
 from service.evaluation.scenario import Scenario
 from service.evaluation.scores import LabelScores, label_scores
 from service.evaluation.simulate_cloud import simulate_cloud
@@ -31,6 +32,7 @@ class Evaluation:
         """The stable figures ``markerflow eval --json`` prints.
 
         Gaps are None where a formulation proves no bound (heuristics): JSON has no inf.
+        ``doubtful_share`` and ``doubtful_recall`` are those of ``doubt_scores``.
         """
         frames = self.capture.cloud.n_frames
         return {
@@ -39,6 +41,7 @@ class Evaluation:
             "ghost_precision": self.scores.ghost_precision,
             "ghost_recall": self.scores.ghost_recall,
             **certificate_figures(self.windows),
+            **doubt_scores(self.capture, self.result),
             "seconds_per_frame": self.seconds / max(frames - 1, 1),
             "frames": frames,
             "markers": len(self.capture.first_frame.names),

@@ -102,6 +102,12 @@ class LabeledTrajectories:
             -1 where occluded. Empty when the input had no point identities.
         filled: ``(frames, markers, 3)`` where a marker is occluded, its predicted position
             (from the rigid motion of its neighbours), NaN elsewhere. Empty when unknown.
+        best_view: Camera mode: ``(frames, markers)`` index into ``view_names`` of the
+            camera that shows each marker best (``service.best_view.markers``). Empty
+            without cameras.
+        view_names: The cameras ``best_view`` indexes; empty without cameras.
+        confidence: ``(frames, markers)`` probability that each label is right (1 in the
+            given first frame, NaN where no window labeled the frame). Empty when unknown.
     """
 
     names: list[str]
@@ -110,6 +116,9 @@ class LabeledTrajectories:
     rate: float
     point_index: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=int))
     filled: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    best_view: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=int))
+    view_names: list[str] = field(default_factory=list)
+    confidence: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def n_frames(self) -> int:

@@ -27,9 +27,10 @@ from formulations.methods.formulation import Formulation
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
 from service.errors import InputError
+from service.labeling.confidence import carried, last_labeled, marker_confidence
 from service.labeling.outcome import WindowOutcome
 from service.labeling.spans import window_spans
-from service.labeling.stats import WindowStats
+from service.labeling.stats import DoubtCount, WindowStats
 
 Inverse = TypeVar("Inverse")
 Progress = Callable[[int, int], None]  # (windows done, windows)
@@ -77,6 +78,7 @@ def label_windows(
     """
     spans = window_spans(n_frames, window)
     state = first if after is None else after.state
+    carry = _template_confidence(first, after)
     for k in range(0 if after is None else after.index + 1, len(spans)):
         template, last = spans[k]
         began = time.perf_counter()
@@ -84,7 +86,12 @@ def label_windows(
         prepared = time.perf_counter() - began
         solution = _solve(formulation, problem, template)
         labels = chain.invert(solution, inverse)
-        stats = WindowStats.of(template, last, solution, prepared, time.perf_counter() - began)
+        judged = time.perf_counter()
+        occluded = _occluded(labels)
+        confidence = carried(marker_confidence(problem, solution, len(carry), labels.views), carry)
+        carry = last_labeled(confidence, occluded, carry)
+        doubt = DoubtCount.of(confidence, occluded, time.perf_counter() - judged)
+        stats = WindowStats.of(template, last, solution, prepared, time.perf_counter() - began, doubt)
         if observer:
             observer(template, problem, solution)
         if progress:
@@ -92,8 +99,24 @@ def label_windows(
         state = labels.state
         yield WindowOutcome(
             index=k, point_index=labels.point_index, filled=labels.filled, stats=stats, state=state,
-            views=labels.views, positions=labels.positions,
+            views=labels.views, positions=labels.positions, confidence=confidence, carry=carry,
         )
+
+
+def _template_confidence(first: MarkerState, after: WindowOutcome | None) -> np.ndarray:
+    """``(N,)`` each marker's confidence carried into the first window: 1 from the given
+    first frame; after ``after``, its ``carry`` (1 for an outcome stored without)."""
+    if after is None or after.carry is None:
+        return np.ones(first.position.shape[0])
+    return after.carry
+
+
+def _occluded(labels: WindowLabels) -> np.ndarray:
+    """``(M, N)`` markers the window left without a point (or, per camera, without a view)."""
+    if labels.positions is not None:
+        return np.isnan(labels.positions).any(axis=2)
+    occluded: np.ndarray = labels.point_index < 0
+    return occluded
 
 
 def first_marker_state(names: list[str], first_frame: np.ndarray) -> MarkerState:

@@ -17,7 +17,7 @@ import numpy as np
 from formulations.markers.state import MarkerState
 from service.labeling.stats import WindowStats
 
-_OPTIONAL = ("views", "positions")  # stored only when present
+_OPTIONAL = ("views", "positions", "confidence", "carry")  # stored only when present
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,10 @@ class WindowOutcome:
             is then ``(M, 0)``: the markers took detections, not points.
         positions: ``per-camera`` only: ``(M, N, 3)`` located positions, NaN where no
             camera saw the marker.
+        confidence: ``(M, N)`` probability that each marker's label is right
+            (``service.labeling.confidence``); None in outcomes stored before it existed.
+        carry: ``(N,)`` each marker's confidence at its last label so far: what the next
+            window's confidences are carried on from (``carried``); None as above.
     """
 
     index: int
@@ -45,6 +49,8 @@ class WindowOutcome:
     state: MarkerState
     views: np.ndarray | None = None
     positions: np.ndarray | None = None
+    confidence: np.ndarray | None = None
+    carry: np.ndarray | None = None
 
     def to_bytes(self) -> bytes:
         arrays = {f"state.{f.name}": getattr(self.state, f.name) for f in fields(MarkerState)}

@@ -2,8 +2,11 @@
 which labels the certificate does not vouch for.
 
 An integral window is optimal *under the model* (the arc costs and gates of the window
-LP): it proves no label right. Labels are called doubtful where the model had the least
-to go on, and a take's share of them is reported next to the certificate.
+LP): it proves no label right. Every label also carries a confidence
+(``formulations.confidence``: the margin by which the chosen reading beats the best
+reading that changes the label, read as a probability); a label is *doubtful* when its
+confidence is below ``DOUBTFUL_BELOW``, and a take's share of them is reported next to
+the certificate.
 """
 
 from __future__ import annotations
@@ -13,6 +16,24 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from formulations.window.solution import WindowSolution
+
+DOUBTFUL_BELOW = 0.9  # a label whose confidence is below this is doubtful
+DOUBTFUL_WARNING = 0.02  # warn when more than this share of a take's labels is doubtful
+REACQUIRED_LISTED = 20  # re-acquisition frames listed per marker in a summary
+
+
+@dataclass(frozen=True)
+class DoubtCount:
+    """A window's labels (markers holding a point or view), how many are doubtful, and the
+    seconds their confidence took."""
+
+    labels: int
+    doubtful: int
+    seconds: float
+
+    @classmethod
+    def of(cls, confidence: np.ndarray, occluded: np.ndarray, seconds: float) -> DoubtCount:
+        return cls(int((~occluded).sum()), int(doubtful_labels(confidence, occluded).sum()), seconds)
 
 
 @dataclass(frozen=True)
@@ -30,6 +51,9 @@ class WindowStats:
         build_seconds, solve_seconds, round_seconds: Inside the formulation.
         total_seconds: Whole window, inversion included.
         components: How the window was split (objects by Viterbi, coupled components).
+        labels, doubtful: Labels in the window's new frames, and those with a confidence
+            below ``DOUBTFUL_BELOW`` (0 in windows stored before confidences existed).
+        confidence_seconds: Time spent on the labels' confidence (in ``total_seconds``).
     """
 
     template: int
@@ -46,15 +70,21 @@ class WindowStats:
     round_seconds: float
     total_seconds: float
     components: dict[str, int]
+    labels: int = 0
+    doubtful: int = 0
+    confidence_seconds: float = 0.0
 
     @classmethod
-    def of(cls, template: int, last: int, solution: WindowSolution, prepare: float, total: float) -> WindowStats:
+    def of(
+        cls, template: int, last: int, solution: WindowSolution, prepare: float, total: float, doubt: DoubtCount,
+    ) -> WindowStats:
         return cls(
             template=template, last=last, integral=solution.integral, gap=solution.gap,
             cost=solution.cost, lower_bound=solution.lower_bound, n_fractional=solution.n_fractional,
             status=solution.status, prepare_seconds=prepare, build_seconds=solution.build_seconds,
             solve_seconds=solution.solve_seconds, round_seconds=solution.round_seconds,
-            total_seconds=total, components=dict(solution.components),
+            total_seconds=total, components=dict(solution.components), labels=doubt.labels,
+            doubtful=doubt.doubtful, confidence_seconds=doubt.seconds,
         )
 
     def to_dict(self) -> dict:
@@ -66,43 +96,30 @@ def finite_or_none(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
 
 
-REACQUIRED_FRAMES = 5  # a label stays doubtful this many frames after its marker reappears
-DOUBTFUL_WARNING = 0.02  # warn when more than this share of a take's labels is doubtful
-REACQUIRED_LISTED = 20  # re-acquisition frames listed per marker in a summary
+def reacquired(occluded: np.ndarray) -> np.ndarray:
+    """``(F, M)`` bool: seen in frame ``f`` and occluded in frame ``f - 1``: picked up again
+    rather than carried along a track."""
+    onsets = np.zeros_like(occluded, dtype=bool)
+    onsets[1:] = occluded[:-1] & ~occluded[1:]
+    return onsets
 
 
-def reacquired(occluded: np.ndarray, frames: int = REACQUIRED_FRAMES) -> np.ndarray:
-    """``(F, M)`` bool: seen in frame ``f`` and occluded in one of frames ``f - frames .. f - 1``.
-
-    Such a label was picked up again rather than carried along a track: the marker state
-    that chose it had been predicted, unseen, through the gap.
-    """
-    recent = np.zeros_like(occluded, dtype=bool)
-    for back in range(1, frames + 1):
-        recent[back:] |= occluded[:-back]
-    return recent & ~occluded
+def doubtful_labels(confidence: np.ndarray, occluded: np.ndarray) -> np.ndarray:
+    """``(F, M)`` bool: labels (seen samples) whose confidence is below ``DOUBTFUL_BELOW``."""
+    return (np.asarray(confidence) < DOUBTFUL_BELOW) & ~np.asarray(occluded, dtype=bool)
 
 
-def doubtful_labels(occluded: np.ndarray, windows: list[WindowStats]) -> np.ndarray:
-    """``(F, M)`` bool: labels (seen samples) that are ``reacquired``, or that lie in a window
-    whose relaxation was fractional (rounded, so not even optimal under the model)."""
-    fractional = np.zeros(len(occluded), dtype=bool)
-    for w in windows:
-        fractional[w.template + 1 : w.last + 1] |= not w.integral
-    return reacquired(occluded) | (fractional[:, None] & ~occluded)
-
-
-def doubtful_fraction(occluded: np.ndarray, windows: list[WindowStats]) -> float:
+def doubtful_fraction(confidence: np.ndarray, occluded: np.ndarray) -> float:
     """Doubtful labels / labels (``doubtful_labels``; 0 with no label)."""
     occluded = np.asarray(occluded, dtype=bool)
     labels = int((~occluded).sum())
-    return int(doubtful_labels(occluded, windows).sum()) / labels if labels else 0.0
+    return int(doubtful_labels(confidence, occluded).sum()) / labels if labels else 0.0
 
 
 def reacquisitions(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:
     """Per marker that has any, the first ``REACQUIRED_LISTED`` frames (from 0) where it
     reappeared after an occlusion: where its identity went from predicted back to a point."""
-    onsets = reacquired(np.asarray(occluded, dtype=bool), frames=1)
+    onsets = reacquired(np.asarray(occluded, dtype=bool))
     return {
         name: np.flatnonzero(onsets[:, m])[:REACQUIRED_LISTED].tolist()
         for m, name in enumerate(names) if onsets[:, m].any()

@@ -27,9 +27,10 @@ MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3
 def trajectories_to_bytes(traj: LabeledTrajectories) -> bytes:
     """Exact, pickle-free bytes of ``traj`` (names and rate in a JSON header)."""
     buffer = io.BytesIO()
-    header = json.dumps({"names": list(traj.names), "rate": float(traj.rate)})
+    header = json.dumps({"names": list(traj.names), "rate": float(traj.rate), "view_names": list(traj.view_names)})
     np.savez_compressed(buffer, header=np.array(header), positions=traj.positions, occluded=traj.occluded,
-                        point_index=traj.point_index, filled=traj.filled)
+                        point_index=traj.point_index, filled=traj.filled, best_view=traj.best_view,
+                        confidence=traj.confidence)
     return buffer.getvalue()
 
 
@@ -39,6 +40,10 @@ def trajectories_from_bytes(data: bytes) -> LabeledTrajectories:
         return LabeledTrajectories(
             names=header["names"], positions=stored["positions"], occluded=stored["occluded"], rate=header["rate"],
             point_index=stored["point_index"], filled=stored["filled"],
+            # results stored before best view existed have none
+            best_view=stored["best_view"] if "best_view" in stored else np.zeros((0, 0), dtype=int),
+            view_names=header.get("view_names", []),
+            confidence=stored["confidence"] if "confidence" in stored else np.zeros((0, 0)),  # none stored before
         )
 
 
@@ -57,10 +62,15 @@ def nullable(values: np.ndarray) -> list[Any]:
 
 def trajectories_json(traj: LabeledTrajectories) -> dict:
     """``positions`` ``[frame][marker] = [x, y, z]`` mm or null where occluded; ``filled`` the
-    predicted position where occluded, null elsewhere."""
+    predicted position where occluded, null elsewhere; ``best_view`` ``[frame][marker]`` the
+    name of the camera that shows the marker best (camera mode), null for 3D points;
+    ``confidence`` ``[frame][marker]`` the probability that the label is right
+    (``service.labeling.confidence``), null where no window said."""
     return {
         "markers": list(traj.names), "rate": traj.rate, "positions": nullable(traj.positions),
         "occluded": traj.occluded.tolist(), "filled": nullable(traj.filled) if traj.filled.size else None,
+        "best_view": np.array(traj.view_names, dtype=object)[traj.best_view].tolist() if traj.view_names else None,
+        "confidence": nullable(traj.confidence) if traj.confidence.size else None,
     }
 
 

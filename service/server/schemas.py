@@ -43,10 +43,13 @@ class WindowSummary(Certificate):
     index: int
     template: int = Field(description="First frame of the window (labeled by the window before).")
     last: int
+    labels: int = Field(0, description="Labels (markers holding a point) in the window's new frames.")
+    doubtful: int = Field(0, description="Of those, the ones whose confidence is below the doubtful threshold.")
 
     @classmethod
     def of_stored(cls, window: StoredWindow) -> WindowSummary:
         return cls(index=window.index, template=window.stats["template"], last=window.stats["last"],
+                   labels=window.stats.get("labels", 0), doubtful=window.stats.get("doubtful", 0),
                    **Certificate.of(window.stats).model_dump())
 
 
@@ -87,6 +90,12 @@ class LabeledResult(BaseModel):
     positions: list[list[Position]] = Field(description="[frame][marker] = [x, y, z] mm; null where occluded.")
     occluded: list[list[bool]]
     filled: list[list[Position]] | None = Field(description="Predicted position where occluded, null elsewhere.")
+    best_view: list[list[str]] | None = Field(
+        default=None, description="[frame][marker] = the camera that shows the marker best (camera mode); null for 3D points.",
+    )
+    confidence: list[list[float | None]] | None = Field(
+        default=None, description="[frame][marker] = probability that the label is right; null where no window said.",
+    )
 
 
 class SolveAnswer(LabeledResult):

@@ -75,6 +75,8 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
         c3d = _with_labels(_new_c3d(traj, source, start), traj, source.unit, 0, path)
     else:  # a copy: ezc3d's write extends the LABELS list it is given
         c3d = _with_labels(copy.deepcopy(source.c3d), traj, source.unit, start, path)
+    if traj.confidence.size:
+        _with_confidence(c3d, traj, 0 if source.c3d is None else start)
     _check_writable(path)
     c3d.write(str(path))
 
@@ -110,6 +112,43 @@ def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: in
     if "camera_masks" in meta and meta["camera_masks"].size:
         meta["camera_masks"][:, columns] = False
     return c3d
+
+
+CONFIDENCE_SUFFIX = "_confidence"  # analog channel <marker>_confidence holds that marker's label confidence
+
+
+def _with_confidence(c3d: ezc3d.c3d, traj: LabeledTrajectories, start: int) -> None:
+    """Append one analog channel ``<marker>_confidence`` per labeled marker (in place).
+
+    Why analog channels: a C3D parameter holds at most 255 values per dimension and about
+    32 kB in all (ezc3d refuses to read back a MARKERFLOW:CONFIDENCE of 2 x 900 values),
+    far less than markers x frames; and the POINT residual is stored as an 8-bit multiple
+    of POINT:SCALE (0.5 reads back as 0 with the default scale) and means a reconstruction
+    error where negative marks a gap. Analog channels are C3D's place for any per-frame
+    signal: each frame's value is repeated over the analog samples of that frame (the
+    file's own analog rate, or the point rate when it had none), 0 in frames outside the
+    labels. Channels of these names already in the file (a relabeled markerflow output)
+    are replaced.
+    """
+    analog, frames = c3d["parameters"]["ANALOG"], c3d["data"]["points"].shape[2]
+    data = c3d["data"]["analogs"]
+    ratio = data.shape[2] // frames if data.size else 1
+    labels = [str(label).strip() for label in analog["LABELS"]["value"]] if data.size else []
+    names = [f"{name}{CONFIDENCE_SUFFIX}" for name in traj.names]
+    kept = [i for i, label in enumerate(labels) if label not in names]
+    values = np.zeros((len(names), frames))
+    values[:, start : start + traj.n_frames] = np.nan_to_num(traj.confidence.T, nan=0.0)
+    added = np.repeat(values, ratio, axis=1)[None]
+    c3d["data"]["analogs"] = np.concatenate([data[:, kept], added], axis=1) if data.size else added
+    for key, text in (("LABELS", names), ("DESCRIPTIONS", ["markerflow label confidence"] * len(names)),
+                      ("UNITS", ["1"] * len(names))):
+        texts = list(analog[key]["value"]) if key in analog and data.size else [""] * len(labels)
+        analog[key]["value"] = [texts[i] for i in kept] + text
+    for key, number in (("SCALE", 1.0), ("OFFSET", 0.0)):
+        numbers = np.asarray(analog[key]["value"]) if key in analog and data.size else np.zeros(len(labels))
+        analog[key]["value"] = np.concatenate([numbers[kept], np.full(len(names), number)])
+    if not data.size:
+        analog["RATE"]["value"] = np.array([float(c3d["parameters"]["POINT"]["RATE"]["value"][0])])
 
 
 def _columns(labels: list[str], names: list[str], path: Path) -> list[int]:

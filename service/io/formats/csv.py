@@ -12,10 +12,17 @@ from service.io.formats.conventions import hidden_samples, require_file, sample_
 from service.io.recording import LabeledTrajectories, SourceFile
 
 _AXES = ("x", "y", "z")
+_CONFIDENCE = "_confidence"
 
 
 def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
     """Write ``frame,time,<name>_x,<name>_y,<name>_z,...`` in mm; occluded cells empty.
+
+    Camera mode adds ``<name>_best_view,...`` after the coordinates: the name of the
+    camera that shows each marker best in that frame (``LabeledTrajectories.best_view``).
+    Labels with confidences end with ``<name>_confidence,...``: the probability that the
+    marker's label is right, in every frame (occluded ones too: that it is occluded
+    there), empty where no window said.
 
     ``frame`` numbers the input's frames as its file does (the labels of input frame
     ``start`` are frame ``source.first_frame + start``); ``time`` is seconds since the
@@ -28,12 +35,18 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     first = (source or SourceFile()).first_frame + start
     hidden = hidden_samples(traj)
     header = ["frame", "time"] + [f"{name}_{axis}" for name in traj.names for axis in _AXES]
+    views = np.array(traj.view_names, dtype=object)[traj.best_view] if traj.view_names else None
+    header += [f"{name}_best_view" for name in traj.names] if views is not None else []
+    confidence = traj.confidence.size > 0
+    header += [f"{name}{_CONFIDENCE}" for name in traj.names] if confidence else []
     try:
         with path.open("w", newline="", encoding="utf-8") as f:
             writer = csv.writer(f)
             writer.writerow(header)
             writer.writerows(
                 [str(first + f), repr((start + f) / traj.rate)] + sample_cells(traj.positions[f], hidden[f])
+                + (list(views[f]) if views is not None else [])
+                + (_confidence_cells(traj.confidence[f]) if confidence else [])
                 for f in range(traj.n_frames)
             )
     except OSError as exc:
@@ -54,24 +67,67 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
             rows = list(csv.reader(f))
     except csv.Error as exc:
         raise InputError(f"{path}: not a CSV table ({exc})") from exc
-    names = _names(rows[0] if rows else [], path)
+    rows, confidence = _split_confidence(rows, path)
+    names, with_views = _names(rows[0] if rows else [], path)
     width = 2 + 3 * len(names)
-    table = np.array([_floats(row, width, path, i) for i, row in enumerate(rows[1:], start=2)])
+    views = [_view_cells(row, width, len(names), path, i) for i, row in enumerate(rows[1:], start=2)] if with_views else []
+    table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in enumerate(rows[1:], start=2)])
     if len(table) < 2:
         raise InputError(f"{path}: needs at least two frames to infer the frame rate")
     positions = table[:, 2:].reshape(len(table), len(names), 3)
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
-    return LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))
+    labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))
+    if confidence is not None:
+        labels.confidence = _named_confidence(confidence, names, path)
+    if not with_views:
+        return labels
+    view_names = list(dict.fromkeys(name for row in views for name in row))
+    best_view = np.array([[view_names.index(name) for name in row] for row in views], dtype=int)
+    return LabeledTrajectories(names, positions, occluded, labels.rate, best_view=best_view, view_names=view_names,
+                               confidence=labels.confidence)
 
 
-def _names(header: list[str], path: Path) -> list[str]:
-    triples = [header[i : i + 3] for i in range(2, len(header), 3)]
-    names = [t[0][:-2] for t in triples]
+def _split_confidence(rows: list[list[str]], path: Path) -> tuple[list[list[str]], tuple[list[str], np.ndarray] | None]:
+    """The table without its trailing ``<name>_confidence`` columns, and those columns'
+    names and values (None when there are none)."""
+    header = rows[0] if rows else []
+    count = next((i for i, cell in enumerate(reversed(header)) if not cell.endswith(_CONFIDENCE)), len(header))
+    if count == 0:
+        return rows, None
+    cut = len(header) - count
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise InputError(f"{path}:{line}: {len(row)} cells, header has {len(header)}")
+    values = np.array([_floats(row[cut:], count, path, i) for i, row in enumerate(rows[1:], start=2)]).reshape(-1, count)
+    return [row[:cut] for row in rows], ([cell[: -len(_CONFIDENCE)] for cell in header[cut:]], values)
+
+
+def _named_confidence(confidence: tuple[list[str], np.ndarray], names: list[str], path: Path) -> np.ndarray:
+    if confidence[0] != names:
+        raise InputError(f"{path}: confidence columns should be <name>_confidence for each marker, in order")
+    return confidence[1]
+
+
+def _confidence_cells(values: np.ndarray) -> list[str]:
+    return ["" if np.isnan(v) else repr(float(v)) for v in values]
+
+
+def _names(header: list[str], path: Path) -> tuple[list[str], bool]:
+    """The marker names, and whether ``<name>_best_view`` columns follow the coordinates."""
+    n_markers = (len(header) - 2) // 4 if header[-1:] and header[-1].endswith("_best_view") else (len(header) - 2) // 3
+    names = [header[i][:-2] for i in range(2, 2 + 3 * n_markers, 3)]
     expected = ["frame", "time"] + [f"{n}_{axis}" for n in names for axis in _AXES]
-    if header != expected or not names:
-        raise InputError(f"{path}: header should be frame,time,<name>_x,<name>_y,<name>_z,...")
-    return names
+    with_views = expected + [f"{n}_best_view" for n in names]
+    if header not in (expected, with_views) or not names:
+        raise InputError(f"{path}: header should be frame,time,<name>_x,<name>_y,<name>_z,...[,<name>_best_view,...]")
+    return names, header == with_views
+
+
+def _view_cells(row: list[str], width: int, n_markers: int, path: Path, line: int) -> list[str]:
+    if len(row) != width + n_markers or not all(row[width:]):
+        raise InputError(f"{path}:{line}: {len(row)} cells, header has {width + n_markers} (a best view in each)")
+    return row[width:]
 
 
 def _floats(row: list[str], width: int, path: Path, line: int) -> list[float]:

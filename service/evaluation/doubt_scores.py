@@ -1,0 +1,57 @@
+"""How well the doubtful labels point at the wrong ones, against a simulated capture's truth."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from service.evaluation.simulated import SimulatedCapture
+from service.io.recording import LabeledTrajectories
+from service.labeling.stats import doubtful_labels
+
+
+@dataclass(frozen=True)
+class DoubtCounts:
+    """Labels (markers holding a point, frame 0 not scored), the doubtful ones, the wrong
+    ones (a ghost or another marker's point), and the wrong ones that are doubtful."""
+
+    labels: int
+    doubtful: int
+    wrong: int
+    flagged: int
+
+    def scores(self) -> dict[str, float | None]:
+        """``doubtful_share`` = doubtful / labels (0 with no label); ``doubtful_recall`` =
+        flagged / wrong (None with no wrong label)."""
+        return {
+            "doubtful_share": self.doubtful / self.labels if self.labels else 0.0,
+            "doubtful_recall": self.flagged / self.wrong if self.wrong else None,
+        }
+
+
+def doubt_counts(capture: SimulatedCapture, result: LabeledTrajectories) -> DoubtCounts:
+    """Count a labeling's labels against the truth; doubtful = confidence below
+    ``DOUBTFUL_BELOW`` (``service.labeling.stats.doubtful_labels``).
+
+    Raises:
+        ValueError: ``result`` has no confidences, or names a point a frame does not have.
+    """
+    if result.confidence.shape != result.point_index.shape:
+        raise ValueError("the labeling has no confidence for every label")
+    labeled = result.point_index >= 0
+    labeled[0] = False
+    owner = np.full(result.point_index.shape, -2)  # the true marker of each point taken, -1 a ghost
+    for f in np.flatnonzero(labeled.any(axis=1)):
+        taken = result.point_index[f, labeled[f]]
+        if taken.max() >= len(capture.point_marker[f]):
+            raise ValueError(f"frame {f}: the labeling names point {taken.max()} of {len(capture.point_marker[f])}")
+        owner[f, labeled[f]] = capture.point_marker[f][taken]
+    wrong = labeled & (owner != np.arange(result.point_index.shape[1]))
+    doubtful = doubtful_labels(result.confidence, ~labeled)
+    return DoubtCounts(int(labeled.sum()), int(doubtful.sum()), int(wrong.sum()), int((doubtful & wrong).sum()))
+
+
+def doubt_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> dict[str, float | None]:
+    """``doubtful_share`` and ``doubtful_recall`` of a labeling (``DoubtCounts.scores``)."""
+    return doubt_counts(capture, result).scores()

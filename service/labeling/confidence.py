@@ -1,0 +1,60 @@
+"""Each marker's confidence in a window, from the confidence of the window's objects.
+
+The window's objects are its markers (3D points, ``joint-3d``) or one object per camera and
+marker (``per-camera``, object ``c N + n``). There a marker's position is made from the
+views it kept, so its label is as doubtful as the least confident of those views; a
+marker that kept no view is as doubtful as its least confident "not seen here".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from formulations.confidence import label_confidence
+from formulations.window.problem import WindowProblem
+from formulations.window.solution import WindowSolution
+
+
+def marker_confidence(
+    problem: WindowProblem, solution: WindowSolution, markers: int, views: np.ndarray | None,
+) -> np.ndarray:
+    """``(M, N)`` probability that each marker's label in each new frame of the window is right.
+
+    ``views``: per-camera only, ``(M, N, C)`` the detection each marker kept per camera, -1 for none.
+    """
+    probability = label_confidence(problem, solution.path).probability  # (objects, M)
+    if probability.shape[0] == markers:
+        return probability.T.copy()
+    cameras = probability.shape[0] // markers
+    per_view = probability.reshape(cameras, markers, -1).transpose(2, 1, 0)  # (M, N, C)
+    kept = views >= 0 if views is not None else np.zeros(per_view.shape, dtype=bool)
+    of_kept = np.where(kept, per_view, np.inf).min(axis=2)
+    return np.where(kept.any(axis=2), of_kept, per_view.min(axis=2))
+
+
+def carried(window: np.ndarray, template: np.ndarray) -> np.ndarray:
+    """``(M, N)`` the window's confidences carried on from the markers' earlier ones.
+
+    A window's confidence is conditional on the marker state it was posed from: p(right
+    at t | identity right so far). An identity that went wrong earlier stays wrong: the
+    window follows the track it was given, and a marker lost and found again is sought
+    where its own last position (moved with its neighbours) puts it. Later windows weigh
+    no evidence that could tell (no rigid-body check of a tracked marker's name), so with
+    p(right at t | identity wrong so far) = 0,
+
+        p(right at t) = p(right at t | identity right so far) p(identity right so far),
+
+    the last factor being the confidence of the marker's last label before the window.
+
+    Args:
+        window: ``(M, N)`` the window's own confidences.
+        template: ``(N,)`` each marker's confidence at its last label before the window.
+    """
+    return window * template[None, :]
+
+
+def last_labeled(confidence: np.ndarray, occluded: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """``(N,)`` each marker's confidence at its last label in the window, ``before`` if none."""
+    seen = ~occluded
+    last = len(seen) - 1 - np.argmax(seen[::-1], axis=0)
+    return np.where(seen.any(axis=0), confidence[last, np.arange(seen.shape[1])], before)
