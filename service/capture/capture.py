@@ -14,6 +14,7 @@ import numpy as np
 
 from formulations.cameras.camera import Camera
 from formulations.methods.formulation import Formulation
+from formulations.subject.model import SubjectModel
 from service.errors import InputError
 
 ASSOCIATIONS = ("joint-3d", "per-camera")
@@ -31,12 +32,18 @@ class LabelingOptions:
             window LP) or ``"per-camera"`` (2D window LP per camera, then triangulation).
         layout_weight: mu of the L1 layout term between rigid neighbours coupled by shared
             candidates, 3D points (and joint-3d) only; 0, the default, leaves it out.
+        best_view_switch_cost: Camera mode: lambda of each marker's best-view DP (Jiang Sec.
+            III, ``service.best_view.markers``), the price of a camera switch in frames of
+            the best view; default 1.
+        best_view_window: Camera mode: N, frames per best-view window; default 30.
     """
 
     formulation: str | dict | Formulation = "lp-l1"
     window: int = 20
     association: str = "joint-3d"
     layout_weight: float = 0.0
+    best_view_switch_cost: float = 1.0
+    best_view_window: int = 30
 
 
 @dataclass
@@ -50,6 +57,8 @@ class Capture:
         points: 3D mode: per frame a ``(P, 3)`` array of unlabeled points, mm.
         cameras: Camera mode: the calibrated cameras (world unit mm).
         detections: Camera mode: ``detections[f][c]`` is a ``(D, 2)`` array of pixels.
+        model: A subject model in place of the labeled first frame: ``names`` are then the
+            model's markers, ``first_frame`` is ignored (NaN), and frame 0 is identified.
     """
 
     names: list[str]
@@ -58,12 +67,15 @@ class Capture:
     points: list[np.ndarray] | None = None
     cameras: list[Camera] | None = None
     detections: list[list[np.ndarray]] | None = field(default=None, repr=False)
+    model: SubjectModel | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if (self.points is None) == (self.detections is None):
             raise InputError("a capture has either 3D points or camera detections, not both or neither")
         if self.detections is not None and not self.cameras:
             raise InputError("camera detections need the cameras' calibration")
+        if self.model is not None and self.points is None:
+            raise InputError("labeling from a subject model needs 3D points (camera mode needs a labeled first frame)")
 
     @property
     def mode(self) -> str:

@@ -4,7 +4,8 @@
       "units": "mm",                       # of 3D points, first_frame and camera t: "mm" or "m"
       "rate": 120,
       "markers": ["LFHD", "RFHD", ...],
-      "first_frame": [[x, y, z], ...],     # labeled frame 0, one row per marker
+      "first_frame": [[x, y, z], ...],     # labeled frame 0, one row per marker, or
+      "model": {"version": 1, ...},        # a subject model (markerflow model): frame 0 is identified
       "points": [[[x, y, z], ...], ...],   # 3D mode: unlabeled points per frame, or
       "cameras": [{"name": "cam1", "K": [[fx, 0, cx], [0, fy, cy], [0, 0, 1]],
                    "distortion": [k1, k2, p1, p2], "R": [[...], [...], [...]] or "rvec": [...],
@@ -15,12 +16,14 @@
       "association": "joint-3d"
     }
 
-Frame 0 of ``points``/``detections`` is the labeled frame. Every check names the field
+Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only)
+``markers`` and ``first_frame`` are left out and the model's names are used. Every check names the field
 path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 with it.
 """
 
 from __future__ import annotations
 
+import json
 from typing import Annotated, Literal
 
 import numpy as np
@@ -28,6 +31,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
+from service.capture.model_input import model_names, parse_model
 from service.errors import InputError
 
 # 1e9 (1000 km in mm) bounds every number: sums of squares of larger finite values overflow
@@ -75,8 +79,9 @@ class CaptureDocument(BaseModel):
     model_config = ConfigDict(extra="forbid")
     units: Literal["mm", "m"] = "mm"
     rate: float = Field(gt=0, allow_inf_nan=False)
-    markers: list[str] = Field(min_length=1)
-    first_frame: list[Point3]
+    markers: list[str] | None = Field(default=None, min_length=1)
+    first_frame: list[Point3] | None = None
+    model: dict | None = None
     points: list[list[Point3]] | None = None
     cameras: list[CameraDocument] | None = None
     detections: dict[str, list[list[Pixel]]] | None = None
@@ -86,9 +91,9 @@ class CaptureDocument(BaseModel):
 
     @field_validator("markers")
     @classmethod
-    def _unique(cls, markers: list[str]) -> list[str]:
+    def _unique(cls, markers: list[str] | None) -> list[str] | None:
         seen = set()
-        for name in markers:
+        for name in markers or []:
             if name in seen:
                 raise ValueError(f"marker name {name!r} appears twice")
             seen.add(name)
@@ -96,7 +101,11 @@ class CaptureDocument(BaseModel):
 
     @model_validator(mode="after")
     def _consistent(self) -> CaptureDocument:
-        if len(self.first_frame) != len(self.markers):
+        if self.model is not None:
+            self._check_model()
+        elif self.first_frame is None or self.markers is None:
+            raise ValueError("give markers and first_frame, or a subject model as model")
+        elif len(self.first_frame) != len(self.markers):
             raise ValueError(f"first_frame has {len(self.first_frame)} rows for {len(self.markers)} markers")
         if (self.points is None) == (self.detections is None):
             raise ValueError("give exactly one of points (3D mode) or detections (camera mode)")
@@ -105,6 +114,13 @@ class CaptureDocument(BaseModel):
         if self.n_frames < 2:
             raise ValueError("a capture needs at least 2 frames (the labeled frame and one more)")
         return self
+
+    def _check_model(self) -> None:
+        if self.first_frame is not None or self.markers is not None:
+            raise ValueError("model: give either a subject model or markers and first_frame, not both")
+        if self.points is None:
+            raise ValueError("model: labeling from a subject model needs points (3D mode)")
+        parse_model(json.dumps(self.model), "model")
 
     def _check_detections(self, detections: dict[str, list[list[Pixel]]]) -> None:
         if not self.cameras:
@@ -131,10 +147,15 @@ class CaptureDocument(BaseModel):
     def capture(self) -> Capture:
         """The capture in millimetres; cameras without detections see nothing."""
         scale = MM_PER_UNIT[self.units]
+        if self.model is not None and self.points is not None:
+            model = parse_model(json.dumps(self.model), "model")
+            frames = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
+            names = model_names(model)
+            return Capture(names, np.full((len(names), 3), np.nan), self.rate, points=frames, model=model)
         first_frame = np.asarray(self.first_frame, dtype=float).reshape(-1, 3) * scale
         if self.points is not None:
             points = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
-            return Capture(list(self.markers), first_frame, self.rate, points=points)
+            return Capture(list(self.markers or []), first_frame, self.rate, points=points)
         documents, found = self.cameras or [], self.detections or {}  # both there: _consistent checked it
         cameras = [camera.camera(scale) for camera in documents]
         empty: list[list[Pixel]] = [[] for _ in range(self.n_frames)]
@@ -143,7 +164,7 @@ class CaptureDocument(BaseModel):
             [np.asarray(per_camera[c][f], dtype=float).reshape(-1, 2) for c in range(len(cameras))]
             for f in range(self.n_frames)
         ]
-        return Capture(list(self.markers), first_frame, self.rate, cameras=cameras, detections=detections)
+        return Capture(list(self.markers or []), first_frame, self.rate, cameras=cameras, detections=detections)
 
     @classmethod
     def of(cls, capture: Capture, options: LabelingOptions = LabelingOptions()) -> CaptureDocument:

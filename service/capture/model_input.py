@@ -55,8 +55,12 @@ def check_shared_names(take: list[str], model: SubjectModel, source: str) -> Non
         )
 
 
-def with_model(capture: Capture, model: SubjectModel, start: int = 0, end: int | None = None) -> Capture:
-    """The capture's frames ``start .. end - 1`` (3D points) under the model's names, frame ``start`` unlabeled.
+def with_model(
+    capture: Capture, model: SubjectModel, start: int = 0, end: int | None = None, keep_labels: bool = False,
+) -> Capture:
+    """The capture's frames ``start .. end - 1`` (3D points) under the model's names, frame ``start``
+    unlabeled; with ``keep_labels`` (and ``start`` 0) the capture's labeled first frame is kept
+    for the markers the model knows, and the model names the rest.
 
     Raises:
         InputError: A camera capture, or an empty or out-of-range span.
@@ -69,7 +73,10 @@ def with_model(capture: Capture, model: SubjectModel, start: int = 0, end: int |
             f"--start {start} --end {stop}: needs 0 <= start, start + 2 <= end <= {capture.n_frames} frames"
         )
     names = model_names(model)
-    return replace(
-        capture, names=names, first_frame=np.full((len(names), 3), np.nan), points=capture.points[start:stop],
-        model=model,
-    )
+    first = np.full((len(names), 3), np.nan)
+    if keep_labels and start == 0:
+        labeled = np.asarray(capture.first_frame, dtype=float)
+        for row, name in enumerate(capture.names):
+            if name in names:
+                first[names.index(name)] = labeled[row]
+    return replace(capture, names=names, first_frame=first, points=capture.points[start:stop], model=model)

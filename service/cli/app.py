@@ -57,6 +57,11 @@ def track(
     window: WindowOption = None,
     shuffle: Annotated[bool, typer.Option(help="C3D/TRC input: shuffle each frame's points before labeling.")] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object of the figures on stdout.")] = False,
+    subject: Annotated[Path | None, typer.Option(
+        "--model", help="Subject model .json (markerflow model): no labeled frame; INPUT's labels are discarded.",
+    )] = None,
+    start: Annotated[int, typer.Option(help="With --model: the first frame to label (identified by the model).")] = 0,
+    end: Annotated[int | None, typer.Option(help="With --model: label frames before this one.")] = None,
 ) -> None:
     """Label INPUT and write the named trajectories.
 
@@ -64,7 +69,7 @@ def track(
     """
     from service.cli.track import run_track
 
-    _guard(lambda: run_track(input, out, formulation, _window(window), shuffle, as_json))
+    _guard(lambda: run_track(input, out, formulation, _window(window), shuffle, as_json, subject, start, end))
 
 
 @app.command("eval")
@@ -74,11 +79,14 @@ def evaluate(
     formulation: FormulationOption = None,
     window: WindowOption = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout.")] = False,
+    subject: Annotated[Path | None, typer.Option(
+        "--model", help="Subject model .json: the labeler gets no labeled frame (scenario first_frame = \"model\").",
+    )] = None,
 ) -> None:
     """Run a scenario on labeled trajectories and print the scores."""
     from service.cli.evaluate import run_eval
 
-    _guard(lambda: run_eval(trajectories, scenario, formulation, _window(window), as_json))
+    _guard(lambda: run_eval(trajectories, scenario, formulation, _window(window), as_json, subject))
 
 
 @app.command()
@@ -86,11 +94,82 @@ def model(
     inputs: Annotated[list[Path], typer.Argument(help="Labeled .c3d/.trc/.csv takes of one subject (a range of motion).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Subject model .json to write.")],
     centres: Annotated[Path | None, typer.Option(help="Also write the fitted joint-centre trajectories (.trc).")] = None,
+    markerset: Annotated[str | None, typer.Option(
+        help="Marker-set template: a name in configs/markersets (cmu-41, plug-in-gait, gait2354, rajagopal) or a .toml; "
+        "then a static take is enough.",
+    )] = None,
 ) -> None:
     """Learn a subject: which markers share a rigid segment, the joints, the limb lengths."""
     from service.cli.model import run_model
 
-    _guard(lambda: run_model(inputs, out, centres))
+    _guard(lambda: run_model(inputs, out, centres, markerset))
+
+
+@app.command()
+def pose(
+    input: Annotated[Path, typer.Argument(
+        help="Folder of per-camera OpenPose BODY_25B JSON folders (Pose2Sim layout: camNN_json), or of per-camera image folders.",
+    )],
+    calibration: Annotated[Path, typer.Option(help="Calibration: Pose2Sim .toml, caliscope .toml or markerflow .json.")],
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", help="Joint trajectories .trc (calibration frame and units); a .png overlay beside it.",
+    )],
+    model: Annotated[Path | None, typer.Option(
+        "--model", help="Subject model .json (markerflow model) to build the body from; default: a human sized to the take.",
+    )] = None,
+    particles: Annotated[int, typer.Option(help="N: particles per layer.")] = 300,
+    layers: Annotated[int, typer.Option(help="M: annealing layers per frame.")] = 10,
+    rate: Annotated[float, typer.Option(help="Frames per second of the video (OpenPose JSON does not say).")] = 60.0,
+    seed: Annotated[int, typer.Option(help="Seed of the particle filter.")] = 0,
+) -> None:
+    """Fit an articulated body to every frame by annealed particle filtering (Davison, Deutscher & Reid 2001)."""
+    from service.cli.pose import run_pose
+
+    _guard(lambda: run_pose(input, calibration, out, model, particles, layers, rate, seed))
+
+
+@app.command("best-view")
+def best_view(
+    costs: Annotated[Path, typer.Argument(help="COSTS.csv: frame,object,camera,cost (lower is better), one row per triple.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="CHOICES.csv to write: frame,object,camera.")],
+    switch_cost: Annotated[float, typer.Option(help="lambda: the price of one camera switch, in cost units.")] = 1.0,
+    window: Annotated[int, typer.Option(help="N: frames per sliding window, the current one included.")] = 30,
+) -> None:
+    """Pick each object's camera per frame by Jiang's sliding-window DP (quality plus a price per switch)."""
+    from service.cli.best_view import run_best_view
+
+    _guard(lambda: run_best_view(costs, out, switch_cost, window))
+
+
+@app.command()
+def boxes(
+    detections: Annotated[Path, typer.Argument(help="MOTChallenge det.txt (frame, id, left, top, width, height, conf, ...).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="MOTChallenge result file to write.")],
+    formulation: Annotated[str, typer.Option(
+        "--formulation", "-f", help=f"lp-l1, ilp, nn-hungarian, ... or a TOML with a {FORMULATION_TABLE} table.",
+    )] = "lp-l1",
+    seqinfo: Annotated[Path | None, typer.Option(help="seqinfo.ini: sequence length and image size.")] = None,
+    images: Annotated[Path | None, typer.Option(help="Folder of frames (000001.jpg, ...): adds 64-bin grey histograms.")] = None,
+    window: Annotated[int, typer.Option("--window", "-w", help="Frames per window, template included.")] = 5,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object of the figures on stdout.")] = False,
+) -> None:
+    """Track the boxes of one camera (Jiang's window LP) and write MOTChallenge results."""
+    from service.cli.boxes import run_boxes
+
+    _guard(lambda: run_boxes(detections, out, formulation, seqinfo, images, _window(window) or 5, as_json))
+
+
+@app.command("mot-eval")
+def mot_eval(
+    result: Annotated[Path, typer.Argument(help="MOTChallenge result file.")],
+    gt: Annotated[Path, typer.Argument(help="MOTChallenge gt.txt.")],
+    seqinfo: Annotated[Path | None, typer.Option(help="seqinfo.ini (default: the one beside the gt folder, if any).")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout.")] = False,
+) -> None:
+    """Score a MOTChallenge result with TrackEval: HOTA, MOTA, IDF1, ID switches."""
+    from service.cli.mot_eval import run_mot_eval
+
+    _guard(lambda: run_mot_eval(result, gt, seqinfo, as_json))
 
 
 @app.command("formulations")

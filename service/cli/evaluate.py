@@ -7,19 +7,29 @@ import json
 from pathlib import Path
 
 from service.capture.formulation_spec import formulation_from_spec, resolve_formulation
+from service.capture.model_input import read_model
 from service.cli.report import print_summary, warn_doubtful, window_progress
+from service.errors import InputError
 from service.evaluation.cameras import CameraEvaluation, evaluate_cameras
 from service.evaluation.cloud import Evaluation, evaluate
+from service.evaluation.model_start import evaluate_from_model
 from service.evaluation.scenario import Scenario
 from service.io.formats import read_labeled
 from service.labeling.stats import doubtful_fraction
 
 
-def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, window: int | None, as_json: bool) -> None:
+def run_eval(
+    trajectories: Path, scenario_path: Path, formulation: str | None, window: int | None, as_json: bool,
+    model: Path | None = None,
+) -> None:
     """Simulate, label and score; print a table or one JSON object, and warn on stderr when
     many labels are doubtful (``doubtful_fraction``; None in camera mode, whose evaluation
-    keeps no labeled trajectories)."""
+    keeps no labeled trajectories). ``model`` labels from a subject model, no labeled frame."""
     scenario = Scenario.from_toml(scenario_path)
+    if model is not None:
+        scenario = dataclasses.replace(scenario, first_frame="model")
+    elif scenario.first_frame == "model":
+        raise InputError(f"{scenario_path.name}: first_frame = \"model\" needs --model subject.json")
     if window is not None:
         scenario = dataclasses.replace(scenario, window=window)
     # Resolved here so that a bad formulation names the option or scenario file it came from.
@@ -30,13 +40,15 @@ def run_eval(trajectories: Path, scenario_path: Path, formulation: str | None, w
     truth = read_labeled(trajectories)
     result: Evaluation | CameraEvaluation
     with window_progress(f"labeling {trajectories.name}") as progress:
-        if scenario.mode == "cameras":
+        if model is not None:
+            result = evaluate_from_model(truth, scenario, read_model(model), chosen, progress, trajectories.name)
+        elif scenario.mode == "cameras":
             result = evaluate_cameras(truth, scenario, chosen, progress=progress)
         else:
             result = evaluate(truth, scenario, chosen, progress=progress)
     doubtful = None
     if isinstance(result, Evaluation):
-        doubtful = doubtful_fraction(result.result.occluded, result.windows)
+        doubtful = doubtful_fraction(result.result.confidence, result.result.occluded)
     summary = {**result.summary(), "doubtful_fraction": doubtful}
     if as_json:
         print(json.dumps(summary, allow_nan=False))

@@ -9,6 +9,9 @@ from rich.table import Table
 
 from formulations.errors import FormulationError
 from formulations.subject.fit import SubjectFit, fit_subject
+from formulations.subject.grouping import Grouping
+from formulations.subject.template import fit_template
+from service.capture.markerset import load_template
 from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out
 from service.errors import InputError
@@ -16,14 +19,23 @@ from service.io.formats import read_labeled
 from service.io.recording import LabeledTrajectories, Recording
 
 
-def run_model(inputs: list[Path], output: Path, centres: Path | None) -> None:
-    """Fit a subject model to ``inputs``, print it, write it as JSON and optionally the joint centres as TRC."""
+def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset: str | None = None) -> None:
+    """Fit a subject model to ``inputs``, print it, write it as JSON and optionally the joint centres as TRC.
+
+    With ``markerset`` (a template name or file) the segments and joint centres come from the
+    template and the takes (a static trial is enough) give the marker coordinates.
+    """
     check_writable_folder(output.parent)
     if centres is not None:
         check_writable_output(centres)
+    if markerset is not None and centres is not None:
+        raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
     names, positions, rate = _pool([read_labeled(path) for path in inputs])
     try:
-        fit = fit_subject(names, positions)
+        if markerset is not None:
+            fit = SubjectFit(fit_template(load_template(markerset), names, positions), Grouping([], [], []), {})
+        else:
+            fit = fit_subject(names, positions)
     except FormulationError as error:
         raise InputError(f"{', '.join(p.name for p in inputs)}: {error}") from None
     _print(fit, len(positions))

@@ -15,19 +15,28 @@ from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import read_capture_document
 from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording
+from service.capture.model_input import check_shared_names, model_names, read_model, with_model
 from service.cli.output import check_writable_output
-from service.cli.report import CERTIFICATE, out, warn_doubtful, window_progress
+from service.cli.report import CERTIFICATE, out, warn, warn_doubtful, window_progress
 from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
+from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion_warning
 
 
 def run_track(
     input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool, as_json: bool = False,
+    model: Path | None = None, start: int = 0, end: int | None = None,
 ) -> None:
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
+
+    With ``model`` (a subject model JSON) no labeled frame is needed: a recording's labels are
+    discarded, frames ``start .. end - 1`` are labeled from frame ``start`` identified by the
+    model (a capture JSON's labeled first frame, if it has one, is kept), and the output
+    carries the model's marker names, in the input's unit and frame numbering; a .c3d of a
+    .c3d that has every model marker is the input with those points replaced.
 
     ``formulation`` and ``window`` override a JSON document's own options when given.
     A .c3d/.trc output of a .c3d/.trc input keeps the input's unit and frame numbering;
@@ -36,7 +45,17 @@ def run_track(
     and a warning on stderr when many labels are doubtful.
     """
     check_writable_output(output)
+    if model is None and (start or end is not None):
+        raise InputError("--start and --end need --model: without it, frame 0 must be labeled")
     capture, options, source = _read_input(input, shuffle)
+    not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
+    if model is not None:
+        chosen = read_model(model)
+        if input.suffix.lower() != ".json":
+            check_shared_names(capture.names, chosen, input.name)
+        keep_labels = input.suffix.lower() == ".json"
+        capture = with_model(capture, chosen, start, end, keep_labels)
+        source, not_kept = _kept(source, model_names(chosen), output)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:
@@ -45,7 +64,7 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    write_labeled(output, result, source)
+    write_labeled(output, result, source, start)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     if as_json:
         print(json.dumps(summary, allow_nan=False))
@@ -58,6 +77,8 @@ def run_track(
             highlight=False,
         )
     warn_doubtful(summary["doubtful_fraction"])
+    warn(fast_motion_warning([FastMarker(**fast) for fast in summary["fast_markers"]]))
+    warn(not_kept)
 
 
 def track_summary(
@@ -70,7 +91,9 @@ def track_summary(
     right. ``doubtful_fraction`` and ``reacquired`` (marker -> frames) are those of
     ``service.labeling.stats``. ``noise_mm`` is the take's measurement noise read back
     from the labeled positions (``TakeNoise``: the robust scale of the constant-acceleration
-    residual, mean over the axes); None when too little was seen to say.
+    residual, mean over the axes); None when too little was seen to say. ``fast_markers``
+    lists the markers that move more per frame than half their neighbour distance
+    (``service.labeling.take_warnings``: marker, step_mm, neighbour_mm, neighbour).
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {
@@ -81,8 +104,9 @@ def track_summary(
         "noise_mm": None if noise is None else finite_or_none(float(noise.measurement_mm.mean())),
         **certificate_figures(windows),
         "certificate": CERTIFICATE,
-        "doubtful_fraction": doubtful_fraction(result.occluded, windows),
+        "doubtful_fraction": doubtful_fraction(result.confidence, result.occluded),
         "reacquired": reacquisitions(result.names, result.occluded),
+        "fast_markers": [vars(fast) for fast in fast_markers(result.names, result.positions)],
         "seconds": seconds,
         "formulation": formulation,
         "output": str(output),
@@ -109,6 +133,22 @@ def _read_input(input: Path, shuffle: bool) -> tuple[Capture, LabelingOptions, S
         raise InputError(f"{input}: cannot read ({error.strerror})") from None
     document = read_capture_document(text, str(input))
     return document.capture(), document.options(), None
+
+
+def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[SourceFile | None, str | None]:
+    """What output from a model keeps of its input: all of it when the input has every model
+    marker, else its unit and frame numbering (a C3D lacking a model marker cannot hold its labels);
+    and, for a .c3d output that then loses the input's other content, the warning that says so."""
+    if source is None or source.c3d is None:
+        return source, None
+    labels = {str(label).strip() for label in source.c3d["parameters"]["POINT"]["LABELS"]["value"]}
+    lacking = [name for name in names if name not in labels]
+    if not lacking:
+        return source, None
+    warning = (f"warning: the input has no point for model markers {', '.join(lacking[:6])}"
+               f"{' ...' if len(lacking) > 6 else ''}, so {output.name} is a new C3D of the labels alone (the input's "
+               "unit and frame numbering, but not its analog channels, events or other parameters)")
+    return replace(source, c3d=None), warning if output.suffix.lower() == ".c3d" else None
 
 
 def _formulation_table(spec: str) -> str | dict:

@@ -11,6 +11,7 @@ from service.capture.capture import LabelingOptions
 from service.errors import InputError
 
 MODES = ("cloud", "cameras")
+FIRST_FRAMES = ("labeled", "model")
 ASSOCIATIONS = ("joint-3d", "per-camera")
 _EXPECTED: dict[object, str] = {float: "a number", int: "an integer", str: "a string", dict: "a table"}
 _NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames")
@@ -48,6 +49,9 @@ class Scenario:
             window LP) or ``"per-camera"`` (the window LP in each camera's image, then
             triangulation).
         up_axis: Camera mode: the recording's vertical axis (0, 1 or 2) for placing it.
+        first_frame: ``"labeled"`` (the labeler gets the first frame's names and positions) or
+            ``"model"`` (cloud mode: it gets a subject model, ``markerflow eval --model``, and
+            no labeled frame; the truth only scores).
     """
 
     mode: str = "cloud"
@@ -70,6 +74,7 @@ class Scenario:
     clutter_per_camera: float = 2.0
     association: str = "joint-3d"
     up_axis: int = 2
+    first_frame: str = "labeled"
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -168,6 +173,9 @@ class Scenario:
         self._require("drop_burst_frames", self.drop_burst_frames >= 1.0, ">= 1")
         self._require("window", self.window >= 2, ">= 2")
         self._require("formulation", self.formulation.strip() != "", "a non-empty name")
+        self._require("first_frame", self.first_frame in FIRST_FRAMES, f"one of {', '.join(FIRST_FRAMES)}")
+        if self.first_frame == "model":
+            self._require("mode", self.mode == "cloud", "cloud when first_frame is model")
         # p_enter is a probability: r / (b (1 - r)) <= 1, i.e. r <= b / (1 + b).
         if self.deletion_transitions[0] > 1.0:
             raise InputError(

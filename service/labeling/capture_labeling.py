@@ -19,11 +19,13 @@ loop, the formulation and the first marker state are the same for all.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from typing import Any, Protocol
 
 import numpy as np
 
 from formulations.cameras.rig import Rig
+from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.formulation_spec import resolve_formulation
 from service.errors import InputError
@@ -31,6 +33,7 @@ from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.cloud import CloudChain
 from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
+from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
 from service.labeling.per_camera import PerCameraChain
 from service.labeling.spans import window_spans
@@ -60,9 +63,16 @@ class CaptureLabeling:
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
         self.formulation = resolve_formulation(options.formulation)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
-        self._first = first_marker_state(capture.names, capture.first_frame)
         self._frames, self._window = capture.n_frames, options.window
-        self._association = _association(capture, options)
+        self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
+            capture.cameras, options.best_view_switch_cost, options.best_view_window)
+        if capture.model is not None and capture.points is not None:
+            self._first, first_frame = model_first_frame(capture.model, capture.points[0], capture.first_frame)
+            inner = _association(replace(capture, first_frame=first_frame), options)
+            self._association: Association = ModelChain(inner, capture.model, capture.points)
+        else:
+            self._first = first_marker_state(capture.names, capture.first_frame)
+            self._association = _association(capture, options)
 
     def windows(
         self, after: WindowOutcome | None = None, progress: Progress | None = None, observer: Observer | None = None,
@@ -77,8 +87,13 @@ class CaptureLabeling:
         )
 
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
-        """The labeled trajectories from all windows' outcomes."""
-        return self._association.assemble(outcomes)
+        """The labeled trajectories from all windows' outcomes; in camera mode with each
+        marker's best view per frame (``service.best_view.markers``); with every label's confidence."""
+        labels = self._association.assemble(outcomes)
+        labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
+        if self._view_choice is None:
+            return labels
+        return self._view_choice.attach(labels, self._association.views(outcomes))
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
         """``(F, N, C)`` detection each marker took in each camera, -1 for none (camera mode).
@@ -94,6 +109,17 @@ class CaptureLabeling:
         """Label every window in one go."""
         outcomes = list(self.windows(progress=progress, observer=observer))
         return self.result(outcomes), [o.stats for o in outcomes]
+
+
+def _confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.ndarray:
+    """``(frames, markers)``: 1 in the given first frame, each window's confidences in its
+    new frames, NaN where no stored window says (not labeled yet, or stored without)."""
+    confidence = np.full((frames, markers), np.nan)
+    confidence[0] = 1.0
+    for outcome in outcomes:
+        if outcome.confidence is not None:
+            confidence[outcome.stats.template + 1 : outcome.stats.last + 1] = outcome.confidence
+    return confidence
 
 
 def _association(capture: Capture, options: LabelingOptions) -> Association:

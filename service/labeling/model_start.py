@@ -1,24 +1,44 @@
-"""Labeling from a subject model: no labeled frame; markers named when the model finds them.
+"""Labeling with a subject model: identification at the start, the model's segments throughout.
 
-The capture's frame 0 is identified (``formulations.subject.identify``); its named markers
-start the marker state (``model_start_state``). Before each window, markers unseen at the
-template frame are looked for there again: a point the model names for such a marker, that
-no seen marker holds, becomes its position (``acquire``). So a marker absent at the start
-is named when it appears, within one window.
+The capture's frame 0 is identified (``formulations.subject.identify``), or, when the user
+labeled it, taken as labeled with the model naming only what the labels leave out; either
+start builds the marker state of ``model_start_state`` (segment-mates as neighbours).
+Before each window, at its template frame:
+
+- acquisition: markers unseen there are looked for again; a point the model names for such a
+  marker, that no seen marker holds, becomes its position (``acquire``), so a marker absent
+  at the start is named when it appears, within one window;
+- recovery: segments whose labels contradict their constellation are re-read from the model
+  (``recover``) instead of carrying the error forward;
+- prediction: unseen markers are anchored to their segments' poses (``follow_segments``),
+  so the window's gates are centred where the segment puts them;
+- layout: with a layout weight, the pairs are segment-mates (``segment_layout``).
+
+After each window, an occluded marker's fill is where its segment's pose in that frame puts
+it (``segment_poses``: three labeled markers on the segment, else the joint chain); the
+inner chain's fill stays where the model poses nothing (single markers, unposed segments).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from functools import cache, partial
 from typing import Any
 
 import numpy as np
 
+from formulations.markers.guide import assign_nearest
 from formulations.markers.reacquire import REACQUISITION
 from formulations.markers.state import MarkerState
+from formulations.relaxation.components import coupled_components
+from formulations.subject.follow import follow_segments
 from formulations.subject.geometry import ModelGeometry
-from formulations.subject.identify import identify
+from formulations.subject.identify import Identification, identify
 from formulations.subject.model import SubjectModel
+from formulations.subject.recover import HELD_MM, recover
+from formulations.subject.segment_fill import segment_fill
+from formulations.subject.segment_pose import RIGID_WITHIN, segment_poses
 from formulations.subject.start_state import acquire, model_start_state
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
@@ -27,17 +47,24 @@ from service.io.recording import LabeledTrajectories
 from service.labeling.loop import WindowLabels
 from service.labeling.outcome import WindowOutcome
 
-HELD_MM = 1e-6  # a seen marker's state position is the point it took, exactly
+LABEL_GATE_MM = 60.0  # a labeled first-frame position takes the point within this of it
 
 
-def model_first_frame(model: SubjectModel, points: np.ndarray) -> tuple[MarkerState, np.ndarray]:
+def model_first_frame(
+    model: SubjectModel, points: np.ndarray, labeled: np.ndarray | None = None,
+) -> tuple[MarkerState, np.ndarray]:
     """The first marker state and ``(N, 3)`` the named markers' points (NaN where unnamed).
+
+    ``labeled`` ``(N, 3)`` (model order, NaN where not labeled) are the user's labels of this
+    frame: they are kept, and the model names only the markers they leave out.
 
     Raises:
         InputError: The model names no point of the first frame.
     """
     geometry = ModelGeometry.of(model)
     found = identify(geometry, points)
+    if labeled is not None and np.isfinite(labeled).all(axis=1).any():
+        found = _with_labels(geometry, found, points, np.asarray(labeled, dtype=float))
     try:
         state = model_start_state(geometry, found, points, REACQUISITION.lost_after)
     except ValueError as error:
@@ -47,9 +74,22 @@ def model_first_frame(model: SubjectModel, points: np.ndarray) -> tuple[MarkerSt
     return state, first
 
 
+def _with_labels(geometry: ModelGeometry, found: Identification, points: np.ndarray, labeled: np.ndarray) -> Identification:
+    """The user's labels, and the identification's names for the markers they leave out."""
+    given = np.isfinite(labeled).all(axis=1)
+    point = np.full(len(given), -1, dtype=np.int64)
+    point[given] = assign_nearest(labeled[given], points, np.full(int(given.sum()), LABEL_GATE_MM), LABEL_GATE_MM)
+    free = ~given & found.named & ~np.isin(found.point, point[point >= 0])
+    point[free] = found.point[free]
+    positions = np.where((point >= 0)[:, None], points[np.maximum(point, 0)], np.nan)
+    placed = segment_poses(geometry, positions[None]).place(geometry)[0]
+    residual = np.linalg.norm(placed - positions, axis=1)
+    return Identification(point, np.where(point >= 0, residual, np.nan), placed)
+
+
 @dataclass
 class ModelChain:
-    """A 3D-point chain whose unseen markers the model looks for at every template frame."""
+    """A 3D-point chain that the subject model steers at every template frame (see the module)."""
 
     inner: Any  # CloudChain or Joint3dChain: pose, invert, assemble, views
     model: SubjectModel
@@ -57,13 +97,24 @@ class ModelChain:
 
     def __post_init__(self) -> None:
         self._geometry = ModelGeometry.of(self.model)
+        self.repaired: list[tuple[int, int]] = []  # (template frame, segment) re-read by recovery
 
     def pose(self, state: MarkerState, template: int, last: int) -> tuple[WindowProblem, Any]:
-        return self.inner.pose(self._acquired(state, self.points[template]), template, last)
+        points = self.points[template]
+        found = cache(partial(identify, self._geometry, points))  # one identification serves both
+        state = self._acquired(state, points, found)
+        state, repaired = recover(self._geometry, state, points, found)
+        self.repaired.extend((template, s) for s in repaired)
+        problem, inverse = self.inner.pose(follow_segments(self._geometry, state), template, last)
+        mu = float(getattr(self.inner, "layout_weight", 0.0))
+        if mu > 0:
+            problem = segment_layout(problem, self._geometry.segment_of, mu)
+        return problem, (inverse, state, template)
 
     def invert(self, solution: WindowSolution, inverse: Any) -> WindowLabels:
-        labels: WindowLabels = self.inner.invert(solution, inverse)
-        return labels
+        inner, state, template = inverse
+        labels: WindowLabels = self.inner.invert(solution, inner)
+        return replace(labels, filled=self._filled(labels, state, template))
 
     def assemble(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         result: LabeledTrajectories = self.inner.assemble(outcomes)
@@ -73,11 +124,22 @@ class ModelChain:
         views: np.ndarray = self.inner.views(outcomes)
         return views
 
-    def _acquired(self, state: MarkerState, points: np.ndarray) -> MarkerState:
+    def _filled(self, labels: WindowLabels, state: MarkerState, template: int) -> np.ndarray:
+        """The inner fill, replaced wherever the segment carries the marker (``segment_fill``)."""
+        taken = labels.point_index  # (M, N)
+        positions = np.full(taken.shape + (3,), np.nan)
+        for m, row in enumerate(taken):
+            seen = row >= 0
+            positions[m, seen] = self.points[template + 1 + m][row[seen]]
+        template_positions = np.where(state.visible[:, None], state.position, np.nan)[None]
+        placed = segment_fill(self._geometry, state, np.concatenate([template_positions, positions]), RIGID_WITHIN)
+        return np.where(np.isfinite(placed[1:]), placed[1:], labels.filled)
+
+    def _acquired(self, state: MarkerState, points: np.ndarray, identified: Callable[[], Identification]) -> MarkerState:
         unseen = ~state.visible
         if not unseen.any() or len(points) == 0:
             return state
-        found = identify(self._geometry, points)
+        found = identified()
         held = np.zeros(len(points), bool)
         if state.visible.any():
             gap = np.linalg.norm(points[:, None] - state.position[state.visible][None], axis=2)
@@ -87,3 +149,19 @@ class ModelChain:
         if not len(new):
             return state
         return acquire(state, new, points[found.point[new]])
+
+
+def segment_layout(problem: WindowProblem, segment_of: np.ndarray, mu: float) -> WindowProblem:
+    """The problem with layout pairs between markers of one segment that shared candidates couple.
+
+    A rigid segment keeps its markers' layout; two markers of different segments need not,
+    however close (Ringer & Lasenby's grouping, in place of the nearest neighbours).
+    """
+    n = len(segment_of)
+    first, second = np.triu_indices(n, k=1)
+    pairs = np.column_stack([first, second])
+    pairs = pairs[(segment_of[first] == segment_of[second]) & (segment_of[first] >= 0)]
+    problem = replace(problem, layout_pairs=np.zeros((0, 2), dtype=int), layout_weight=np.zeros(0))
+    component = coupled_components(problem)
+    pairs = pairs[component[pairs[:, 0]] == component[pairs[:, 1]]]
+    return replace(problem, layout_pairs=pairs, layout_weight=np.full(len(pairs), mu))

@@ -10,22 +10,25 @@ from __future__ import annotations
 import logging
 from contextlib import asynccontextmanager
 
+from anyio import CapacityLimiter
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from fastapi.responses import JSONResponse
+from fastapi_offline import FastAPIOffline
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
 
 from service.capture.document import CaptureDocument
 from service.errors import InputError
-from service.server import routes_info, routes_jobs, routes_solve
+from service.server import routes_info, routes_jobs, routes_models, routes_solve
 from service.server.events import EventStreams
 from service.server.executor import DaskExecutor, Executor, ProcessPoolExecutor
 from service.server.limits import BodyLimit
 from service.server.metrics import metrics_registry
 from service.server.settings import Settings
 from service.server.store import store_for
+from service.web.pages import mount_web
 
 log = logging.getLogger("markerflow.server")
 
@@ -38,7 +41,8 @@ def create_app(settings: Settings) -> FastAPI:
     """
     settings.check_exposure()
     docs = settings.api_docs  # False: no /docs, /redoc or /openapi.json
-    app = FastAPI(
+    # FastAPIOffline serves Swagger UI's and ReDoc's scripts from its package, not a CDN.
+    app = (FastAPIOffline if docs else FastAPI)(
         title="markerflow", version="1", lifespan=_lifespan,
         description="Label optical motion-capture markers as durable jobs: submit, follow, fetch.",
         docs_url="/docs" if docs else None, redoc_url="/redoc" if docs else None,
@@ -49,8 +53,10 @@ def create_app(settings: Settings) -> FastAPI:
     app.state.event_streams = EventStreams(settings.max_event_streams_per_token)
     app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes, owners=app.state.owners,
                        read_seconds=settings.read_timeout_seconds)
-    for router in (routes_jobs.router, routes_solve.router, routes_info.router):
+    app.state.model_fits = CapacityLimiter(settings.max_parallel_jobs)  # POST /v1/models fits at once
+    for router in (routes_jobs.router, routes_solve.router, routes_models.router, routes_info.router):
         app.include_router(router)
+    mount_web(app)
     # Starlette types every handler as taking any Exception; each of these gets only its own class.
     app.add_exception_handler(InputError, _input_error)  # type: ignore[arg-type]
     app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]

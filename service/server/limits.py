@@ -12,19 +12,21 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.capture.document import CaptureDocument
 from service.errors import InputError
-from service.server.auth import bearer_token, owner_of
+from service.server.auth import owner_of
 from service.server.prescan import Structure, check_depth
 from service.server.settings import Limits
+from service.web.session import presented_token
 
 
 class BodyLimit:
     """ASGI middleware: a body is read only from a known caller, and only up to ``max_bytes``.
 
-    With tokens configured, a request without a valid bearer token gets 401 before a byte
-    of its body is read. A declared ``Content-Length`` over the limit is refused (413) at
-    once; otherwise the body is read up to the limit (chunked uploads declare no length)
-    and replayed to the app. Hand-written because Starlette and uvicorn have no body-size
-    setting. A body that stalls for ``read_seconds`` answers 408.
+    With tokens configured, a request without a valid bearer token (or, on a web page's
+    path, session cookie) gets 401 before a byte of its body is read. A declared
+    ``Content-Length`` over the limit is refused (413) at once; otherwise the body is read
+    up to the limit (chunked uploads declare no length) and replayed to the app.
+    Hand-written because Starlette and uvicorn have no body-size setting. A body that
+    stalls for ``read_seconds`` answers 408.
     """
 
     def __init__(self, app: ASGIApp, max_bytes: int, owners: dict[str, str], read_seconds: float) -> None:
@@ -38,7 +40,8 @@ class BodyLimit:
             return await self.app(scope, receive, send)
         headers = dict(scope["headers"])
         try:
-            owner_of(self.owners, bearer_token(headers.get(b"authorization", b"").decode("latin-1")))
+            owner_of(self.owners, presented_token(scope["path"], headers.get(b"authorization", b"").decode("latin-1"),
+                                                  headers.get(b"cookie", b"").decode("latin-1")))
         except HTTPException as refused:
             return await _answer(send, refused.status_code, str(refused.detail), refused.headers or {})
         declared = headers.get(b"content-length", b"")
@@ -92,7 +95,7 @@ def check_limits(document: CaptureDocument, limits: Limits) -> None:
         InputError: ``frames: 120000 frames exceeds the limit of 100000 (limits.max_frames)``.
     """
     _at_most("frames", document.n_frames, "frames", limits.max_frames, "max_frames")
-    _at_most("markers", len(document.markers), "markers", limits.max_markers, "max_markers")
+    _at_most("markers", len(document.markers or []), "markers", limits.max_markers, "max_markers")
     if document.points is not None:
         for f, points in enumerate(document.points):
             _at_most(f"points.{f}", len(points), "points", limits.max_points_per_frame, "max_points_per_frame")

@@ -1,0 +1,145 @@
+"""Every labeled recording of ../shared/data relabeled by `markerflow track`, scored against its own labels.
+
+A take whose frame 0 has every marker is relabeled from frame 0, as a user would:
+`markerflow track TAKE --out OUT.c3d --json`. Any other take has no usable labeled frame
+(`track` would refuse it): a subject model is fitted on its first half (``fit_subject``, what
+`markerflow model` runs) and `markerflow track TAKE --model M.json --start H [--end E]` labels
+the second half. Each output is read back and compared, marker by marker and frame by frame,
+with the file's own labels:
+
+- correct: the marker took its own point;
+- wrong: it took a point, but another marker's (its own was present);
+- missing: its own point was present, it took none;
+- extra: it took a point in a frame where it has none of its own.
+
+Accuracy = correct / (marker-frames present in the file), over the labeled frames, frame
+`start` included. The recordings are those of ``service.evaluation.matrix.RECORDINGS`` (the
+Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); their
+``exclude`` columns (copies, a trigger) are kept, as `track` gets the file as it is.
+Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
+``seconds`` of `--json`.
+
+    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from formulations.errors import FormulationError  # noqa: E402
+from formulations.subject.fit import fit_subject  # noqa: E402
+from service.evaluation.matrix import DATA, RECORDINGS  # noqa: E402
+from service.io.formats import read_labeled  # noqa: E402
+from service.io.recording import Recording  # noqa: E402
+
+MARKERFLOW = ROOT / ".venv" / "bin" / "markerflow"
+SAME_POINT_MM = 1e-3  # the output holds the input's own coordinates, through a unit round trip
+
+
+@dataclass
+class Row:
+    name: str
+    route: str
+    frames: int
+    markers: int
+    correct: int = 0
+    wrong: int = 0
+    missing: int = 0
+    extra: int = 0
+    wall: float = float("nan")
+    seconds: float = float("nan")
+    failure: str = ""
+
+    def cells(self) -> str:
+        present = self.correct + self.wrong + self.missing
+        if self.failure:
+            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | |"
+        return (f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.correct / present:.2%} | "
+                f"{self.wrong} | {self.missing} | {self.extra} | {present} | {self.wall:.1f} | "
+                f"{self.frames / self.seconds:.0f} |")
+
+
+def score(truth: Recording, output: Recording, rows: slice, row: Row) -> None:
+    """Count correct/wrong/missing/extra over the truth's frames ``rows`` (output aligned by frame and name)."""
+    theirs = output.positions if output.n_frames == truth.n_frames else None
+    if theirs is None:  # an output holding only the labeled frames
+        theirs = np.full(truth.positions.shape[:1] + (output.n_markers, 3), np.nan)
+        theirs[rows][: output.n_frames] = output.positions[: rows.stop - rows.start]
+    missing_out = output.missing() if output.n_frames == truth.n_frames else np.isnan(theirs).any(axis=2)
+    for j, name in enumerate(output.names):
+        i = truth.names.index(name)
+        own, took = ~truth.missing()[rows, i], ~missing_out[rows, j]
+        same = np.linalg.norm(theirs[rows, j] - truth.positions[rows, i], axis=1) <= SAME_POINT_MM
+        row.correct += int((own & took & same).sum())
+        row.wrong += int((own & took & ~same).sum())
+        row.missing += int((own & ~took).sum())
+        row.extra += int((~own & took).sum())
+
+
+def run(command: list[str], row: Row) -> dict | None:
+    began = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True)
+    row.wall = time.perf_counter() - began
+    if done.returncode != 0:
+        row.failure = f"rc {done.returncode}: {(done.stderr.strip().splitlines() or ['?'])[-1][:120]}"
+        return None
+    summary: dict = json.loads(done.stdout.strip().splitlines()[-1])
+    row.seconds = summary["seconds"]
+    return summary
+
+
+def relabel(name: str, path: Path, cap: int, folder: Path) -> Row:
+    truth = read_labeled(path)
+    missing = truth.missing()
+    out = folder / f"{name}.c3d"
+    if not missing[0].any():
+        row = Row(name, "frame 0", truth.n_frames, truth.n_markers)
+        if run([str(MARKERFLOW), "track", str(path), "--out", str(out), "--json"], row) is not None:
+            score(truth, read_labeled(out), slice(0, truth.n_frames), row)
+        return row
+    half = truth.n_frames // 2
+    end = min(truth.n_frames, half + cap) if cap else truth.n_frames
+    row = Row(name, f"model of 0-{half - 1}", end - half, truth.n_markers)
+    present = np.where(missing[:, :, None], np.nan, truth.positions)
+    try:
+        model = fit_subject(list(truth.names), present[:half]).model
+    except FormulationError as error:
+        row.failure = f"model fit refused: {error}"[:140]
+        return row
+    model_path = folder / f"{name}.json"
+    model_path.write_text(model.to_json())
+    command = [str(MARKERFLOW), "track", str(path), "--out", str(out), "--json", "--model", str(model_path),
+               "--start", str(half), "--end", str(end)]
+    if run(command, row) is not None:
+        score(truth, read_labeled(out), slice(half, end), row)
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", nargs="*", help="recording names (service.evaluation.matrix)")
+    parser.add_argument("--cap", type=int, default=0, help="label at most this many frames on the model route")
+    args = parser.parse_args()
+    print("| take | start | frames | markers | correct | wrong | missing | extra | present | wall s | frames/s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for recording in RECORDINGS:
+            if args.only and recording.name not in args.only:
+                continue
+            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder)).cells(), flush=True)
+
+
+if __name__ == "__main__":
+    main()
