@@ -5,8 +5,10 @@ import itertools
 import numpy as np
 import pytest
 
+from formulations.assignment import rankings
 from formulations.assignment.blocks import k_best_assignments
 from formulations.assignment.murty import ranked_assignments
+from formulations.assignment.rankings import RankingCache
 
 
 def every_assignment(cost: np.ndarray, miss: np.ndarray | None) -> list[tuple[float, tuple[int, ...]]]:
@@ -100,3 +102,38 @@ def test_the_ranking_is_lazy():
     cost = np.random.default_rng(0).uniform(0, 1, size=(40, 60))
     first = list(itertools.islice(ranked_assignments(cost, np.full(40, 2.0)), 5))
     assert len(first) == 5 and all(a.cost <= b.cost + 1e-12 for a, b in itertools.pairwise(first))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_blocks_ranked_by_murty_equal_brute_force(monkeypatch, seed):
+    """Blocks too large to enumerate are ranked by Murty's algorithm and merged by its lazy bounds."""
+    monkeypatch.setattr(rankings, "ENUMERATION_LIMIT", 0)
+    rng = np.random.default_rng(300 + seed)
+    cost = rng.integers(0, 4, size=(6, 6)).astype(float)
+    cost[rng.random(cost.shape) < 0.6] = np.inf  # sparse: several blocks, some of one row
+    miss = rng.integers(1, 5, size=6).astype(float)
+    truth = every_assignment(cost, miss)
+    k = int(rng.integers(2, 30))
+    assert_ranks(truth, k_best_assignments(cost, miss, k), k)
+    assert_ranks(truth, k_best_assignments(cost, miss, k, RankingCache()), k)
+
+
+def test_a_shared_cache_ranks_a_recurring_block_once_and_answers_alike():
+    """Two matrices that share a block (hypotheses from one parent): the same rankings as
+    without the cache, and the shared block ranked once."""
+    rng = np.random.default_rng(7)
+    first = np.full((5, 6), np.inf)
+    first[0:2, 0:2] = rng.uniform(0, 3, size=(2, 2))  # the shared block
+    first[2:4, 2:4] = rng.uniform(0, 3, size=(2, 2))
+    first[4, 4:6] = rng.uniform(0, 3, size=2)
+    second = first.copy()
+    second[2:4, 2:4] = rng.uniform(0, 3, size=(2, 2))  # a different block in the other hypothesis
+    miss = rng.uniform(1, 4, size=5)
+    cache = RankingCache()
+    for cost in (first, second):
+        shared = k_best_assignments(cost, miss, 12, cache)
+        alone = k_best_assignments(cost, miss, 12)
+        assert [a.cost for a in shared] == [a.cost for a in alone]
+        assert [a.columns.tolist() for a in shared] == [a.columns.tolist() for a in alone]
+        assert_ranks(every_assignment(cost, miss), shared, 12)
+    assert len(cache.rankings) == 3  # rows 0-1 once, rows 2-3 twice (different costs)

@@ -9,133 +9,166 @@ every assignment is one assignment per block, and its cost is the sum,
 So the k best overall are the k smallest sums over the blocks' ranked lists: a heap over
 index vectors (i_1..i_b), starting at (0..0); a popped vector pushes its successors that
 advance one coordinate b' >= the last one advanced, which reaches every vector exactly
-once and in order (each list is sorted). Only blocks whose second-best costs at most
-delta_(k-1) more than their best (delta_(k-1): the (k-1)-th smallest such step over all
-blocks) can leave their best among the k: the k-1 single steps below it already beat any
-vector that moves another block. Any upper bound on delta_(k-1) (here: the one over
-one-row blocks) and lower bounds on the steps (Murty's child bounds) keep that exact. A block's list is Murty's ranking
-(``murty.ranked_assignments``), pulled lazily; a one-row block is its row sorted. In a
-window of markers most rows are one-row blocks (a marker no other marker contests), so
-Murty only runs on the few contended blocks.
+once and in order (each list is sorted). As in Miller–Stone–Cox, a successor enters the
+heap at a lower bound (its block's ``bound``: Murty's queue front, no LAP solved) and is
+only ranked exactly when it reaches the front, so a block whose next assignment cannot be
+among the k is never solved past its best. Only blocks whose second best costs at most
+delta_(k-1) more than their best can leave it (delta_(k-1): the (k-1)-th smallest such
+step over all blocks, bounded above by the steps known exactly, of one-row and enumerated
+blocks): the k-1 single steps below it already beat any vector that moves another. A
+block's list is ``rankings.BlockRanking`` (enumerated when small, Murty's otherwise),
+from a ``RankingCache`` the caller may share across matrices; a one-row block is its row
+sorted. In a window of markers most rows are one-row blocks (a
+marker no other marker contests), so ranking only runs on the few contended blocks.
 """
 
 from __future__ import annotations
 
 import heapq
 import itertools
-from collections.abc import Iterator
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.sparse.csgraph import connected_components
 
-from formulations.assignment.murty import Costs, RankedAssignment, next_bound, ranked_assignments
-
-Indices = NDArray[np.intp]
+from formulations.assignment.murty import Costs, Indices, RankedAssignment
+from formulations.assignment.rankings import BlockRanking, RankingCache
 
 
-class _Ranking:
-    """One block's assignments in order (columns of the whole matrix), pulled on demand and kept."""
+class _Placed:
+    """A block's ranking placed in the whole matrix: its rows, its columns mapped to the matrix's."""
 
-    def __init__(self, rows: Indices, more: Iterator[RankedAssignment], columns: Indices | None = None) -> None:
-        """``columns``: the block's columns in the whole matrix (None: ``more`` already uses those)."""
-        self.rows, self.more = rows, more
-        self.columns = None if columns is None else np.append(columns, -1)  # unassigned (-1) stays -1
-        self.found: list[RankedAssignment] = []
+    def __init__(self, rows: Indices, columns: Indices, ranking: BlockRanking) -> None:
+        self.rows, self.ranking = rows, ranking
+        self.place = np.append(columns, -1)  # unassigned (-1) stays -1
+        self.cost, self.bound = ranking.cost, ranking.bound
 
-    def get(self, index: int) -> RankedAssignment | None:
-        """The block's ``index``-th best assignment, or None when it has fewer."""
-        while len(self.found) <= index:
-            found = next(self.more, None)
-            if found is None:
-                return None
-            columns = found.columns if self.columns is None else self.columns[found.columns]
-            self.found.append(RankedAssignment(found.cost, columns))
-        return self.found[index]
+    def columns(self, index: int) -> Indices:
+        found = self.ranking.get(index)
+        assert found is not None
+        placed: Indices = self.place[found.columns]
+        return placed
 
 
-def k_best_assignments(cost: Costs, miss: Costs | None = None, k: int = 1) -> list[RankedAssignment]:
+class _Lone:
+    """A one-row block: its finite options sorted (columns of the whole matrix)."""
+
+    def __init__(self, row: int, costs: Costs, columns: Indices) -> None:
+        finite = np.isfinite(costs)
+        self.rows = np.array([row], dtype=np.intp)
+        self.costs, self.options = costs[finite].tolist(), columns[finite]
+
+    def cost(self, index: int) -> float | None:
+        return self.costs[index] if index < len(self.costs) else None
+
+    def bound(self, index: int) -> tuple[float, bool]:
+        return (self.costs[index] if index < len(self.costs) else np.inf), True
+
+    def columns(self, index: int) -> Indices:
+        column: Indices = self.options[index : index + 1]
+        return column
+
+
+def k_best_assignments(
+    cost: Costs, miss: Costs | None = None, k: int = 1, cache: RankingCache | None = None,
+) -> list[RankedAssignment]:
     """The ``k`` cheapest assignments of ``cost`` (R x C) in order, fewer if fewer exist.
 
-    Same problem as ``murty.ranked_assignments``: ``miss[i]`` is row i's cost of staying
+    Same problem as ``murty.MurtyRanking``: ``miss[i]`` is row i's cost of staying
     unassigned (column -1), None when every row must be assigned. Ties come in any order.
+    ``cache`` shares block rankings with other calls (None: this call's own).
     """
     cost = np.asarray(cost, dtype=float)
     rows, width = cost.shape
+    cache = RankingCache() if cache is None else cache
     extended = np.column_stack([cost, np.full(rows, np.inf) if miss is None else miss])
-    lone, shared = _blocks(cost)
+    finite = np.isfinite(extended)
+    lone, shared = _blocks(finite[:, :width])
     # One-row blocks, all at once: each row's options sorted (the last column is the miss).
     order = np.argsort(extended[lone], axis=1, kind="stable")
     ranked_cost = np.take_along_axis(extended[lone], order, axis=1)
     ranked_col = np.where(order == width, -1, order)
-    rankings = [_Ranking(r, ranked_assignments(cost[np.ix_(r, c)], None if miss is None else miss[r]), c) for r, c in shared]
-    best = [ranking.get(0) for ranking in rankings]
+    placed = [_Placed(r, c, cache.ranking(cost[np.ix_(r, c)], None if miss is None else miss[r])) for r, c in shared]
+    best = [p.cost(0) for p in placed]
     if not np.isfinite(ranked_cost[:, 0]).all() or any(b is None for b in best):
         return []
     columns = np.empty(rows, dtype=np.intp)
     columns[lone] = ranked_col[:, 0]
-    for ranking, b in zip(rankings, best):
-        assert b is not None
-        columns[ranking.rows] = b.columns
-    total = float(ranked_cost[:, 0].sum() + sum(b.cost for b in best if b is not None))
+    for p in placed:
+        columns[p.rows] = p.columns(0)
+    total = float(ranked_cost[:, 0].sum() + sum(b for b in best if b is not None))
     if k == 1:
         return [RankedAssignment(total, columns)]
-    # Blocks that may move: a one-row block whose step to its second best is at most the
-    # (k-1)-th smallest such step among one-row blocks (>= the limit over all blocks), and a
-    # block of several rows whose step is not bounded above that (Murty's child bounds).
-    lone_steps = ranked_cost[:, 1] - ranked_cost[:, 0] if extended.shape[1] > 1 else np.full(len(lone), np.inf)
-    limit = np.sort(lone_steps)[k - 2] if len(lone) >= k - 1 else np.inf
-    active = [_lone_ranking(lone[i], ranked_cost[i], ranked_col[i]) for i in np.flatnonzero(lone_steps <= limit)]
-    for (r, c), ranking, b in zip(shared, rankings, best):
-        assert b is not None
-        local = RankedAssignment(b.cost, np.where(b.columns >= 0, np.searchsorted(c, b.columns), -1))
-        if next_bound(cost[np.ix_(r, c)], None if miss is None else miss[r], local) - b.cost <= limit:
-            active.append(ranking)
-    return _merge(total, columns, active, k)
+    # Only blocks whose second best costs at most delta_(k-1) more than their best can move
+    # (delta_(k-1): the (k-1)-th smallest step, bounded above by the steps known exactly:
+    # each one-row block's, and each ranked block's once its second best is found).
+    lone_steps = ranked_cost[:, 1] - ranked_cost[:, 0] if width else np.full(len(lone), np.inf)
+    placed_steps = [(p.bound(1), b) for p, b in zip(placed, best)]
+    exact_steps = np.concatenate([lone_steps, [then - b for (then, exact), b in placed_steps if exact and b is not None]])
+    limit = np.partition(exact_steps, k - 2)[k - 2] if len(exact_steps) >= k - 1 else np.inf
+    moving = np.flatnonzero((lone_steps <= limit) & (lone_steps < np.inf))
+    parts: list[_Placed | _Lone] = [_Lone(int(lone[i]), ranked_cost[i], ranked_col[i]) for i in moving]
+    parts += [p for p, ((then, _), b) in zip(placed, placed_steps) if b is not None and then - b <= limit and then < np.inf]
+    return _merge(total, columns, parts, k)
 
 
-def _merge(total: float, columns: Indices, blocks: list[_Ranking], k: int) -> list[RankedAssignment]:
-    """The k smallest sums over the blocks' lists, from the all-best assignment ``columns``."""
+def _merge(total: float, columns: Indices, blocks: list[_Placed | _Lone], k: int) -> list[RankedAssignment]:
+    """The k smallest sums over the blocks' lists, from the all-best assignment ``columns``.
+
+    A heap entry is (key, tie, base, index, last, exact): ``index`` advanced ``last`` from a
+    vector of cost ``base`` + the block's previous cost; ``key`` is exact or a lower bound."""
     counter = itertools.count()
-    queue = [(total, next(counter), (0,) * len(blocks), 0)]
+    queue: list[tuple[float, int, float, tuple[int, ...], int, bool]] = [
+        (total, next(counter), total, (0,) * len(blocks), 0, True),
+    ]
     ranked: list[RankedAssignment] = []
     while queue and len(ranked) < k:
-        total, _, index, last = heapq.heappop(queue)
+        total, _, base, index, last, exact = heapq.heappop(queue)
+        if not exact:  # rank the advanced block's next assignment, and queue it at its cost
+            then = blocks[last].cost(index[last])
+            if then is not None:
+                heapq.heappush(queue, (base + then, next(counter), base, index, last, True))
+            continue
         chosen = columns.copy()
         for block, i in zip(blocks, index):
             if i:
-                part = block.get(i)
-                assert part is not None
-                chosen[block.rows] = part.columns
+                chosen[block.rows] = block.columns(i)
         ranked.append(RankedAssignment(total, chosen))
         for b in range(last, len(blocks)):
-            now, then = blocks[b].get(index[b]), blocks[b].get(index[b] + 1)
-            if now is not None and then is not None:
-                advanced = index[:b] + (index[b] + 1,) + index[b + 1:]
-                heapq.heappush(queue, (total - now.cost + then.cost, next(counter), advanced, b))
+            now = blocks[b].cost(index[b])
+            assert now is not None
+            then, exact = blocks[b].bound(index[b] + 1)
+            if then < np.inf:
+                advanced = index[:b] + (index[b] + 1,) + index[b + 1 :]
+                base = total - now
+                heapq.heappush(queue, (base + then, next(counter), base, advanced, b, exact))
     return ranked
 
 
-def _lone_ranking(row: int, costs: Costs, columns: Indices) -> _Ranking:
-    """A one-row block's ranking from its sorted options."""
-    options = (RankedAssignment(float(c), np.array([j], dtype=np.intp)) for c, j in zip(costs, columns) if np.isfinite(c))
-    return _Ranking(np.array([row], dtype=np.intp), options)
+def _blocks(finite: NDArray[np.bool_]) -> tuple[Indices, list[tuple[Indices, Indices]]]:
+    """Rows alone in their block, and the rows and columns of every block of several rows.
 
-
-def _blocks(cost: Costs) -> tuple[Indices, list[tuple[Indices, Indices]]]:
-    """Rows alone in their block, and the rows and columns of every block of several rows."""
-    rows, width = cost.shape
-    finite = np.isfinite(cost)
-    linking = np.flatnonzero(finite.sum(axis=0) >= 2)  # columns two rows can take
-    r, c = np.nonzero(finite[:, linking])
-    graph = sp.coo_matrix((np.ones(len(r)), (r, rows + c)), shape=(rows + len(linking),) * 2)
-    _, label = connected_components(graph, directed=False)
-    size = np.bincount(label[:rows], minlength=label.max() + 1)
-    lone = np.flatnonzero(size[label[:rows]] == 1)
-    shared = []
-    row_label = label[:rows]
-    for group in np.flatnonzero(size >= 2):
-        members = np.flatnonzero(row_label == group)
-        shared.append((members, np.flatnonzero(finite[members].any(axis=0))))
-    return lone, shared
+    Among the rows that share a column with another, ``reach`` (which rows a row reaches
+    through shared columns) is closed by squaring, a few rounds for the short chains of
+    contention in a window of markers; a block's label is its first row."""
+    linking = finite[:, finite.sum(axis=0) >= 2]
+    is_contested = linking.any(axis=1)
+    contested, lone = np.flatnonzero(is_contested), np.flatnonzero(~is_contested)
+    if len(contested) == 0:
+        return lone, []
+    links = linking[contested].astype(np.float64)
+    reach = links @ links.T > 0
+    while True:
+        grown = reach.astype(np.float64) @ reach > 0
+        if np.count_nonzero(grown) == np.count_nonzero(reach):  # grown only adds
+            break
+        reach = grown
+    label = reach.argmax(axis=1)  # the first row it reaches: the same for every row of a block
+    block_finite = finite[contested]
+    used = np.flatnonzero(block_finite.any(axis=0))
+    column_label = label[block_finite[:, used].argmax(axis=0)]
+    row_order, column_order = np.argsort(label, kind="stable"), np.argsort(column_label, kind="stable")
+    groups = np.unique(label)
+    row_splits = np.searchsorted(label[row_order], groups).tolist() + [len(label)]
+    column_splits = np.searchsorted(column_label[column_order], groups).tolist() + [len(used)]
+    rows, columns = contested[row_order], used[column_order]
+    return lone, [(rows[a:b], columns[c:d]) for a, b, c, d in zip(row_splits, row_splits[1:], column_splits, column_splits[1:])]

@@ -20,7 +20,9 @@ removed (the inherited partial solution: a smaller problem). Miller, Stone & Cox
 
 1. lazy evaluation: a child enters the queue with a lower bound, and is only solved when
    it reaches the front (then re-queued at its exact cost); a solved subproblem at the
-   front is the next best, since its cost is at most every bound behind it;
+   front is the next best, since its cost is at most every bound behind it. The front's
+   key is so a lower bound on the next assignment, before any LAP is solved
+   (``MurtyRanking.lower_bound``, which ``blocks`` merges by);
 2. an optimised partition order: rows whose exclusion raises the bound most go first, so
    the children that are cheap to reach (more rows forced, smaller problems) come last.
 
@@ -51,6 +53,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 Costs = NDArray[np.float64]
+Indices = NDArray[np.intp]
 
 
 class RankedAssignment(NamedTuple):
@@ -62,22 +65,48 @@ class RankedAssignment(NamedTuple):
 
 @dataclass
 class _Subproblem:
-    """The extended problem with rows ``forced`` to columns and ``excluded`` (row, column) entries."""
+    """The extended problem with ``forced_rows`` taking ``forced_columns`` and ``excluded`` (row, column) entries."""
 
-    forced: dict[int, int]
-    excluded: list[tuple[int, int]]
+    forced_rows: Indices
+    forced_columns: Indices
+    excluded: tuple[tuple[int, int], ...]
     key: float  # the bound until solved, then the exact cost
-    columns: NDArray[np.intp] | None = field(default=None)
+    columns: Indices | None = field(default=None)
 
-    def costs(self, extended: Costs) -> Costs:
-        """The extended matrix with this subproblem's exclusions set to inf (a copy)."""
-        costs = extended.copy()
+    def free(self, extended: Costs) -> tuple[Indices, Indices, Costs]:
+        """The unforced rows and columns, and their costs with this subproblem's exclusions at inf."""
+        free_rows = _unforced(extended.shape[0], self.forced_rows)
+        free_columns = _unforced(extended.shape[1], self.forced_columns)
+        costs = extended[np.ix_(free_rows, free_columns)]
         if self.excluded:
-            costs[tuple(np.array(self.excluded).T)] = np.inf
-        return costs
+            excluded = np.array(self.excluded)
+            r = _positions(extended.shape[0], free_rows)[excluded[:, 0]]
+            c = _positions(extended.shape[1], free_columns)[excluded[:, 1]]
+            live = (r >= 0) & (c >= 0)  # exclusions on forced rows or columns no longer matter
+            costs[r[live], c[live]] = np.inf
+        return free_rows, free_columns, costs
 
 
-def ranked_assignments(cost: Costs, miss: Costs | None = None) -> Iterator[RankedAssignment]:
+@dataclass
+class _Child:
+    """A child of a solved subproblem as queued: its parent, the rows it newly forces (to the
+    parent's columns) and the row whose parent's column it excludes; built when it is solved,
+    so the many children never solved cost a tuple each."""
+
+    parent: _Subproblem
+    newly_forced: Indices
+    row: int
+    key: float
+
+    def subproblem(self) -> _Subproblem:
+        parent = self.parent
+        assert parent.columns is not None
+        forced_rows = np.concatenate([parent.forced_rows, self.newly_forced])
+        excluded = (*parent.excluded, (self.row, int(parent.columns[self.row])))
+        return _Subproblem(forced_rows, parent.columns[forced_rows], excluded, self.key)
+
+
+class MurtyRanking(Iterator[RankedAssignment]):
     """Every assignment of ``cost`` (R x C), cheapest first, lazily.
 
     Args:
@@ -85,33 +114,39 @@ def ranked_assignments(cost: Costs, miss: Costs | None = None) -> Iterator[Ranke
         miss: ``(R,)`` u_i, the cost of leaving row i unassigned (None: every row must be
             assigned, which needs C >= R).
     """
-    cost = np.asarray(cost, dtype=float)
-    width, extended = cost.shape[1], _extended(cost, miss)
-    queue: list[tuple[float, int, _Subproblem]] = []
-    counter = itertools.count()
-    heapq.heappush(queue, (-np.inf, next(counter), _Subproblem(forced={}, excluded=[], key=-np.inf)))
-    while queue:
-        _, _, problem = heapq.heappop(queue)
-        if problem.columns is None:
-            solved = _solve(extended, problem)
-            if solved is not None:
-                heapq.heappush(queue, (solved.key, next(counter), solved))
-            continue
-        columns = problem.columns.copy()
-        columns[columns >= width] = -1
-        yield RankedAssignment(problem.key, columns)
-        for child in _partition(extended, problem):
-            heapq.heappush(queue, (child.key, next(counter), child))
+
+    def __init__(self, cost: Costs, miss: Costs | None = None) -> None:
+        cost = np.asarray(cost, dtype=float)
+        self.width, self.extended = cost.shape[1], _extended(cost, miss)
+        none = np.empty(0, dtype=np.intp)
+        self.counter = itertools.count()
+        root = _Subproblem(none, none, (), key=-np.inf)
+        self.queue: list[tuple[float, int, _Subproblem | _Child]] = [(-np.inf, next(self.counter), root)]
+
+    def __next__(self) -> RankedAssignment:
+        while self.queue:
+            _, _, queued = heapq.heappop(self.queue)
+            problem = queued.subproblem() if isinstance(queued, _Child) else queued
+            if problem.columns is None:
+                solved = _solve(self.extended, problem)
+                if solved is not None:
+                    heapq.heappush(self.queue, (solved.key, next(self.counter), solved))
+                continue
+            for child in _partition(self.extended, problem):
+                heapq.heappush(self.queue, (child.key, next(self.counter), child))
+            columns = problem.columns.copy()
+            columns[columns >= self.width] = -1
+            return RankedAssignment(problem.key, columns)
+        raise StopIteration
+
+    def lower_bound(self) -> float:
+        """A lower bound on the next assignment's cost (inf: there is none), no LAP solved."""
+        return self.queue[0][0] if self.queue else np.inf
 
 
-def next_bound(cost: Costs, miss: Costs | None, best: RankedAssignment) -> float:
-    """A lower bound on the second-best assignment's cost (inf: there is none), from the
-    bounds of the best one's children: no LAP solved."""
-    cost = np.asarray(cost, dtype=float)
-    rows, width = cost.shape
-    columns = np.where(best.columns >= 0, best.columns, width + np.arange(rows))
-    root = _Subproblem(forced={}, excluded=[], key=best.cost, columns=columns)
-    return min((child.key for child in _partition(_extended(cost, miss), root)), default=np.inf)
+def ranked_assignments(cost: Costs, miss: Costs | None = None) -> MurtyRanking:
+    """Every assignment of ``cost`` (R x C) with row misses ``miss``, cheapest first, lazily."""
+    return MurtyRanking(cost, miss)
 
 
 def _extended(cost: Costs, miss: Costs | None) -> Costs:
@@ -125,59 +160,62 @@ def _extended(cost: Costs, miss: Costs | None) -> Costs:
 
 def _solve(extended: Costs, problem: _Subproblem) -> _Subproblem | None:
     """The subproblem with its best assignment, or None when it has none."""
-    rows, width = extended.shape
-    forced_rows = np.fromiter(problem.forced, dtype=np.intp, count=len(problem.forced))
-    forced_columns = np.fromiter(problem.forced.values(), dtype=np.intp, count=len(problem.forced))
-    free_rows, free_columns = _unforced(rows, forced_rows), _unforced(width, forced_columns)
-    costs = problem.costs(extended)
+    rows = extended.shape[0]
+    free_rows, free_columns, costs = problem.free(extended)
     columns = np.empty(rows, dtype=np.intp)
-    columns[forced_rows] = forced_columns
+    columns[problem.forced_rows] = problem.forced_columns
     if len(free_rows):
         try:
-            r, c = linear_sum_assignment(costs[np.ix_(free_rows, free_columns)])
+            r, c = linear_sum_assignment(costs)
         except ValueError:  # no assignment avoids every inf
             return None
-        if len(r) < len(free_rows):
+        if len(r) < len(free_rows) or not np.isfinite(costs[r, c]).all():
             return None
         columns[free_rows[r]] = free_columns[c]
-    total = float(costs[np.arange(rows), columns].sum())
+    total = float(extended[np.arange(rows), columns].sum())
     if not np.isfinite(total):
         return None
-    return _Subproblem(forced=problem.forced, excluded=problem.excluded, key=total, columns=columns)
+    return _Subproblem(problem.forced_rows, problem.forced_columns, problem.excluded, key=total, columns=columns)
 
 
-def _unforced(size: int, forced: NDArray[np.intp]) -> NDArray[np.intp]:
+def _unforced(size: int, forced: Indices) -> Indices:
     """Indices in range(size) not in ``forced``."""
     keep = np.ones(size, dtype=bool)
     keep[forced] = False
     return np.flatnonzero(keep)
 
 
-def _partition(extended: Costs, problem: _Subproblem) -> list[_Subproblem]:
+def _positions(size: int, kept: Indices) -> Indices:
+    """Each index's position in ``kept`` (-1: not kept)."""
+    at = np.full(size, -1, dtype=np.intp)
+    at[kept] = np.arange(len(kept))
+    return at
+
+
+def _partition(extended: Costs, problem: _Subproblem) -> list[_Child]:
     """Murty's children of a solved subproblem, each queued at its row-minimum bound."""
     assert problem.columns is not None
     chosen = problem.columns
-    free = _unforced(extended.shape[0], np.fromiter(problem.forced, dtype=np.intp, count=len(problem.forced)))
+    free = _unforced(extended.shape[0], problem.forced_rows)
     if len(free) == 0:
         return []
-    allowed = problem.costs(extended)[free]
-    allowed[:, list(problem.forced.values())] = np.inf
+    own_column = chosen[free]
+    allowed = extended[free]  # a copy
+    if problem.excluded:  # exclusions on forced rows no longer matter
+        excluded = np.array(problem.excluded)
+        r = _positions(extended.shape[0], free)[excluded[:, 0]]
+        allowed[r[r >= 0], excluded[r >= 0, 1]] = np.inf
+    allowed[:, problem.forced_columns] = np.inf
     at = np.arange(len(free))
-    own = allowed[at, chosen[free]]
+    own = allowed[at, own_column]
     row_min = allowed.min(axis=1)
-    allowed[at, chosen[free]] = np.inf
+    allowed[at, own_column] = np.inf
     second = allowed.min(axis=1)
-    order = np.argsort(-(second - own), kind="stable")  # largest exclusion penalty first
+    order = np.argsort(own - second, kind="stable")  # largest exclusion penalty first
     free, own, row_min, second = free[order], own[order], row_min[order], second[order]
-    forced_cost = float(extended[list(problem.forced), list(problem.forced.values())].sum())
-    before = forced_cost + np.r_[0.0, np.cumsum(own)[:-1]]
-    after = np.r_[np.cumsum(row_min[::-1])[::-1][1:], 0.0]
+    forced_cost = float(extended[problem.forced_rows, problem.forced_columns].sum())
+    before = forced_cost + np.concatenate([[0.0], np.cumsum(own)[:-1]])
+    after = np.concatenate([np.cumsum(row_min[::-1])[::-1][1:], [0.0]])
     bounds = np.maximum(problem.key, before + second + after)
-    children = []
-    forced = dict(problem.forced)
-    for t, row in enumerate(free.tolist()):
-        if np.isfinite(bounds[t]):
-            excluded = [*problem.excluded, (row, int(chosen[row]))]
-            children.append(_Subproblem(forced=dict(forced), excluded=excluded, key=float(bounds[t])))
-        forced[row] = int(chosen[row])
-    return children
+    rows = free.tolist()
+    return [_Child(problem, free[:t], rows[t], bound) for t, bound in enumerate(bounds.tolist()) if bound < np.inf]

@@ -4,8 +4,9 @@ A hypothesis is one node per object at frame m with the cost of its path so far 
 cost form, -log P^Psi up to a constant: the costs of its steps add). For m = 1..M, each of
 the I hypotheses kept is expanded by its J best associations of frame m: the assignment
 problem F of ``mht_association`` (eq. 10: objects x contested resources, private
-columns, occlusion as the miss) ranked by Murty's algorithm (``formulations.assignment``).
-A child's step costs
+columns, occlusion as the miss) ranked by Murty's algorithm (``formulations.assignment``;
+the hypotheses of a frame differ in a few markers, so their F share most blocks, and one
+``RankingCache`` per frame ranks each distinct block once). A child's step costs
 
     F(sigma) + [m >= 2] sum_{(a, b)} mu_ab ||(r_a,m - r_b,m) - (r_a,m-1 - r_b,m-1)||_1,
 
@@ -50,6 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.assignment.blocks import k_best_assignments
+from formulations.assignment.rankings import RankingCache
 from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation, check_parameters
 from formulations.methods.frame_steps import FrameSteps
@@ -101,8 +103,8 @@ class Mht(Formulation):
             keep = _merge_and_cut(children, child_score, self.hypotheses)
             before, nodes, score = nodes[parent[keep]], children[keep], child_score[keep]
             taken = taken[parent[keep]]
-            for h in range(len(keep)):
-                taken[h, steps.node_groups[nodes[h]].indices] = 1.0
+            holder, group = steps.node_groups[nodes.ravel()].nonzero()  # every hypothesis at once
+            taken[holder // nodes.shape[1], group] = 1.0
             parents.append(parent[keep])
             layers.append(nodes)
         sink_cost = np.array([steps.successors(nodes[h], taken[h])[1].sum() for h in range(len(nodes))])
@@ -123,13 +125,18 @@ class Mht(Formulation):
     ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64], bool]:
         """Every hypothesis's J best children at frame m + 1: nodes, parent, score, and
         whether each hypothesis's associations were all ranked (known only if ``probe``)."""
-        children, parent, child_score, complete = [], [], [], True
+        children: list[NDArray[np.intp]] = []
+        parent: list[int] = []
+        child_score: list[float] = []
+        complete = True
+        cache = RankingCache()  # the hypotheses differ in a few markers: most blocks of F recur
         for h in range(len(nodes)):
             node, cost, held = steps.successors(nodes[h], taken[h])
             if self.noise is not None and m >= 1:
                 cost = cost + _velocity_cost(problem, node, nodes[h], before[h], self.noise)
             f = association(problem.n_objects, problem.node_object, problem.node_kind, node, cost, held)
-            ranked, exhausted = _feasible_best(f, steps, self.associations, probe)
+            probe &= complete and len(children) <= self.hypotheses  # else the search is cut already
+            ranked, exhausted = _feasible_best(f, steps, self.associations, probe, cache)
             complete &= exhausted
             for step_cost, chosen in ranked:
                 layout = _layout_step(problem, nodes[h], chosen) if m >= 1 else 0.0
@@ -140,15 +147,15 @@ class Mht(Formulation):
 
 
 def _feasible_best(
-    f: Association, steps: FrameSteps, j: int, probe: bool,
+    f: Association, steps: FrameSteps, j: int, probe: bool, cache: RankingCache,
 ) -> tuple[list[tuple[float, NDArray[np.intp]]], bool]:
     """The J best associations holding no resource twice, as (cost, nodes); and whether
     they are all there are (with ``probe`` J + 1 are asked, so a cut list is seen as cut;
     without, a full list counts as cut)."""
     k = j + probe
     for _ in range(FILTER_ROUNDS):
-        ranked = k_best_assignments(f.cost, f.miss, k)
-        found = [(a.cost, f.nodes(a.columns)) for a in ranked]
+        ranked = k_best_assignments(f.cost, f.miss, k, cache)
+        found = list(zip((a.cost for a in ranked), f.nodes(np.array([a.columns for a in ranked]).reshape(len(ranked), -1))))
         if f.checked:
             found = [(c, n) for c, n in found if (steps.node_groups[n].sum(axis=0) <= 1).all()]
         if len(ranked) < k or len(found) >= j + probe:
@@ -159,10 +166,16 @@ def _feasible_best(
 
 def _merge_and_cut(children: NDArray[np.intp], score: NDArray[np.float64], keep: int) -> NDArray[np.intp]:
     """Indices of the ``keep`` cheapest children with distinct nodes (the cheaper of a merge)."""
-    order = np.argsort(score, kind="stable")
-    _, first = np.unique(children[order], axis=0, return_index=True)
-    distinct: NDArray[np.intp] = order[np.sort(first)]
-    return distinct[:keep]
+    distinct: list[int] = []
+    seen: set[bytes] = set()
+    for child in np.argsort(score, kind="stable").tolist():
+        nodes = children[child].tobytes()
+        if nodes not in seen:
+            seen.add(nodes)
+            distinct.append(child)
+            if len(distinct) == keep:
+                break
+    return np.array(distinct, dtype=np.intp)
 
 
 def _layout_step(problem: WindowProblem, previous: NDArray[np.intp], chosen: NDArray[np.intp]) -> float:

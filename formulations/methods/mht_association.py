@@ -47,8 +47,8 @@ class Association:
     checked: bool
 
     def nodes(self, columns: NDArray[np.intp]) -> NDArray[np.intp]:
-        """The node each object takes under an assignment (-1 columns: occluded)."""
-        chosen: NDArray[np.intp] = np.column_stack([self.cell_node, self.occlusion])[np.arange(len(columns)), columns]
+        """The node each object takes under assignments ``(..., N)`` (-1 columns: occluded)."""
+        chosen: NDArray[np.intp] = np.column_stack([self.cell_node, self.occlusion])[np.arange(len(self.occlusion)), columns]
         return chosen  # column -1 picks the last: the occlusion node
 
 
@@ -68,14 +68,32 @@ def association(
     first_of_cell = np.zeros(len(node), dtype=bool)
     contested = np.flatnonzero(group >= 0)
     cells = obj[contested] * (group.max(initial=0) + 1) + group[contested]
-    first_of_cell[contested[np.unique(cells, return_index=True)[1]]] = True
-    groups, column = np.unique(group[first_of_cell], return_inverse=True)
-    col = len(groups) + np.arange(len(node))  # private columns, one per node
+    first_of_cell[contested[_first_of_each(cells)]] = True
+    column, n_groups = _dense_rank(group[first_of_cell])
+    col = np.empty(len(node), dtype=np.intp)
     col[first_of_cell] = column
-    used, col = np.unique(col, return_inverse=True)  # drop the private columns nobody needs
-    matrix = np.full((n_objects, len(used)), np.inf)
+    private = ~first_of_cell  # the other nodes: a column each, after the groups'
+    col[private] = n_groups + np.arange(np.count_nonzero(private))
+    matrix = np.full((n_objects, n_groups + np.count_nonzero(private)), np.inf)
     matrix[obj, col] = cost
-    cell_node = np.full((n_objects, len(used)), -1, dtype=np.intp)
+    cell_node = np.full(matrix.shape, -1, dtype=np.intp)
     cell_node[obj, col] = node
     checked = bool((count > 1).any() or ((group >= 0) & ~first_of_cell).any())
     return Association(cost=matrix, miss=miss, cell_node=cell_node, occlusion=occlusion, checked=checked)
+
+
+def _first_of_each(values: NDArray[np.intp]) -> NDArray[np.intp]:
+    """Index of the first occurrence of each distinct value (``np.unique``'s ``return_index``, without its overhead)."""
+    order = np.argsort(values, kind="stable")
+    ordered = values[order]
+    first: NDArray[np.intp] = order[np.concatenate([[True], ordered[1:] != ordered[:-1]])] if len(values) else order
+    return first
+
+
+def _dense_rank(values: NDArray[np.intp]) -> tuple[NDArray[np.intp], int]:
+    """Each value's rank among the distinct values (``np.unique``'s ``return_inverse``), and their number."""
+    order = np.argsort(values, kind="stable")
+    ordered = values[order]
+    rank = np.empty(len(values), dtype=np.intp)
+    rank[order] = np.cumsum(np.concatenate([[False], ordered[1:] != ordered[:-1]]))
+    return rank, int(rank.max(initial=-1)) + 1
