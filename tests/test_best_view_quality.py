@@ -8,10 +8,12 @@ from capture_fixtures import camera_capture, points_capture
 
 from formulations.best_view import box_quality, box_truncation, marker_quality
 from formulations.cameras.camera import Camera
+from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import LabelingOptions
 from service.errors import InputError
 from service.io.formats import write_labeled
 from service.io.formats.csv import read_csv_labeled
+from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
 from service.server.results import trajectories_from_bytes, trajectories_json, trajectories_to_bytes
 
@@ -109,3 +111,26 @@ def test_point_jobs_have_no_best_view(tmp_path):
 def test_bad_best_view_options_are_one_line(options, message):
     with pytest.raises(InputError, match=message):
         CaptureLabeling(camera_capture(5, markers=4), options)
+
+
+def test_an_occluded_marker_is_best_seen_by_the_camera_whose_ray_clears_the_body():
+    """A limb ringed by markers; one of them seen only by camera a in frame 0, then by none.
+    With 0/1 visibility camera a shows it best in frame 0 and no camera after (qualities 0,
+    so the view stays); the occlusion-aware P_D sees that the ray to camera a crosses the
+    limb (a saw it regardless in frame 0) and the ray to camera b does not."""
+    angles = np.deg2rad(np.arange(0, 360, 45))
+    limb = np.array([[50 * np.cos(a), 50 * np.sin(a), z] for z in (-60.0, -20.0, 20.0, 60.0) for a in angles])
+    hidden = next(i for i, x in enumerate(limb) if np.allclose(x, [0, 50, 20]))
+    through, clear = looking_at_origin([-1500, -1000, 0], "a"), looking_at_origin([1500, 1000, 0], "b")
+    positions = np.repeat(limb[None], 3, axis=0)
+    measured, filled = positions.copy(), np.full_like(positions, np.nan)
+    measured[1:, hidden], filled[1:, hidden] = np.nan, limb[hidden]
+    views = np.zeros((3, len(limb), 2), dtype=int)
+    views[1:, hidden], views[0, hidden, 1] = -1, -1
+    labels = LabeledTrajectories([f"m{i}" for i in range(len(limb))], measured, np.isnan(measured[..., 0]), 120.0,
+                                 filled=filled)
+    chosen = MarkerViewChoice([through, clear], switch_cost=0.0, window=1).attach(labels, views).best_view
+    assert (chosen[:, hidden] == 1).all()
+    alone = MarkerViewChoice([through], switch_cost=0.0, window=1)
+    visibility = alone._visibility(measured, np.where(np.isnan(measured), filled, measured), views[..., :1] >= 0)
+    assert visibility[1, hidden, 0] < 0.05 and (visibility[:, np.arange(len(limb)) != hidden] == 1).all()
