@@ -11,7 +11,10 @@ births and deaths), and for reference published tracker outputs scored as they a
 
 The cost constants were chosen on TUD-Campus and MOT17-02; the other three are held out.
 
-    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian]
+Arcs are priced by Jiang's weighted costs, or with ``--likelihood`` as negative
+log-likelihoods (``formulations.boxes.likelihood``), the same for every formulation.
+
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood]
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
+    parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
     print("|---|---|---|---|---|---|---|")
@@ -57,7 +61,7 @@ def main() -> None:
         for name, det, gt, seqinfo, published in sequences():
             detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
             for formulation in args.formulations.split(","):
-                run = track_boxes(detections, formulation, window=args.window)
+                run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood)
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

@@ -17,10 +17,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from formulations.boxes import kalman
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel, histogram_distance
 from formulations.boxes.geometry import centre, height
 from formulations.boxes.kalman import box_corners, corner_rates
+from formulations.boxes.likelihood import DetectionRates, box_likelihood, clutter_volume
 from formulations.boxes.objects import BoxObjects
 from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights
@@ -50,7 +52,7 @@ class BoxWindow:
 
 def box_window(
     objects: BoxObjects, template_frame: int, n_frames: int, frame: Ints, boxes: Array, histograms: Array | None,
-    model: BoxCostModel, rule: ConflictRule,
+    model: BoxCostModel, rule: ConflictRule, rates: DetectionRates | None = None, image: Array | None = None,
 ) -> BoxWindow:
     """Pose frames ``template_frame+1 .. template_frame+n_frames`` for ``objects``.
 
@@ -65,6 +67,10 @@ def box_window(
             histograms (None without frames).
         model: Gate and costs.
         rule: When two boxes conflict.
+        rates: P_D and false alarms so far: price arcs as negative log-likelihoods
+            (``formulations.boxes.likelihood``; the template term keeps only the histogram),
+            or None for Jiang's weighted costs.
+        image: ``(4,)`` the image rectangle (x1, y1, x2, y2), where false alarms fall; needed with ``rates``.
     """
     frames = template_frame + np.arange(1, n_frames + 1)
     predicted, spread = objects.forecast(n_frames)  # (N, M, 4), (N, M, 4, 4)
@@ -79,6 +85,14 @@ def box_window(
         costs.append(cost[n, b])
     obj, det = np.concatenate(objs).astype(int), np.concatenate(dets).astype(int)
     template_cost = np.concatenate(costs)
+    likelihood = None
+    if rates is not None:
+        if image is None:
+            raise ValueError("box likelihood costs need the image rectangle")
+        log_clutter = float(np.log(rates.false_alarms_per_frame / clutter_volume(image, boxes)))
+        likelihood = box_likelihood(objects, rates, log_clutter, predicted, spread, obj, frame[det] - template_frame,
+                                    kalman.measurement(boxes[det]))
+        template_cost = np.zeros(len(det))  # the forecast is in the reappear cost
     hist_dist = None
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
@@ -92,7 +106,7 @@ def box_window(
         n_frames=n_frames, object=obj, frame=frame[det] - template_frame, location=boxes[det] / unit[obj, None],
         template_cost=template_cost, resources=resources, occlusion_location=box_corners(predicted) / unit[:, None, None],
         motion=velocity, appearance=None if hist_dist is None or histograms is None else histograms[det],
-        template_appearance=None if hist_dist is None else objects.histogram,
+        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood,
     )
     weights = ArcCostWeights(  # floats: integer weights would make the arc cost array integer
         appearance_change=float(model.histogram_change) if hist_dist is not None else 0.0,

@@ -97,3 +97,26 @@ def mahalanobis(z: Array, predicted: Array, s: Array) -> Array:
     whitened = np.linalg.solve(np.linalg.cholesky(s)[:, None], difference[..., None])[..., 0]
     result: Array = (whitened**2).sum(axis=2)
     return result
+
+
+_TO_CORNERS = np.array([[1.0, 0, -0.5, 0], [0, 1.0, 0, -0.5], [1.0, 0, 0.5, 0], [0, 1.0, 0, 0.5]])
+
+
+def step_variance(size: Array, velocity_covariance: Array, frames: Array) -> Array:
+    """``(C,)`` variance per corner coordinate of a step into a box of ``size`` (w, h) ``(C, 2)``.
+
+    The step from box z_i to the next box z_j off the object's velocity v, e = z_j - z_i - v,
+    carries two measurement noises, one frame's position noise, the velocity's own
+    uncertainty P_vv (``velocity_covariance``, ``(C, 4, 4)``) and the velocity noise of the
+    ``frames`` (``(C,)``) since the state, all but P_vv at the size of box j:
+
+        C_j = 2 R + Q_p + P_vv + k Q_v   in (cx, cy, w, h),   s_j^2 = tr(T C_j T^T) / 4,
+
+    T taking (cx, cy, w, h) to corners: one sd for all four corner coordinates, their mean variance.
+    """
+    wh = np.maximum(np.concatenate([size, size], axis=1), 1.0)
+    position, velocity, measured = (POSITION_SD * wh) ** 2, (VELOCITY_SD * wh) ** 2, (MEASUREMENT_SD * wh) ** 2
+    noise = 2.0 * measured + position + frames[:, None] * velocity
+    diagonal = np.einsum("ai,ni,ai->n", _TO_CORNERS, noise, _TO_CORNERS)
+    result: Array = (diagonal + np.einsum("ai,nij,aj->n", _TO_CORNERS, velocity_covariance, _TO_CORNERS)) / 4.0
+    return result

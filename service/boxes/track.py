@@ -36,6 +36,7 @@ from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel
 from formulations.boxes.geometry import corners
 from formulations.boxes.lifecycle import Lifecycle, born
+from formulations.boxes.likelihood import DetectionRates
 from formulations.boxes.objects import BoxObjects, advance
 from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
@@ -71,6 +72,7 @@ def track_boxes(
     model: BoxCostModel = BoxCostModel(),
     rule: ConflictRule = ConflictRule(),
     lifecycle: Lifecycle = Lifecycle(),
+    likelihood: bool = False,
 ) -> BoxTracking:
     """Track ``detections`` (one camera) and number the tracks 1, 2, ... in order of birth.
 
@@ -80,6 +82,10 @@ def track_boxes(
         window: Frames per window, template included (>= 2).
         histograms: ``(K, H)`` normalised histogram per detection row, or None.
         model, rule, lifecycle: Costs and gate, conflict sets, births and deaths.
+        likelihood: Price arcs as negative log-likelihoods with P_D and false alarms learned
+            window by window (``formulations.boxes.likelihood``), else Jiang's weighted costs
+            (``model``'s constants). Off by default: on MOT17 it lets the window's look-ahead
+            carry lost objects onto other people's boxes (README, Boxes).
 
     Raises:
         InputError: A window shorter than 2, an unknown formulation, histograms of the wrong shape.
@@ -95,14 +101,17 @@ def track_boxes(
     image = _image(detections, boxes)
     objects = BoxObjects.empty(None if histograms is None else histograms.shape[1])
     owner = np.zeros(len(frame), dtype=int)  # track id of each detection, 0 = none
+    rates = DetectionRates() if likelihood else None
     windows = integral = 0
     t0, next_ident = 1, 1
     while t0 < detections.n_frames:
         m = min(window - 1, detections.n_frames - t0)
         inside = (frame > t0) & (frame <= t0 + m)
+        posing = _Posing(t0, m, frame, boxes, histograms, model, rule, rates, image)
         before = objects
+        taken = np.zeros((0, m), int)
         if objects.n_objects:
-            objects, certified = _solve(solver, before, t0, m, frame, boxes, histograms, model, rule, owner)
+            objects, taken, certified = _solve(solver, before, posing, owner)
             windows, integral = windows + 1, integral + certified
         chains = lifecycle.chains(frame, boxes, (frame >= t0) & (frame <= t0 + m) & ~_explained(owner, conflicting))
         if chains:
@@ -111,8 +120,11 @@ def track_boxes(
             at_template = [c[0] for c in chains if frame[c[0]] == t0]
             owner[at_template] = new.ident[[i for i, c in enumerate(chains) if frame[c[0]] == t0]]
             owner[inside] = 0  # the window again, with the new objects competing from their first box
-            objects, certified = _solve(solver, before.joined(new), t0, m, frame, boxes, histograms, model, rule, owner)
+            before = before.joined(new)
+            objects, taken, certified = _solve(solver, before, posing, owner)
             windows, integral = windows + 1, integral + certified
+        if rates is not None:
+            rates = _counted(rates, before, taken, t0, inside & ~_explained(owner, conflicting))
         objects = objects.subset(~lifecycle.leaving(objects, t0 + m, image))
         t0 += m
     tracked = np.flatnonzero(owner)
@@ -121,21 +133,44 @@ def track_boxes(
     return BoxTracking(tracks, windows, integral, time.perf_counter() - start)
 
 
+@dataclass(frozen=True)
+class _Posing:
+    """What every solve of one window shares: its frames, the detections, costs and priors."""
+
+    t0: int
+    m: int
+    frame: np.ndarray
+    boxes: np.ndarray
+    histograms: np.ndarray | None
+    model: BoxCostModel
+    rule: ConflictRule
+    rates: DetectionRates | None
+    image: np.ndarray
+
+
 def _solve(
-    solver: Formulation, objects: BoxObjects, t0: int, m: int, frame: np.ndarray, boxes: np.ndarray,
-    histograms: np.ndarray | None, model: BoxCostModel, rule: ConflictRule, owner: np.ndarray,
-) -> tuple[BoxObjects, bool]:
-    """Solve one window; write each taken detection's owner; return the objects moved on and the certificate."""
-    index = np.flatnonzero((frame > t0) & (frame <= t0 + m))
-    hist = None if histograms is None else histograms[index]
-    posed = box_window(objects, t0, m, frame[index], boxes[index], hist, model, rule)
+    solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray,
+) -> tuple[BoxObjects, np.ndarray, bool]:
+    """Solve one window; write each taken detection's owner; return the objects moved on, the
+    ``(N, M)`` detection each took (-1 occluded) and the certificate."""
+    p = posing
+    index = np.flatnonzero((p.frame > p.t0) & (p.frame <= p.t0 + p.m))
+    hist = None if p.histograms is None else p.histograms[index]
+    posed = box_window(objects, p.t0, p.m, p.frame[index], p.boxes[index], hist, p.model, p.rule, p.rates, p.image)
     problem, node_candidate = build_window(posed.candidates, posed.weights, posed.layout_pairs, posed.layout_weight)
     solution = solver.solve(problem)
     taken = taken_candidates(node_candidate, solution.path, index[posed.detection])  # (N, M), -1 occluded
     for n in range(objects.n_objects):
         owner[taken[n][taken[n] >= 0]] = objects.ident[n]
-    moved = advance(objects, t0, taken, boxes, histograms, HISTOGRAM_RATE)
-    return moved, bool(solution.integral)
+    moved = advance(objects, p.t0, taken, p.boxes, p.histograms, HISTOGRAM_RATE)
+    return moved, taken, bool(solution.integral)
+
+
+def _counted(rates: DetectionRates, objects: BoxObjects, taken: np.ndarray, t0: int, spare: np.ndarray) -> DetectionRates:
+    """``rates`` plus one window: its object-frames after each object's template sighting, and its spare detections."""
+    due = (t0 + 1 + np.arange(taken.shape[1]))[None, :] > objects.last_seen[:, None]
+    hits = int((taken >= 0).sum())
+    return rates.counted(hits, int(due.sum()) - hits, int(spare.sum()), taken.shape[1])
 
 
 def _explained(owner: np.ndarray, conflicting: sp.csr_matrix) -> np.ndarray:
