@@ -12,7 +12,7 @@ d is the corner step off the object's velocity (in its heights: the window's loc
 s its sd (``kalman.step_variance`` at the size of box j, in pixels; in heights for d),
 m_j the Mahalanobis distance of box j to the object's Kalman forecast for its frame with
 innovation covariance S (wide after a long gap, whichever window the object was last seen
-in), rho Huber's loss (``window.likelihood.huber``) and K one shift keeping every cost >= 0.
+in), rho the step loss (``window.likelihood.step_loss``: a contaminated Gaussian) and K one shift keeping every cost >= 0.
 
 P_D and lambda_FA are learned from the windows solved so far (``DetectionRates``): P_D the
 share of object-frames a path took a box (Beta(18, 2) prior, clipped to [0.5, 0.99]), and
@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from formulations.boxes import kalman
 from formulations.boxes.objects import BoxObjects
-from formulations.window.likelihood import CandidateLikelihood, huber
+from formulations.window.likelihood import CandidateLikelihood, step_loss
 
 Array = NDArray[np.float64]
 Ints = NDArray[np.int_]
@@ -106,4 +106,4 @@ def box_likelihood(
     shift = -float(min(offset.min(initial=0.0), reach.min(initial=0.0)))
     miss = np.full((n, m), -np.log1p(-detection) + shift)
     return CandidateLikelihood(step_sigma=sigma_px / unit[obj], step_offset=offset + shift,
-                               reappear_cost=huber(distance) + reach + shift, miss_cost=miss)
+                               reappear_cost=step_loss(distance) + reach + shift, miss_cost=miss)

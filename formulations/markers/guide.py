@@ -25,9 +25,9 @@ class Gate:
     """Gate radius around a marker's prediction.
 
     Attributes:
-        radius_mm: Radius for a marker seen in the previous frame.
-        growth_mm: Added per frame the marker has been unseen.
-        max_radius_mm: Upper limit while unseen.
+        radius_mm: Smallest radius.
+        growth_mm: Added per frame unseen to the gate of a stranded marker.
+        max_radius_mm: Largest radius.
         unknown_velocity_radius_mm: Radius while a marker's velocity is unknown (just
             after the labeled first frame): it must cover one frame of fast motion.
         motion_sigmas: Gate half-width in sds of the marker's motion residual (3D).
@@ -52,12 +52,18 @@ class Gate:
         return miss
 
     def radius(self, state: MarkerState) -> np.ndarray:
-        """The fixed rule above, widened to ``motion_sigmas`` sd (3D) of the marker's learned
-        prediction error (``MarkerState.prediction_var``): a marker on a
-        fast limb, or in a take at a low frame rate, keeps its points inside its gate."""
-        grown = np.minimum(self.radius_mm + self.growth_mm * state.unseen, max(self.max_radius_mm, self.radius_mm))
+        """``motion_sigmas`` sd (3D) of the marker's learned prediction error
+        (``MarkerState.prediction_var``), between ``radius_mm`` and ``max_radius_mm``: a
+        marker on a fast limb, or in a take at a low frame rate, keeps its points inside its
+        gate, and one occluded for long looks only as far as its prediction can have drifted
+        (a gate grown by a fixed step per frame took in so many points that every marker of
+        a window became one coupled component)."""
         motion = self.motion_sigmas * np.sqrt(3 * state.prediction_var(state.unseen))
-        grown = np.maximum(grown, np.minimum(motion, 2 * self.max_radius_mm))
+        grown = np.maximum(self.radius_mm, np.minimum(motion, self.max_radius_mm))
+        # Nothing carries a stranded marker (no seen neighbour to follow): its drift was
+        # never learned, so its gate grows by a fixed step instead.
+        blind = np.minimum(self.radius_mm + self.growth_mm * state.unseen, self.max_radius_mm)
+        grown = np.where(state.stranded(1), np.maximum(grown, blind), grown)
         radius: np.ndarray = np.where(state.velocity_known, grown, np.maximum(grown, self.unknown_velocity_radius_mm))
         return radius
 

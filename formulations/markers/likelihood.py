@@ -24,7 +24,7 @@ import numpy as np
 from formulations.markers.guide import GuideTrack
 from formulations.markers.motion import MOTION_VAR_PRIOR_MM2
 from formulations.markers.state import MarkerState
-from formulations.window.likelihood import CandidateLikelihood, huber
+from formulations.window.likelihood import CandidateLikelihood, step_loss
 
 LOG_2PI_3D = 1.5 * np.log(2 * np.pi)
 PRIOR_HITS, PRIOR_MISSES = 18.0, 2.0  # Beta prior on P_D: 0.9 from 20 pseudo marker-frames
@@ -45,10 +45,10 @@ def marker_likelihood(
     step_sigma = np.sqrt(step_var)
     predicted_sigma = np.sqrt(step_var[obj] + state.drift_var[obj] * guide.unseen[frame - 1, obj])
     off = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1) / predicted_sigma
-    reappear = huber(off) + 3 * np.log(predicted_sigma) + base
+    reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
     offset = 3 * np.log(step_sigma[obj]) + base
     # K: the lowest cost an observation can have (its residual 0) is lifted to 0.
-    shift = -float(min(offset.min(initial=0.0), (reappear - huber(off)).min(initial=0.0)))
+    shift = -float(min(offset.min(initial=0.0), (reappear - step_loss(off)).min(initial=0.0)))
     miss = np.full((n, m), -np.log1p(-detection) + shift)
     return CandidateLikelihood(
         step_sigma=step_sigma[obj], step_offset=offset + shift, reappear_cost=reappear + shift, miss_cost=miss,

@@ -10,7 +10,9 @@ Two running estimates feed the likelihood costs (``markers.likelihood``) and the
   (|e|^2 / 3 - motion_var) / (h - 1), the variance added per frame unseen.
 
 Each is a running mean of squares learned at rate 1 / (samples + 2) down to
-``MOTION_RATE``: the first samples replace the prior, later ones follow slow change.
+``MOTION_RATE``: the first samples replace the prior, later ones follow slow change; the
+motion residual's falls ``MOTION_DECAY`` times slower than it rises, and never below
+``MOTION_VAR_FLOOR_MM2``.
 Each square is first limited to ``MOTION_CLIP`` times the current value, so a mislabeled
 frame cannot open every later gate.
 """
@@ -25,22 +27,32 @@ MOTION_VAR_PRIOR_MM2 = 100.0
 # Prior drift, (2.5 mm)^2 per frame unseen: the old fixed prediction sd grew 2.5 mm a frame.
 DRIFT_VAR_PRIOR_MM2 = 6.25
 MOTION_RATE = 0.02  # weight of one new sample once learned: about the last 50
+# A calm stretch lowers the variance ten times slower than motion raises it: a limb that
+# accelerated a few hundred frames ago may do so again (real motion comes in bursts).
+MOTION_DECAY = 0.1
+# (0.5 mm)^2: below the centroid noise of optical systems; filtered takes go lower.
+MOTION_VAR_FLOOR_MM2 = 0.25
 MOTION_CLIP = 9.0  # a sample counts at most as a 3-sigma one
 
 
 def learn_motion(
-    var: np.ndarray, samples: np.ndarray, residual: np.ndarray, usable: np.ndarray
+    var: np.ndarray, samples: np.ndarray, residual: np.ndarray, usable: np.ndarray, decay: float = MOTION_DECAY,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``motion_var`` and its sample count after one frame (module doc).
+
+    With ``decay`` = 1 this is the running mean of squares, the variance itself; below 1 it
+    is an envelope above it, what the costs need of a motion that comes in bursts.
 
     Args:
         var, samples: ``(N,)`` current estimate and count.
         residual: ``(N, 3)`` observed minus constant-velocity prediction.
         usable: ``(N,)`` markers seen now and in the two frames before.
+        decay: Rate of a lowering step relative to a raising one.
     """
     square = np.minimum((residual**2).mean(axis=1), MOTION_CLIP * var)
-    rate = np.maximum(1.0 / (samples + 2), MOTION_RATE)
-    return np.where(usable, var + rate * (square - var), var), samples + usable
+    rate = np.maximum(1.0 / (samples + 2), np.where(square > var, MOTION_RATE, MOTION_RATE * decay))
+    learned = np.maximum(var + rate * (square - var), MOTION_VAR_FLOOR_MM2)
+    return np.where(usable, learned, var), samples + usable
 
 
 def learn_drift(

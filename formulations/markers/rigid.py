@@ -36,7 +36,7 @@ FOLLOW_ITERATIONS = 3
 
 def follow_neighbours(
     source: np.ndarray, target: np.ndarray, prior: np.ndarray, motion_var: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The rigid motion of the neighbours that really move with an occluded marker.
 
     A weighted fit over every neighbour averages segments that move differently (a still
@@ -45,6 +45,10 @@ def follow_neighbours(
     the current fit, drops the neighbours that do not share the motion; c is 3 sd of the
     marker's own motion residual (``MarkerState.motion_var``), so it scales with the take.
     The first fit is the prior-weighted one: the prior favours near, rigid neighbours.
+
+    Returns:
+        Rotations and centroids as ``rigid_transform``, and ``(S,)`` whether the fit is firm:
+        three or more neighbours within c of it, a rigid body that really carries the marker.
 
     Args:
         source, target: ``(S, K, 3)`` neighbours at the anchor frame and now.
@@ -58,4 +62,7 @@ def follow_neighbours(
         moved = np.einsum("sij,skj->ski", rotation, source - c_s[:, None]) + c_t[:, None]
         error2 = ((moved - target) ** 2).sum(axis=2)
         weight = prior / (1.0 + error2 / scale2)
-    return rigid_transform(source, target, weight)
+    rotation, c_s, c_t = rigid_transform(source, target, weight)
+    moved = np.einsum("sij,skj->ski", rotation, source - c_s[:, None]) + c_t[:, None]
+    inliers = ((prior > 0) & (((moved - target) ** 2).sum(axis=2) <= scale2)).sum(axis=1)
+    return rotation, c_s, c_t, inliers >= 3

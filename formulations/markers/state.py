@@ -33,7 +33,8 @@ class MarkerState:
             variance of inter-marker distances, kept online.
         motion_var: ``(N,)`` variance per axis (mm^2) of each marker's constant-velocity
             residual x_t - 2 x_(t-1) + x_(t-2), i.e. 6 sigma^2 + q_n^2 (``noise.TakeNoise``):
-            the take's own noise and the marker's own acceleration, learned as it is labeled.
+            the take's own noise and the marker's own acceleration, learned as it is labeled
+            (``motion.learn_motion``: an envelope that calm lowers slowly).
         motion_samples: ``(N,)`` residuals that went into ``motion_var``.
         drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) the
             prediction of an occluded marker drifts from where it reappears, and the
@@ -91,7 +92,7 @@ class MarkerState:
                 than fly off on a stale velocity.
             rate: Weight of the newest frame in the running distance statistics.
         """
-        predicted, followed = self._predict()
+        predicted, followed, carried = self._predict()
         position = np.where(seen[:, None], observed, predicted)
         was_seen = self.visible & seen
         # Seen twice: measured. Otherwise the displacement the neighbours imply (a stale
@@ -103,10 +104,11 @@ class MarkerState:
         drift_var, drift_samples = learn_drift(
             self.drift_var, self.drift_samples, residual, seen & ~self.visible, self.unseen, self.motion_var,
         )
-        # A followed marker re-anchors at its prediction when a neighbour it followed is
-        # lost: the rest carry it on from where it is now, not from where it was lost
-        # (the lost neighbour may have been the only one on its segment).
-        anchored = seen | (followed & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
+        # A marker carried by a firm rigid fit re-anchors at its prediction when a neighbour
+        # it followed is lost: the rest carry it on from where it is now, not from where it
+        # was lost (the lost neighbour may have been the only one on its segment). A loose
+        # fit is not locked in: its error would compound.
+        anchored = seen | (carried & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
         # Distances learn from seen pairs, and from a seen marker and a followed one: the
         # followed marker moves with the neighbours it follows, so what it learns to be
         # rigid with stays rigid with them when they too are lost.
@@ -145,28 +147,30 @@ class MarkerState:
         usable: np.ndarray = self.anchor_valid & self.visible[self.neighbours]
         return usable
 
-    def _predict(self) -> tuple[np.ndarray, np.ndarray]:
-        """Predicted positions, and which markers followed their neighbours.
+    def _predict(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Predicted positions, which markers followed their neighbours, and which of those
+        a firm rigid fit carried (``rigid.follow_neighbours``).
 
         Constant velocity for markers seen now. An unseen marker follows the neighbours
-        seen both at its anchor frame and now: their weighted rigid motion (weights
-        1 / (var + 1), so neighbours on the same segment dominate) applied to its anchor;
-        a translation when fewer than three such neighbours remain; damped constant
-        velocity when none does.
+        seen both at its anchor frame and now: their robust rigid motion (near neighbours
+        on the same segment dominate) applied to its anchor; a translation when fewer than
+        three such neighbours remain; damped constant velocity when none does.
         """
         ahead = self.position + self.velocity
         usable = self._followable()
         followed = ~self.visible & usable.any(axis=1)
         follow = np.flatnonzero(followed)
         if len(follow) == 0:
-            return ahead, followed
+            return ahead, followed, followed
         # Rigidity prior: the learned distance variance, and nearness (a neighbour twice as
         # far is a quarter as likely to share the marker's segment); see ``follow_neighbours``.
         spacing = np.maximum(self.distance_mean[follow], 1.0)
         prior = usable[follow] / ((self.distance_var[follow] + 1.0) * spacing**2)
         source, target = self.anchor_neighbours[follow], ahead[self.neighbours[follow]]
-        rotation, c_s, c_t = follow_neighbours(source, target, prior, self.motion_var[follow])
+        rotation, c_s, c_t, firm = follow_neighbours(source, target, prior, self.motion_var[follow])
         rotation[usable[follow].sum(axis=1) < 3] = np.eye(3)
         predicted = ahead.copy()
         predicted[follow] = np.einsum("sij,sj->si", rotation, self.anchor[follow] - c_s) + c_t
-        return predicted, followed
+        carried = np.zeros_like(followed)
+        carried[follow] = firm
+        return predicted, followed, carried

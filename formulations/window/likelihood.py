@@ -12,7 +12,8 @@ with d(i, j) = r_j - r_i - delta as in ``costs``, s the sd per axis of that resi
 o_j = 3 log s + (3/2) log 2 pi - log P_D + log lambda_FA + K the rest of a 3D Gaussian's
 log density against the point being a false alarm of density lambda_FA (per mm^3), and K
 one shift per window that keeps every cost >= 0 (every path crosses each frame once, so K
-changes no comparison). rho is Huber's loss at k = 3: a Gaussian core with Laplace tails,
+changes no comparison). rho is the negative log density of a contaminated Gaussian: with
+probability 1 - eps the residual is N(0, s^2) per axis, with eps a burst N(0, (k s)^2),
 because real accelerations come in bursts a Gaussian would call impossible. The
 candidate generator supplies s, o, r and the occlusion costs (``CandidateLikelihood``);
 the template term g(s_n, j) is added to every arc into j, times t after an observation
@@ -27,7 +28,10 @@ import numpy as np
 
 from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE
 
-HUBER_K = 3.0
+# A share of steps are bursts ten times wider than the learned sd (an impact, a spike in a
+# gap-filled export): a Gaussian alone would call them impossible and drop the marker.
+BURST_SHARE = 0.01  # eps
+BURST_WIDTH = 10.0  # k
 
 
 @dataclass(frozen=True)
@@ -48,9 +52,16 @@ class CandidateLikelihood:
     miss_cost: np.ndarray
 
 
-def huber(z: np.ndarray) -> np.ndarray:
-    """rho(z) = z^2 / 2 for z <= k, k z - k^2 / 2 beyond (k = ``HUBER_K``)."""
-    rho: np.ndarray = np.where(z <= HUBER_K, 0.5 * z**2, HUBER_K * z - 0.5 * HUBER_K**2)
+def step_loss(z: np.ndarray) -> np.ndarray:
+    """rho(z): the negative log density of a residual z sds off, relative to z = 0, under a
+    contaminated Gaussian (module doc):
+
+        rho(z) = -log[((1 - eps) e^(-z^2 / 2) + eps k^-3 e^(-z^2 / (2 k^2))) / (1 - eps + eps k^-3)].
+    """
+    core = np.log1p(-BURST_SHARE) - 0.5 * z**2
+    burst = np.log(BURST_SHARE) - 3 * np.log(BURST_WIDTH) - 0.5 * (z / BURST_WIDTH) ** 2
+    at_zero = np.logaddexp(np.log1p(-BURST_SHARE), np.log(BURST_SHARE) - 3 * np.log(BURST_WIDTH))
+    rho: np.ndarray = at_zero - np.logaddexp(core, burst)
     return rho
 
 
@@ -80,7 +91,7 @@ def likelihood_arc_costs(
     z = np.sqrt(np.einsum("ad,ad->a", step, step)) / node_likelihood["step_sigma"][h]
     known = np.isfinite(z)
     stepped = np.flatnonzero(observed)[known]
-    cost[stepped] = huber(z[known]) + node_likelihood["step_offset"][h[known]]
+    cost[stepped] = step_loss(z[known]) + node_likelihood["step_offset"][h[known]]
     cost[into_observation] += np.where(observed, template_on_track, 1.0)[into_observation] * template_cost[head[into_observation]]
     cost[head_kind == SINK] = 0.0
     return cost

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
+from formulations.markers.exchange import repair_exchanges
 from formulations.markers.guide import assign_nearest
 from formulations.markers.state import MarkerState
 from formulations.relaxation.components import coupled_components
@@ -70,6 +71,7 @@ class CloudChain:
     layout_neighbours: int = 2
 
     def pose(self, state: MarkerState, template: int, last: int) -> tuple[WindowProblem, CloudInverse]:
+        state, _ = repair_exchanges(state, _unclaimed(self.cloud.points[template], state))
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
         gated = cloud_candidates(state, frames, self.gating, resources)
@@ -102,6 +104,17 @@ class CloudChain:
         """The first frame's point of each labeled marker (the user labeled frame 0)."""
         radius = self.gating.gate.radius_mm
         return assign_nearest(positions, points, np.full(len(positions), radius), miss_cost=radius)
+
+
+def _unclaimed(points: np.ndarray, state: MarkerState) -> np.ndarray:
+    """The template frame's points that no visible marker holds."""
+    if len(points) == 0:
+        return np.zeros((0, 3))
+    held = state.position[state.visible]
+    if len(held) == 0:
+        return np.asarray(points)
+    nearest = np.min(np.linalg.norm(points[:, None] - held[None], axis=2), axis=1)
+    return np.asarray(points)[nearest > 1e-6]
 
 
 def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> tuple[MarkerState, np.ndarray]:

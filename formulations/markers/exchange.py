@@ -1,0 +1,113 @@
+"""Recovery: give exchanged markers back their tracks at a window's template.
+
+Once markers have swapped tracks (two exchanged, three passed round, or one holding a
+lost neighbour's point while its own goes unclaimed), every later window inherits it: a
+step back costs large jumps and nothing in one window pays for them. What an exchange
+breaks is the shape: each marker sits where its learned neighbour distances do not fit.
+With D[m, p] the shape deviation of marker m placed at position r_p,
+
+    D[m, p] = sum_j a_mj min(| ||r_p - r_j|| - dbar_mj |, c) / sum_j a_mj,
+
+a_mj = 1 / (var_mj + 1) over m's visible neighbours j (``MarkerState``), the tracks at the
+template (the visible markers' points and the points nobody took) are reassigned by the
+assignment minimising sum_m D[m, track(m)], where a marker may hold no track at cost
+``NONE_MM``. Each connected change (markers linked by the tracks they give and take) is
+kept when it gains ``EXCHANGE_GAIN_MM`` per marker and at least halves its deviation.
+The distance statistics adapt to a swapped track over about 1 / rate = 33 frames, so the
+test runs at every template, before they have.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
+
+from formulations.markers.state import MarkerState
+
+SHAPE_CAP_MM = 50.0  # c, as the shape term of ``cloud_candidates``
+EXCHANGE_GAIN_MM = 20.0  # a change must explain the shape by this much per marker (weighted mean mm) ...
+EXCHANGE_RATIO = 0.5  # ... and halve the deviation of the markers it moves
+NONE_MM = 40.0  # holding no track: worse than any fitting track, better than a wrong one
+_TRACK_FIELDS = ("position", "velocity", "velocity_known", "unseen", "streak", "anchor", "anchor_neighbours", "anchor_valid")
+
+
+def shape_deviations(state: MarkerState, positions: np.ndarray) -> np.ndarray:
+    """``(N, P)`` D[m, p] (module doc) for candidate positions ``(P, 3)``; inf for markers with
+    no visible neighbour (nothing to judge them by)."""
+    distance = np.linalg.norm(positions[None, :, None] - state.position[state.neighbours][:, None], axis=3)  # (N, P, K)
+    weight = state.visible[state.neighbours] / (state.distance_var + 1.0)  # (N, K)
+    deviation = np.minimum(np.abs(distance - state.distance_mean[:, None]), SHAPE_CAP_MM)
+    total = weight.sum(axis=1)
+    shape: np.ndarray = np.einsum("nk,npk->np", weight, deviation) / np.maximum(total, 1e-12)[:, None]
+    return np.where((total > 0)[:, None], shape, np.inf)
+
+
+def repair_exchanges(state: MarkerState, unclaimed: np.ndarray) -> tuple[MarkerState, int]:
+    """The state with exchanged tracks given back (module doc), and how many markers moved.
+
+    Args:
+        state: The markers at the template frame.
+        unclaimed: ``(U, 3)`` points of the template frame no marker took.
+    """
+    n, visible = len(state.position), np.flatnonzero(state.visible)
+    tracks = np.concatenate([state.position[visible], unclaimed.reshape(-1, 3)])
+    if len(visible) < 2 or len(tracks) == 0:
+        return state, 0
+    shape = shape_deviations(state, tracks)
+    cost = np.hstack([np.where(np.isfinite(shape), shape, 1e6), np.full((n, n), 1e6)])
+    np.fill_diagonal(cost[:, len(tracks):], NONE_MM)
+    rows, cols = linear_sum_assignment(cost)
+    before = np.full(n, -1)
+    before[visible] = np.arange(len(visible))
+    after = np.where(cols < len(tracks), cols, -1)[np.argsort(rows)]
+    moved = np.flatnonzero(after != before)
+    if len(moved) == 0:
+        return state, 0
+    accept = _accepted(shape, before, after, moved, len(tracks))
+    if not accept.any():
+        return state, 0
+    return _reassigned(state, visible, tracks, np.where(accept, after, before)), int(accept.sum())
+
+
+def _accepted(shape: np.ndarray, before: np.ndarray, after: np.ndarray, moved: np.ndarray, n_tracks: int) -> np.ndarray:
+    """``(N,)`` markers whose connected change clears the gain and ratio tests."""
+    deviation = np.where(np.isfinite(shape), shape, SHAPE_CAP_MM)
+
+    def cost_of(track: np.ndarray) -> np.ndarray:
+        return np.where(track >= 0, deviation[np.arange(len(track)), np.maximum(track, 0)], NONE_MM)
+
+    now, then = cost_of(before), cost_of(after)
+    # Markers and tracks as one graph: a marker joins the track it gives and the one it takes.
+    edges = [(m, len(before) + t) for m in moved for t in (before[m], after[m]) if t >= 0]
+    graph = csr_matrix((np.ones(len(edges)), tuple(np.array(edges).T)), shape=(len(before) + n_tracks,) * 2)
+    _, label = connected_components(graph, directed=False)
+    accept = np.zeros(len(before), bool)
+    for component in np.unique(label[moved]):
+        members = moved[label[moved] == component]
+        gain = now[members].sum() - then[members].sum()
+        if gain > EXCHANGE_GAIN_MM * len(members) and then[members].sum() <= EXCHANGE_RATIO * now[members].sum():
+            accept[members] = True
+    return accept
+
+
+def _reassigned(state: MarkerState, visible: np.ndarray, tracks: np.ndarray, track: np.ndarray) -> MarkerState:
+    """Each marker given track ``track[m]`` (index into visible markers then unclaimed points, -1: none)."""
+    fields = {name: getattr(state, name).copy() for name in _TRACK_FIELDS}
+    for m in np.flatnonzero(track >= 0):
+        t = track[m]
+        if t < len(visible):  # another marker's track: all it knew about that track
+            for name in _TRACK_FIELDS:
+                fields[name][m] = getattr(state, name)[visible[t]]
+        else:  # a point nobody took: seen now, its motion unknown
+            fields["position"][m] = fields["anchor"][m] = tracks[t]
+            fields["velocity"][m], fields["velocity_known"][m] = 0.0, False
+            fields["unseen"][m], fields["streak"][m] = 0, 1
+            fields["anchor_neighbours"][m] = state.position[state.neighbours[m]]
+            fields["anchor_valid"][m] = state.visible[state.neighbours[m]]
+    dropped = np.flatnonzero((track < 0) & state.visible)
+    fields["unseen"][dropped], fields["streak"][dropped] = 1, 0
+    return replace(state, **fields)

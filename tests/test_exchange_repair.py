@@ -1,0 +1,76 @@
+"""Recovery from exchanged tracks (issue 11, item 4): an exchange must not persist."""
+
+from dataclasses import replace
+from itertools import permutations
+
+import numpy as np
+import pytest
+
+from formulations.markers.exchange import repair_exchanges, shape_deviations
+from formulations.markers.state import MarkerState
+
+# Two rigid clusters 300 mm apart, four markers each, irregular (no marker's place mirrors another's).
+BODY = np.array([
+    [0, 0, 0], [52, -8, 5], [6, 61, 22], [38, 27, 47],
+    [300, 0, 0], [371, 12, -6], [296, 48, 15], [334, 18, 55],
+], float)
+
+
+def _learned_state() -> MarkerState:
+    """Markers tracked long enough that their distance statistics are sure of the shape."""
+    state = MarkerState.from_first_frame(BODY, n_neighbours=7)
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        state = state.advance(BODY + rng.normal(0, 0.5, BODY.shape), np.ones(len(BODY), bool))
+    return state
+
+
+def _with_tracks(state: MarkerState, order: np.ndarray) -> MarkerState:
+    """The state with marker m holding the track of marker order[m] (an exchange)."""
+    return replace(state, position=state.position[order], velocity=state.velocity[order])
+
+
+def test_shape_deviation_matches_its_definition():
+    state = _learned_state()
+    points = np.array([[10.0, 5.0, 0.0], [320.0, 30.0, 10.0]])
+    found = shape_deviations(state, points)
+    for m in range(len(BODY)):
+        for p, point in enumerate(points):
+            j = state.neighbours[m]
+            w = 1.0 / (state.distance_var[m] + 1.0)
+            dev = np.minimum(np.abs(np.linalg.norm(point - state.position[j], axis=1) - state.distance_mean[m]), 50.0)
+            assert found[m, p] == pytest.approx((w * dev).sum() / w.sum())
+
+
+def test_every_exchange_of_three_markers_is_undone():
+    """Each permutation of markers 0, 1, 4 (two swaps and both three-cycles) is put right."""
+    state = _learned_state()
+    for perm in permutations([0, 1, 4]):
+        order = np.arange(len(BODY))
+        order[[0, 1, 4]] = perm
+        if (order == np.arange(len(BODY))).all():
+            continue
+        repaired, moved = repair_exchanges(_with_tracks(state, order), np.zeros((0, 3)))
+        assert moved == int((order != np.arange(len(BODY))).sum()), perm
+        assert np.allclose(repaired.position, state.position), perm
+
+
+def test_a_marker_holding_a_lost_neighbours_point_gives_it_back():
+    """Marker 2 lost; marker 0 holds 2's point and 0's own point is unclaimed."""
+    state = _learned_state()
+    lost = replace(state, unseen=np.where(np.arange(len(BODY)) == 2, 5, 0))
+    wrong = replace(lost, position=lost.position.copy())
+    wrong.position[0] = state.position[2]
+    repaired, moved = repair_exchanges(wrong, state.position[[0]])
+    assert moved == 2
+    assert np.allclose(repaired.position[[0, 2]], state.position[[0, 2]])
+    assert repaired.unseen[0] == 0 and repaired.unseen[2] == 0
+
+
+def test_a_right_labeling_is_left_alone_and_noise_moves_nothing():
+    state = _learned_state()
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        noisy = replace(state, position=state.position + rng.normal(0, 2.0, BODY.shape))
+        _, moved = repair_exchanges(noisy, rng.uniform(-100, 400, (3, 3)))
+        assert moved == 0
