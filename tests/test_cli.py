@@ -167,10 +167,13 @@ def test_track_writes_csv(tmp_path: Path) -> None:
     with out.open(newline="", encoding="utf-8") as f:
         header, *rows = list(csv.reader(f))
     labels, truth = read_c3d(CMU)
-    assert header == ["frame", "time"] + [f"{name}_{axis}" for name in labels for axis in "xyz"]
+    coordinates = [f"{name}_{axis}" for name in labels for axis in "xyz"]
+    assert header == ["frame", "time"] + coordinates + [f"{name}_confidence" for name in labels]
     assert len(rows) == 810
-    last = np.array(rows[-1][2:], dtype=float).reshape(41, 3)
+    last = np.array(rows[-1][2 : 2 + len(coordinates)], dtype=float).reshape(41, 3)
     np.testing.assert_allclose(last, truth[:, :, -1].T, rtol=0, atol=1e-3)
+    confidence = np.array([row[2 + len(coordinates) :] for row in rows[1:]], dtype=float)
+    assert ((confidence >= 0) & (confidence <= 1)).all()
 
 
 # -- bad input: one line on stderr, exit code 2 --------------------------------------------

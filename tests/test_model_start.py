@@ -95,7 +95,7 @@ def test_cli_tracks_a_labeled_file_from_the_model(tmp_path: Path) -> None:
     result = runner.invoke(app, ["track", str(take), "--model", str(subject), "--start", str(FIT), "--out", str(out),
                                  "--json"])
     assert result.exit_code == 0, result.output
-    assert json.loads(result.output.strip().splitlines()[-1])["frames"] == 320 - FIT
+    assert json.loads(result.stdout.strip().splitlines()[-1])["frames"] == 320 - FIT  # warnings go to stderr
     subject.write_text("{")
     result = runner.invoke(app, ["track", str(take), "--model", str(subject), "--out", str(out)])
     assert result.exit_code == 2 and "subject model is not JSON" in result.output
