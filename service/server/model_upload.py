@@ -11,7 +11,6 @@ problem is an ``InputError`` whose message starts with the form field.
 from __future__ import annotations
 
 import tomllib
-from pathlib import Path
 
 import numpy as np
 from starlette.datastructures import FormData, UploadFile
@@ -24,7 +23,7 @@ from service.capture.markerset import load_template, shipped
 from service.capture.model_input import MIN_SHARED
 from service.errors import InputError
 from service.server.settings import Limits
-from service.server.submission import _read_upload
+from service.server.submission import labeled_upload, read_upload
 
 MODEL_FIELDS = ("file", "markerset", "template")
 MODEL_SUFFIXES = (".c3d", ".trc", ".csv")
@@ -42,17 +41,9 @@ def fit_upload(form: FormData, limits: Limits) -> SubjectModel:
             or too static to separate segments (the markers and why), a take sharing too few
             names with the template, or a fit over the memory limit.
     """
-    for name in form:
-        if name not in MODEL_FIELDS:
-            raise InputError(f"{name}: unknown form field; the fields are {', '.join(MODEL_FIELDS)}")
-    upload = form.get("file")
-    if not isinstance(upload, UploadFile):
-        raise InputError("file: upload a labeled .c3d, .trc or .csv take in the form field 'file'")
-    filename = Path(upload.filename or "")
-    if filename.suffix.lower() not in MODEL_SUFFIXES:
-        raise InputError(f"file: {filename.name or 'the upload'} is not a .c3d, .trc or .csv file")
+    upload, filename = labeled_upload(form, MODEL_FIELDS, MODEL_SUFFIXES, "take")
     template = _template(form.get("markerset"), form.get("template"))
-    take = _read_upload(upload, filename, limits)
+    take = read_upload(upload, filename, limits)
     positions = np.where(take.missing()[:, :, None], np.nan, take.positions)
     source = f"file: {filename.name}"
     if not np.isfinite(positions).any():

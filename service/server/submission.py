@@ -57,19 +57,27 @@ def document_submission(body: bytes, limits: Limits) -> Submission:
     return _checked(document, "json", limits)
 
 
-def upload_submission(form: FormData, limits: Limits) -> Submission:
-    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object) and ``window``."""
+def labeled_upload(form: FormData, fields: tuple[str, ...], suffixes: tuple[str, ...], what: str) -> tuple[UploadFile, Path]:
+    """The form's ``file`` upload and its name, after checking the form has only ``fields``
+    and the file one of ``suffixes`` (one-line errors naming what is wrong)."""
     for name in form:
-        if name not in UPLOAD_FIELDS:
-            raise InputError(f"{name}: unknown form field; the fields are {', '.join(UPLOAD_FIELDS)}")
+        if name not in fields:
+            raise InputError(f"{name}: unknown form field; the fields are {', '.join(fields)}")
+    listed = ", ".join(suffixes[:-1]) + f" or {suffixes[-1]}"
     upload = form.get("file")
     if not isinstance(upload, UploadFile):
-        raise InputError("file: upload a labeled .c3d or .trc file in the form field 'file'")
+        raise InputError(f"file: upload a labeled {listed} {what} in the form field 'file'")
     filename = Path(upload.filename or "")
-    if filename.suffix.lower() not in UPLOAD_SUFFIXES:
-        raise InputError(f"file: {filename.name or 'the upload'} is not a .c3d or .trc file")
+    if filename.suffix.lower() not in suffixes:
+        raise InputError(f"file: {filename.name or 'the upload'} is not a {listed} file")
+    return upload, filename
+
+
+def upload_submission(form: FormData, limits: Limits) -> Submission:
+    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object) and ``window``."""
+    upload, filename = labeled_upload(form, UPLOAD_FIELDS, UPLOAD_SUFFIXES, "file")
     options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
-    recording = _read_upload(upload, filename, limits)
+    recording = read_upload(upload, filename, limits)
     absent = np.flatnonzero(recording.missing()[0])
     if len(absent):
         raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame")
@@ -133,7 +141,7 @@ def _window_field(value: str | UploadFile | None) -> int:
     return int(value)
 
 
-def _read_upload(upload: UploadFile, filename: Path, limits: Limits) -> Recording:
+def read_upload(upload: UploadFile, filename: Path, limits: Limits) -> Recording:
     """The upload read in a bounded child process (``read_isolated``), never in the server."""
     bounds = ReaderBounds(limits.reader_memory_bytes, limits.reader_seconds, limits.max_markers, limits.max_frames)
     upload.file.seek(0)
