@@ -7,7 +7,6 @@
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +14,7 @@ from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
 from formulations.methods.registry import get_formulation
 from service.errors import InputError
+from service.io.toml_file import read_toml
 
 
 def formulation_from_table(table: dict[str, Any], where: str) -> Formulation:
@@ -57,12 +57,7 @@ def formulation_table(path: Path) -> dict[str, Any]:
     Raises:
         InputError: Unreadable file, bad TOML, or no ``[formulation]`` table.
     """
-    try:
-        data = tomllib.loads(path.read_text())
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{path}: not valid TOML ({error})") from None
+    data = read_toml(path)
     if not isinstance(data.get("formulation"), dict):
         raise InputError(f"{path}: no [formulation] table")
     return data["formulation"]

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 from formulations.errors import FormulationError
 from formulations.subject.template import Template
 from service.errors import InputError
+from service.io.toml_file import read_toml
 
 MARKERSETS = Path(__file__).resolve().parents[2] / "configs" / "markersets"
 
@@ -26,13 +26,7 @@ def load_template(spec: str) -> Template:
     path = Path(spec) if spec.endswith(".toml") else MARKERSETS / f"{spec}.toml"
     if not spec.endswith(".toml") and spec not in shipped():
         raise InputError(f"unknown marker set {spec!r} (shipped: {', '.join(shipped())}; or give a .toml file)")
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{path}: not valid TOML ({error})") from None
+    data = read_toml(path)
     try:
         return Template.from_dict(data, path.name)
     except FormulationError as error:

@@ -1,7 +1,6 @@
 """A scenario: how the simulator degrades a labeled recording into labeler input."""
 
 import math
-import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -9,6 +8,7 @@ from typing import Any
 from formulations.methods.formulation import Formulation
 from service.capture.capture import LabelingOptions
 from service.errors import InputError
+from service.io.toml_file import read_toml
 
 MODES = ("cloud", "cameras")
 FIRST_FRAMES = ("labeled", "model")
@@ -108,13 +108,7 @@ class Scenario:
         Raises:
             InputError: If the file cannot be read or parsed, or on any bad key or value.
         """
-        try:
-            with open(path, "rb") as fh:
-                data = tomllib.load(fh)
-        except OSError as e:
-            raise InputError(f"cannot read scenario file {path}: {e.strerror}") from e
-        except tomllib.TOMLDecodeError as e:
-            raise InputError(f"scenario file {path} is not valid TOML: {e}") from e
+        data = read_toml(path)
         calibration = data.get("calibration")
         if isinstance(calibration, str) and calibration and not Path(calibration).is_absolute():
             data["calibration"] = str(Path(path).parent / calibration)
