@@ -73,6 +73,7 @@ def _formulation(name: str, parameters: str) -> str:
     name and the parameters object the form's ``parameters`` field gives."""
     if not parameters:
         return name
+    check_depth(parameters.encode(), "parameters")  # deep nesting would overflow the parser
     try:
         table = json.loads(parameters)
     except json.JSONDecodeError as error:
