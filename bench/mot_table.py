@@ -14,7 +14,10 @@ The cost constants were chosen on TUD-Campus and MOT17-02; the other three are h
 Arcs are priced by Jiang's weighted costs, or with ``--likelihood`` as negative
 log-likelihoods (``formulations.boxes.likelihood``), the same for every formulation.
 
-    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood]
+With ``--returns-compete`` the chains a lost object took after a miss are offered to a newcomer
+too (``Lifecycle(returns_compete=True)``, ``formulations.boxes.lifecycle``), for every formulation.
+
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--returns-compete]
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import motmetrics  # noqa: E402
 
+from formulations.boxes.lifecycle import Lifecycle  # noqa: E402
 from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks  # noqa: E402
 from service.boxes.scores import mot_scores  # noqa: E402
 from service.boxes.track import track_boxes  # noqa: E402
@@ -38,7 +42,7 @@ MOTMETRICS = Path(motmetrics.__file__).parent / "data"
 
 def sequences() -> list[tuple[str, Path, Path, Path | None, dict[str, Path]]]:
     """(name, detections, gt, seqinfo, published outputs) per sequence."""
-    rows = []
+    rows: list[tuple[str, Path, Path, Path | None, dict[str, Path]]] = []
     for name in ("TUD-Campus", "TUD-Stadtmitte"):
         rows.append((name, DATA / "mot15_sort_frcnn_detections" / name / "det.txt", MOTMETRICS / name / "gt.txt", None,
                      {"motmetrics test.txt": MOTMETRICS / name / "test.txt"}))
@@ -54,6 +58,7 @@ def main() -> None:
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
+    parser.add_argument("--returns-compete", action="store_true", help="offer a lost object's chain to a newcomer too")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
     print("|---|---|---|---|---|---|---|")
@@ -61,7 +66,8 @@ def main() -> None:
         for name, det, gt, seqinfo, published in sequences():
             detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
             for formulation in args.formulations.split(","):
-                run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood)
+                run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
+                                  lifecycle=Lifecycle(returns_compete=args.returns_compete))
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

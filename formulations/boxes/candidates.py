@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from formulations.boxes import kalman
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
-from formulations.boxes.costs import BoxCostModel, histogram_distance
+from formulations.boxes.costs import BoxCostModel, birth_cost, histogram_distance
 from formulations.boxes.geometry import centre, height
 from formulations.boxes.kalman import box_corners, corner_rates
 from formulations.boxes.likelihood import DetectionRates, box_likelihood, clutter_volume
@@ -53,6 +53,7 @@ class BoxWindow:
 def box_window(
     objects: BoxObjects, template_frame: int, n_frames: int, frame: Ints, boxes: Array, histograms: Array | None,
     model: BoxCostModel, rule: ConflictRule, rates: DetectionRates | None = None, image: Array | None = None,
+    unborn: NDArray[np.bool_] | None = None, birth_volume: float = 1.0,
 ) -> BoxWindow:
     """Pose frames ``template_frame+1 .. template_frame+n_frames`` for ``objects``.
 
@@ -71,6 +72,10 @@ def box_window(
             (``formulations.boxes.likelihood``; the template term keeps only the histogram),
             or None for Jiang's weighted costs.
         image: ``(4,)`` the image rectangle (x1, y1, x2, y2), where false alarms fall; needed with ``rates``.
+        unborn: ``(N,)`` True for new objects not yet seen (``lifecycle.born``): they start
+            occluded and, with Jiang's costs, enter by the birth density (``costs.birth_cost``)
+            rather than by their forecast (with ``rates``, by their forecast).
+        birth_volume: V of ``costs.birth_cost``, pixel^4.
     """
     frames = template_frame + np.arange(1, n_frames + 1)
     predicted, spread = objects.forecast(n_frames)  # (N, M, 4), (N, M, 4, 4)
@@ -93,20 +98,27 @@ def box_window(
         likelihood = box_likelihood(objects, rates, log_clutter, predicted, spread, obj, frame[det] - template_frame,
                                     kalman.measurement(boxes[det]))
         template_cost = np.zeros(len(det))  # the forecast is in the reappear cost
+    entry = None
+    if unborn is not None and unborn.any() and likelihood is None:
+        newborn = unborn[obj]
+        entry = template_cost.copy()
+        entry[newborn] += model.prediction * birth_cost(boxes[det[newborn]], birth_volume) - template_cost[newborn]
     hist_dist = None
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
         template_cost = template_cost + model.histogram * hist_dist
+        entry = None if entry is None else entry + model.histogram * hist_dist
     unit = np.maximum(objects.mean[:, 3], 1.0)  # each object's height at t0
     resources = sp.csr_matrix(conflict_resources(rule, frame, boxes)[det])
     start = objects.box
     velocity = np.repeat((corner_rates(objects.mean) / unit[:, None])[:, None, :], n_frames, axis=1)
     candidates = WindowCandidates(
-        template_location=start / unit[:, None], template_occluded=objects.last_seen < template_frame,
+        template_location=start / unit[:, None],
+        template_occluded=(objects.last_seen < template_frame) | (False if unborn is None else unborn),
         n_frames=n_frames, object=obj, frame=frame[det] - template_frame, location=boxes[det] / unit[obj, None],
         template_cost=template_cost, resources=resources, occlusion_location=box_corners(predicted) / unit[:, None, None],
         motion=velocity, appearance=None if hist_dist is None or histograms is None else histograms[det],
-        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood,
+        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood, entry_cost=entry,
     )
     weights = ArcCostWeights(  # floats: integer weights would make the arc cost array integer
         appearance_change=float(model.histogram_change) if hist_dist is not None else 0.0,

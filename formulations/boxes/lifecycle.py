@@ -5,12 +5,22 @@ Jiang's network tracks a fixed set of objects; MOT needs them to come and go. Th
 list; here consistency is a chain of boxes):
 
 - **Birth.** After a window is solved, the detections of its frames t0..t0+M that no object
-  explains (took, or holds a box in the same conflict set) are linked frame to frame (an
-  optimal assignment on IoU, pairs with IoU >= ``link_iou``, consecutive frames only). A
-  chain of at least ``min_hits`` boxes is a new object, placed at the chain's first box
-  with the chain's fitted velocity and mean histogram (``born``), and the window is
-  solved again with it: from its first frame on, the new object competes for boxes with
-  the others in the window optimisation, and the chain only says where it starts.
+  explains (took, or holds a box in the same conflict set), and, with ``returns_compete``,
+  those an object took after a miss in or before the window (``reentries``), are linked frame to frame (an optimal
+  assignment on IoU, pairs with IoU >= ``link_iou``, consecutive frames only). A chain of
+  at least ``min_hits`` boxes is a new object, placed at the chain's first box with the
+  chain's fitted velocity and mean histogram (``born``), and the window is solved again
+  with it: from its first frame on, the new object competes for boxes with the others in
+  the window optimisation, and the chain only says where it starts. With ``returns_compete``
+  a new object first seen after t0 enters the window from an occluded template, its entry priced by the birth
+  density (a box as likely anywhere in the image and the range of box sizes,
+  ``costs.birth_cost``) where a lost object's re-entry is priced by its Kalman forecast:
+  the two are the same likelihood ratio (against a box seen where predicted), so which
+  explains a chain is decided by the window's costs over all its frames, with no constant
+  added (equal prior odds of a newcomer and a return). Without the re-entered chains a lost
+  object often takes a newcomer inside its widening gate: the window sums one costly jump with
+  the cheap steps after it, and nothing else is on offer. A new object that takes no box
+  when the window is solved again (a return the lost object won) is dropped.
 - **Death.** An object unseen for more than ``max_occluded`` frames leaves. One whose
   prediction has crossed the image border leaves sooner, after ``border_occluded`` frames:
   a person walking out of the picture is not behind someone. In the window itself an
@@ -43,12 +53,17 @@ class Lifecycle:
         link_iou: Smallest IoU between consecutive boxes of a chain.
         max_occluded: Frames unseen after which an object leaves.
         border_occluded: Frames unseen after which an object predicted across the image border leaves.
+        returns_compete: Offer the chains a lost object took after a miss to a newcomer too,
+            and price a newcomer's entry by the birth density (module docstring). Off by
+            default: it lifts lp-l1 on MOT17 but costs ID switches, and where few people
+            enter a small image (TUD, the crossing scene of the tests) it gives returns to newcomers (README, Boxes).
     """
 
     min_hits: int = 3
     link_iou: float = 0.3
     max_occluded: int = 30
     border_occluded: int = 5
+    returns_compete: bool = False
 
     def __post_init__(self) -> None:
         if self.min_hits < 1 or not 0 < self.link_iou <= 1 or self.border_occluded < 0 or self.max_occluded < 0:
@@ -79,6 +94,15 @@ class Lifecycle:
         outside = (predicted[:, :2] < image[:2]).any(axis=1) | (predicted[:, 2:] > image[2:]).any(axis=1)
         result: NDArray[np.bool_] = (gap > self.max_occluded) | (outside & (gap > self.border_occluded))
         return result
+
+
+def reentries(last_seen: Ints, taken: Ints, template_frame: int) -> Ints:
+    """Detections (rows of ``taken``'s values) each object took after a miss: from its first
+    box after an occluded frame of the window, or from its first box if it was not seen at
+    the template; ``taken`` is ``(N, M)`` as in ``objects.advance``, ``last_seen`` ``(N,)``."""
+    missed = (np.cumsum(taken < 0, axis=1) > 0) | (last_seen < template_frame)[:, None]
+    result: Ints = taken[missed & (taken >= 0)]
+    return result
 
 
 def born(chains: list[Ints], frame: Ints, boxes: Array, histograms: Array | None, first_ident: int,

@@ -10,8 +10,11 @@ Windows of ``window`` frames overlap by one frame, the template. For each window
    and predicted through its occlusions, and its template histogram moves on
    (``formulations.boxes.objects.advance``);
 3. the detections no object explains (neither taken nor in the conflict set of a taken
-   box) are chained into new objects, and the window is solved again with them; objects
-   unseen too long leave (``formulations.boxes.lifecycle``).
+   box) are chained into new objects, and the window is solved again with them; a new
+   object that takes no box there is dropped; objects unseen too long leave
+   (``formulations.boxes.lifecycle``). With ``Lifecycle(returns_compete=True)`` the chains an
+   object took after a miss are offered to a newcomer too, which enters by the birth
+   density: a lost object and a newcomer compete for a chain on the window's whole look-ahead.
 
 With ``formulation="nn-hungarian"`` the same loop runs frame-by-frame optimal assignment on
 the same costs: SORT's association (Hungarian, gated) on the same Kalman forecast, which,
@@ -25,7 +28,7 @@ Public entry point (also used for people seen by several cameras, one call per c
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -35,8 +38,8 @@ from formulations.boxes.candidates import box_window
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel
 from formulations.boxes.geometry import corners
-from formulations.boxes.lifecycle import Lifecycle, born
-from formulations.boxes.likelihood import DetectionRates
+from formulations.boxes.lifecycle import Lifecycle, born, reentries
+from formulations.boxes.likelihood import DetectionRates, clutter_volume
 from formulations.boxes.objects import BoxObjects, advance
 from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
@@ -99,6 +102,7 @@ def track_boxes(
     frame, boxes = detections.frame.astype(int), corners(detections.box)
     conflicting = conflict_resources(rule, frame, boxes)  # symmetric: row k is O(k), what taking k explains
     image = _image(detections, boxes)
+    volume = clutter_volume(image, boxes)  # where a new object may appear: image x box sizes
     objects = BoxObjects.empty(None if histograms is None else histograms.shape[1])
     owner = np.zeros(len(frame), dtype=int)  # track id of each detection, 0 = none
     rates = DetectionRates() if likelihood else None
@@ -107,22 +111,29 @@ def track_boxes(
     while t0 < detections.n_frames:
         m = min(window - 1, detections.n_frames - t0)
         inside = (frame > t0) & (frame <= t0 + m)
-        posing = _Posing(t0, m, frame, boxes, histograms, model, rule, rates, image)
+        posing = _Posing(t0, m, frame, boxes, histograms, model, rule, rates, image, volume)
         before = objects
         taken = np.zeros((0, m), int)
         if objects.n_objects:
             objects, taken, certified = _solve(solver, before, posing, owner)
             windows, integral = windows + 1, integral + certified
-        chains = lifecycle.chains(frame, boxes, (frame >= t0) & (frame <= t0 + m) & ~_explained(owner, conflicting))
+        unclaimed = owner.copy()
+        if lifecycle.returns_compete:  # a lost object's chain: offered to a newcomer too
+            unclaimed[reentries(before.last_seen, taken, t0)] = 0
+        chains = lifecycle.chains(frame, boxes, (frame >= t0) & (frame <= t0 + m) & ~_explained(unclaimed, conflicting))
         if chains:
             new = born(chains, frame, boxes, histograms, next_ident, t0)
-            next_ident += new.n_objects
-            at_template = [c[0] for c in chains if frame[c[0]] == t0]
-            owner[at_template] = new.ident[[i for i, c in enumerate(chains) if frame[c[0]] == t0]]
+            starts = np.array([frame[c[0]] for c in chains])
+            owner[[c[0] for c in chains if frame[c[0]] == t0]] = new.ident[starts == t0]
             owner[inside] = 0  # the window again, with the new objects competing from their first box
+            old = before.n_objects
             before = before.joined(new)
-            objects, taken, certified = _solve(solver, before, posing, owner)
+            unborn = np.r_[np.zeros(old, bool), starts > t0] if lifecycle.returns_compete else None
+            objects, taken, certified = _solve(solver, before, posing, owner, unborn)
             windows, integral = windows + 1, integral + certified
+            keep = np.r_[np.ones(old, bool), (starts == t0) | (taken[old:] >= 0).any(axis=1)]
+            objects, next_ident = _named(objects.subset(keep), old, owner, next_ident)
+            before, taken = before.subset(keep), taken[keep]
         if rates is not None:
             rates = _counted(rates, before, taken, t0, inside & ~_explained(owner, conflicting))
         objects = objects.subset(~lifecycle.leaving(objects, t0 + m, image))
@@ -146,17 +157,20 @@ class _Posing:
     rule: ConflictRule
     rates: DetectionRates | None
     image: np.ndarray
+    birth_volume: float
 
 
 def _solve(
-    solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray,
+    solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray, unborn: np.ndarray | None = None,
 ) -> tuple[BoxObjects, np.ndarray, bool]:
     """Solve one window; write each taken detection's owner; return the objects moved on, the
-    ``(N, M)`` detection each took (-1 occluded) and the certificate."""
+    ``(N, M)`` detection each took (-1 occluded) and the certificate. ``unborn``: ``(N,)`` the new
+    objects whose first box is after the template (``box_window``)."""
     p = posing
     index = np.flatnonzero((p.frame > p.t0) & (p.frame <= p.t0 + p.m))
     hist = None if p.histograms is None else p.histograms[index]
-    posed = box_window(objects, p.t0, p.m, p.frame[index], p.boxes[index], hist, p.model, p.rule, p.rates, p.image)
+    posed = box_window(objects, p.t0, p.m, p.frame[index], p.boxes[index], hist, p.model, p.rule, p.rates, p.image,
+                       unborn, p.birth_volume)
     problem, node_candidate = build_window(posed.candidates, posed.weights, posed.layout_pairs, posed.layout_weight)
     solution = solver.solve(problem)
     taken = taken_candidates(node_candidate, solution.path, index[posed.detection])  # (N, M), -1 occluded
@@ -164,6 +178,17 @@ def _solve(
         owner[taken[n][taken[n] >= 0]] = objects.ident[n]
     moved = advance(objects, p.t0, taken, p.boxes, p.histograms, HISTOGRAM_RATE)
     return moved, taken, bool(solution.integral)
+
+
+def _named(objects: BoxObjects, old: int, owner: np.ndarray, next_ident: int) -> tuple[BoxObjects, int]:
+    """Number the new objects kept (those after the first ``old``) ``next_ident``, ... in order,
+    in ``objects`` and ``owner`` alike, so that dropped ones leave no gap; return the next free number."""
+    kept = objects.ident[old:]
+    final = np.zeros(int(kept.max(initial=next_ident - 1)) - next_ident + 1, dtype=int)
+    final[kept - next_ident] = next_ident + np.arange(len(kept))
+    mine = owner >= next_ident
+    owner[mine] = final[owner[mine] - next_ident]
+    return replace(objects, ident=np.r_[objects.ident[:old], final[kept - next_ident]]), next_ident + len(kept)
 
 
 def _counted(rates: DetectionRates, objects: BoxObjects, taken: np.ndarray, t0: int, spare: np.ndarray) -> DetectionRates:
