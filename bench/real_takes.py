@@ -1,9 +1,11 @@
 """Every labeled recording of ../shared/data relabeled by `markerflow track`, scored against its own labels.
 
-A take whose frame 0 has every marker is relabeled from frame 0, as a user would:
-`markerflow track TAKE --out OUT.c3d --json`. Any other take has no usable labeled frame
-(`track` would refuse it): a subject model is fitted on its first half (``fit_subject``, what
-`markerflow model` runs) and `markerflow track TAKE --model M.json --start H [--end E]` labels
+Each take is relabeled from its own labels at S, the first frame with the most markers
+labeled (0 when frame 0 has them all), as a user would:
+`markerflow track TAKE --out OUT.c3d --json --start S --end E` (markers absent at S stay
+unlabeled and count as missing). With `--model`, a take whose frame 0 lacks a marker is
+instead labeled from a subject model fitted on its first half (``fit_subject``, what
+`markerflow model` runs): `markerflow track TAKE --model M.json --start H [--end E]` labels
 the second half. Each output is read back and compared, marker by marker and frame by frame,
 with the file's own labels:
 
@@ -19,7 +21,7 @@ Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); th
 Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
 ``seconds`` of `--json`.
 
-    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES]
+    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--model]
 """
 
 from __future__ import annotations
@@ -100,14 +102,17 @@ def run(command: list[str], row: Row) -> dict | None:
     return summary
 
 
-def relabel(name: str, path: Path, cap: int, folder: Path) -> Row:
+def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool) -> Row:
     truth = read_labeled(path)
     missing = truth.missing()
     out = folder / f"{name}.c3d"
-    if not missing[0].any():
-        row = Row(name, "frame 0", truth.n_frames, truth.n_markers)
-        if run([str(MARKERFLOW), "track", str(path), "--out", str(out), "--json"], row) is not None:
-            score(truth, read_labeled(out), slice(0, truth.n_frames), row)
+    if not missing[0].any() or not from_model:
+        start = int(np.argmax((~missing).sum(axis=1)))  # 0 when frame 0 has every marker
+        end = min(truth.n_frames, start + cap) if cap else truth.n_frames
+        row = Row(name, f"frame {start}", end - start, truth.n_markers)
+        command = [str(MARKERFLOW), "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
+        if run(command, row) is not None:
+            score(truth, read_labeled(out), slice(start, end), row)
         return row
     half = truth.n_frames // 2
     end = min(truth.n_frames, half + cap) if cap else truth.n_frames
@@ -130,7 +135,8 @@ def relabel(name: str, path: Path, cap: int, folder: Path) -> Row:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="*", help="recording names (service.evaluation.matrix)")
-    parser.add_argument("--cap", type=int, default=0, help="label at most this many frames on the model route")
+    parser.add_argument("--cap", type=int, default=0, help="label at most this many frames of each take")
+    parser.add_argument("--model", action="store_true", help="label a take without a full frame 0 from a model of its first half")
     args = parser.parse_args()
     print("| take | start | frames | markers | correct | wrong | missing | extra | present | wall s | frames/s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -138,7 +144,7 @@ def main() -> None:
         for recording in RECORDINGS:
             if args.only and recording.name not in args.only:
                 continue
-            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder)).cells(), flush=True)
+            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder), args.model).cells(), flush=True)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""A labeled recording as a capture to relabel: frame 0 labeled, every frame's points unnamed.
+"""A labeled recording as a capture to relabel: one frame labeled, every frame's points unnamed.
 
 ``markerflow track`` and the HTTP upload of a C3D/TRC both label a recording this way, so
 they give the same answer for the same file.
@@ -6,9 +6,13 @@ they give the same answer for the same file.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from service.capture.capture import Capture
+from service.capture.span import frame_span
+from service.errors import InputError
 from service.io.recording import Recording
 
 
@@ -25,3 +29,47 @@ def capture_from_recording(recording: Recording, shuffle: bool = True, seed: int
         points = recording.positions[f][present[f]]
         frames.append(points[rng.permutation(len(points))] if shuffle else points)
     return Capture(list(recording.names), recording.positions[0], recording.rate, points=frames)
+
+
+def capture_from_span(
+    recording: Recording, start: int, end: int | None = None, shuffle: bool = True, seed: int = 0,
+) -> tuple[Capture, list[str]]:
+    """Frames ``start .. end - 1`` of ``recording`` labeled from its frame ``start``, and the
+    names of the markers absent there, which the capture leaves out.
+
+    Their points stay in the frames, unnamed (a relabel throws every label away): a marker
+    with no position in the labeled frame has nothing to start its track from.
+
+    Raises:
+        InputError: A span outside the take (``frame_span``), or no marker present at ``start``.
+    """
+    stop = frame_span(start, end, recording.n_frames)
+    present = ~recording.missing()[start]
+    if not present.any():
+        raise InputError(f"--start {start}: no marker is labeled in that frame{_hint(recording)}")
+    span = capture_from_recording(Recording(recording.names, recording.positions[start:stop], recording.rate),
+                                  shuffle, seed)
+    names = [n for n, p in zip(recording.names, present) if p]
+    absent = [n for n, p in zip(recording.names, present) if not p]
+    return replace(span, names=names, first_frame=span.first_frame[present]), absent
+
+
+def require_complete_first_frame(recording: Recording, source: str) -> None:
+    """Refuse a recording whose frame 0 lacks a marker, pointing at ``--start``.
+
+    Raises:
+        InputError: A marker is missing in frame 0; the line names it and the fullest frame.
+    """
+    absent = np.flatnonzero(recording.missing()[0])
+    if len(absent):
+        raise InputError(
+            f"{source}: marker '{recording.names[absent[0]]}' has no position in the first frame "
+            f"({len(absent)} of {recording.n_markers} absent); --start S labels from frame S{_hint(recording)}"
+        )
+
+
+def _hint(recording: Recording) -> str:
+    """Where the take's labels are fullest: the frame a user would start from."""
+    present = (~recording.missing()).sum(axis=1)
+    best = int(np.argmax(present))
+    return f" (frame {best} has the most markers labeled: {present[best]} of {recording.n_markers})"

@@ -11,6 +11,7 @@ from formulations.errors import FormulationError
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.model import SubjectModel
 from service.capture.capture import Capture
+from service.capture.span import frame_span
 from service.errors import InputError
 
 MIN_SHARED = 0.5  # of a labeled take's names the model must know: less is another marker set
@@ -67,11 +68,7 @@ def with_model(
     """
     if capture.points is None:
         raise InputError("labeling from a subject model needs 3D points (camera mode needs a labeled first frame)")
-    stop = capture.n_frames if end is None else end
-    if not 0 <= start < capture.n_frames or not start + 2 <= stop <= capture.n_frames:
-        raise InputError(
-            f"--start {start} --end {stop}: needs 0 <= start, start + 2 <= end <= {capture.n_frames} frames"
-        )
+    stop = frame_span(start, end, capture.n_frames)
     names = model_names(model)
     first = np.full((len(names), 3), np.nan)
     if keep_labels and start == 0:

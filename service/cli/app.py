@@ -50,7 +50,8 @@ def demo(
 @app.command()
 def track(
     input: Annotated[Path, typer.Argument(
-        help="Capture .json (see \"Capture JSON\" in README.md), or a labeled .c3d/.trc/.csv whose first frame names the markers."
+        help="Capture .json (see \"Capture JSON\" in README.md), or a labeled .c3d/.trc/.csv whose first frame "
+        "(or --start frame) names the markers."
     )],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output .c3d, .trc or .csv.")],
     formulation: FormulationOption = None,
@@ -60,8 +61,11 @@ def track(
     subject: Annotated[Path | None, typer.Option(
         "--model", help="Subject model .json (markerflow model): no labeled frame; INPUT's labels are discarded.",
     )] = None,
-    start: Annotated[int, typer.Option(help="With --model: the first frame to label (identified by the model).")] = 0,
-    end: Annotated[int | None, typer.Option(help="With --model: label frames before this one.")] = None,
+    start: Annotated[int | None, typer.Option(
+        help="First frame to label (default 0). A recording starts from its own labels there (markers absent there "
+        "stay unlabeled); with --model, from the model's identification. Frames outside --start/--end are kept, unlabeled.",
+    )] = None,
+    end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
 ) -> None:
     """Label INPUT and write the named trajectories.
 

@@ -1,4 +1,4 @@
-"""``markerflow track``: label a capture JSON, or relabel a recording from its first frame."""
+"""``markerflow track``: label a capture JSON, or relabel a recording from one of its frames."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from formulations.markers.noise import TakeNoise
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import read_capture_document
 from service.capture.formulation_spec import formulation_table
-from service.capture.from_recording import capture_from_recording
+from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
 from service.capture.model_input import check_shared_names, model_names, read_model, with_model
 from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, out, warn, warn_doubtful, window_progress
@@ -28,9 +28,13 @@ from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion
 
 def run_track(
     input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool, as_json: bool = False,
-    model: Path | None = None, start: int = 0, end: int | None = None,
+    model: Path | None = None, start: int | None = None, end: int | None = None,
 ) -> None:
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
+
+    Without ``model`` a recording is relabeled from its labels at frame ``start`` (0 when not
+    given; then frame 0 must have every marker): frames ``start .. end - 1`` are labeled,
+    and markers absent at ``start`` are left unlabeled, with a warning naming them.
 
     With ``model`` (a subject model JSON) no labeled frame is needed: a recording's labels are
     discarded, frames ``start .. end - 1`` are labeled from frame ``start`` identified by the
@@ -45,16 +49,14 @@ def run_track(
     and a warning on stderr when many labels are doubtful.
     """
     check_writable_output(output)
-    if model is None and (start or end is not None):
-        raise InputError("--start and --end need --model: without it, frame 0 must be labeled")
-    capture, options, source = _read_input(input, shuffle)
+    capture, options, source, absent = _read_input(input, shuffle, None if model else (start, end))
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
     if model is not None:
         chosen = read_model(model)
         if input.suffix.lower() != ".json":
             check_shared_names(capture.names, chosen, input.name)
         keep_labels = input.suffix.lower() == ".json"
-        capture = with_model(capture, chosen, start, end, keep_labels)
+        capture = with_model(capture, chosen, start or 0, end, keep_labels)
         source, not_kept = _kept(source, model_names(chosen), output)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
@@ -64,7 +66,7 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    write_labeled(output, result, source, start)
+    write_labeled(output, with_unlabeled(result, absent), source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     if as_json:
         print(json.dumps(summary, allow_nan=False))
@@ -79,6 +81,7 @@ def run_track(
     warn_doubtful(summary["doubtful_fraction"])
     warn(fast_motion_warning([FastMarker(**fast) for fast in summary["fast_markers"]]))
     warn(not_kept)
+    warn(_absent_warning(absent, start or 0))
 
 
 def track_summary(
@@ -113,6 +116,13 @@ def track_summary(
     }
 
 
+def _absent_warning(absent: list[str], start: int) -> str | None:
+    if not absent:
+        return None
+    return (f"warning: {len(absent)} markers absent at frame {start} are not labeled (written missing): "
+            f"{', '.join(absent[:12])}{' ...' if len(absent) > 12 else ''}")
+
+
 def _has_runs(positions: np.ndarray, order: int = 3) -> bool:
     """Some marker was seen ``order + 1`` frames in a row: the noise has a residual to be read from."""
     return bool(np.isfinite(np.diff(positions, n=order, axis=0)).any())
@@ -122,17 +132,54 @@ def _mm(value: object) -> str:
     return "unknown" if value is None else f"{value:.2f} mm"
 
 
-def _read_input(input: Path, shuffle: bool) -> tuple[Capture, LabelingOptions, SourceFile | None]:
-    """The capture, its options, and the file that output written from it keeps (none for JSON)."""
+def _read_input(
+    input: Path, shuffle: bool, span: tuple[int | None, int | None] | None = None,
+) -> tuple[Capture, LabelingOptions, SourceFile | None, list[str]]:
+    """The capture, its options, the file that output written from it keeps (none for JSON),
+    and the markers left out because they are absent in its labeled frame.
+
+    ``span`` (start, end) relabels a recording from its own labels: at ``start``
+    (``recording_span``: markers absent there are left out), or when no start is given at
+    frame 0, which must then have every marker. None (a subject model names the markers):
+    the whole input, as read. A capture JSON takes no start or end: its labels are of frame 0.
+    """
+    start, end = span or (None, None)
     if input.suffix.lower() != ".json":
         recording = read_labeled(input)
-        return capture_from_recording(recording, shuffle), LabelingOptions(), recording.source
+        if span is not None and start is None:
+            require_complete_first_frame(recording, input.name)
+        if start is None and end is None:
+            return capture_from_recording(recording, shuffle), LabelingOptions(), recording.source, []
+        capture, absent = capture_from_span(recording, start or 0, end, shuffle)
+        return capture, LabelingOptions(), recording.source, absent
+    if start is not None or end is not None:
+        raise InputError("--start and --end of a capture JSON need --model: its labels are of frame 0 only")
     try:
         text = input.read_bytes()
     except OSError as error:
         raise InputError(f"{input}: cannot read ({error.strerror})") from None
     document = read_capture_document(text, str(input))
-    return document.capture(), document.options(), None
+    return document.capture(), document.options(), None, []
+
+
+def with_unlabeled(result: LabeledTrajectories, names: list[str]) -> LabeledTrajectories:
+    """``result`` with markers ``names`` appended, occluded in every frame: written as missing,
+    so a relabeled file holds no label that markerflow did not give."""
+    if not names:
+        return result
+    frames, extra = result.n_frames, len(names)
+
+    def widened(values: np.ndarray, fill: float | int) -> np.ndarray:
+        if values.size == 0:
+            return values
+        return np.concatenate([values, np.full((frames, extra, *values.shape[2:]), fill, dtype=values.dtype)], axis=1)
+
+    return replace(
+        result, names=[*result.names, *names], positions=widened(result.positions, np.nan),
+        occluded=widened(result.occluded, True), point_index=widened(result.point_index, -1),
+        filled=widened(result.filled, np.nan), best_view=widened(result.best_view, -1),
+        confidence=widened(result.confidence, np.nan),
+    )
 
 
 def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[SourceFile | None, str | None]:

@@ -1,0 +1,21 @@
+"""The span of frames ``markerflow track --start S --end E`` labels."""
+
+from __future__ import annotations
+
+from service.errors import InputError
+
+
+def frame_span(start: int, end: int | None, n_frames: int) -> int:
+    """The end of the span ``start .. end - 1`` of ``n_frames`` (``n_frames`` when ``end`` is None).
+
+    A window needs the start frame and at least one frame after it.
+
+    Raises:
+        InputError: ``start`` outside the take, or ``end`` not after ``start + 1`` or past its last frame.
+    """
+    stop = n_frames if end is None else end
+    if not 0 <= start < n_frames or not start + 2 <= stop <= n_frames:
+        raise InputError(
+            f"--start {start} --end {stop}: needs 0 <= start, start + 2 <= end <= {n_frames} frames"
+        )
+    return stop
