@@ -78,6 +78,13 @@ class SolverBackend(ABC):
         """
 
     @abstractmethod
+    def set_interior_point(self) -> None:
+        """Solve LPs by an interior-point method without crossover, cold each time: the duals
+        are central in the optimal dual face rather than a vertex of it (column generation
+        then needs far fewer rounds), the primal is not a vertex. ``set_primal_simplex`` undoes it.
+        """
+
+    @abstractmethod
     def set_model(self, model: LinearModel) -> None:
         """Load the model (replacing any previous one)."""
 

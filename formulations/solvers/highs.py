@@ -31,9 +31,18 @@ class HighsBackend(SolverBackend):
         self._set("mip_rel_gap", float(gap))
 
     def set_primal_simplex(self) -> None:
+        self._set("solver", "simplex")
+        self._set("presolve", "choose")
         self._set("simplex_strategy", PRIMAL_SIMPLEX)
 
-    def _set(self, name: str, value: bool | int | float) -> None:
+    def set_interior_point(self) -> None:
+        self._set("solver", "ipm")
+        self._set("run_crossover", "off")
+        # Without crossover, duals carried back through presolve are not the loaded model's
+        # (columns already in it price negative): solve the model as given.
+        self._set("presolve", "off")
+
+    def _set(self, name: str, value: bool | int | float | str) -> None:
         if self._highs.setOptionValue(name, value) != highspy.HighsStatus.kOk:
             raise ValueError(f"HiGHS rejected option {name}={value!r}")
 
