@@ -27,7 +27,7 @@ from formulations.methods.formulation import Formulation
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
 from service.errors import InputError
-from service.labeling.confidence import carried, last_labeled, marker_confidence
+from service.labeling.confidence import carried, marker_confidence, shape_checked
 from service.labeling.outcome import WindowOutcome
 from service.labeling.spans import window_spans
 from service.labeling.stats import DoubtCount, WindowStats
@@ -89,7 +89,7 @@ def label_windows(
         judged = time.perf_counter()
         occluded = _occluded(labels)
         confidence = carried(marker_confidence(problem, solution, len(carry), labels.views), carry)
-        carry = last_labeled(confidence, occluded, carry)
+        confidence, carry = shape_checked(confidence, occluded, carry, state, labels.state)
         doubt = DoubtCount.of(confidence, occluded, time.perf_counter() - judged)
         stats = WindowStats.of(template, last, solution, prepared, time.perf_counter() - began, doubt)
         if observer:
