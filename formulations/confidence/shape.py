@@ -77,7 +77,8 @@ def shape_identity(template: MarkerState, end: MarkerState, judged: NDArray[np.i
     own_all = np.diag(log_f[: len(partners)])  # log f_m'(x_m') of every partner
     own = own_all[within]
     at_judged = log_f[:, within]  # [j, r]: log f_j(x_r)
-    exchanged = at_judged[: len(partners)] + log_f[within].T - own_all[:, None]  # [m', r]
+    with np.errstate(invalid="ignore"):  # -inf - -inf where a partner has no shape: masked by usable
+        exchanged = at_judged[: len(partners)] + log_f[within].T - own_all[:, None]  # [m', r]
     usable = (partners[:, None] != judged[None, :]) & np.isfinite(own_all)[:, None]
     hypotheses = np.concatenate([np.where(usable, exchanged, -np.inf), at_judged[len(partners):]], axis=0)
     top = hypotheses.max(axis=0, initial=-np.inf)
