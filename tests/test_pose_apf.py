@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from formulations.errors import FormulationError
 from formulations.pose.apf import AnnealingSchedule, anneal, annealing_rate
 from formulations.pose.human import human_model
 from formulations.pose.kinematics import forward_kinematics
@@ -96,3 +98,18 @@ def test_damped_velocity_predicts_and_a_frame_without_data_keeps_the_prediction(
     assert seen and abs(second[0] - 0.05) < 0.01
     third, seen = tracker.step([_Nothing()])
     assert not seen and np.allclose(third, model.clip((second + 0.5 * (second - first))[None])[0])
+
+
+def test_a_corrected_estimate_is_what_the_next_frame_starts_from() -> None:
+    model = human_model()
+    tracker = PoseTracker(model, np.zeros(model.dof), dispersion(model, 0.05, 0.01), AnnealingSchedule(50, 2))
+    with pytest.raises(FormulationError):
+        tracker.correct(np.zeros(model.dof))
+    tracker.step([_Towards(np.zeros(3))])
+    polished = np.zeros(model.dof)
+    polished[0] = 0.2
+    polished[model.columns[model.index("RKnee")]] = -1.0  # beyond the knee's limit: clipped to 0
+    tracker.correct(polished)
+    expected = polished.copy()
+    expected[model.columns[model.index("RKnee")]] = 0.0
+    assert np.array_equal(tracker.prediction(), expected)

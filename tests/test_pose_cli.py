@@ -66,6 +66,19 @@ def test_a_take_is_fitted_and_written_in_the_calibrations_units_with_a_person_mi
     assert (tmp_path / "pose.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_no_refine_writes_the_particle_filters_own_fit(tmp_path) -> None:
+    """--no-refine reaches the fit: the APF alone is written, and it differs from the polished fit."""
+    take = write_take(tmp_path / "take")
+    fits = {}
+    for flag in ("--refine", "--no-refine"):
+        out = tmp_path / f"pose{flag}.trc"
+        result = run_inline(take, "--calibration", CALIBRATION, "--out", out, "--particles", "60", "--layers", "3", flag)
+        assert result.returncode == 0, result.stderr
+        fits[flag] = read_trc(out).positions
+    assert fits["--refine"].shape == fits["--no-refine"].shape
+    assert np.abs(fits["--refine"] - fits["--no-refine"]).max() > 1e-3
+
+
 def one_line_error(result: subprocess.CompletedProcess[str], *words: str) -> None:
     assert result.returncode == 2, result.stderr
     lines = result.stderr.strip().splitlines()

@@ -40,7 +40,8 @@ def test_rest_pose_and_translation_by_hand() -> None:
     X[0, :3] = (1.0, 2.0, 3.0)
     root = np.array([1.0, 2.0, 3.0])
     assert np.allclose(_at(model, X, "RAnkle")[0], root + (0, -P.hip_half_width, -P.thigh - P.shank))
-    assert np.allclose(_at(model, X, "LWrist")[0], root + (0, P.shoulder_half_width, P.trunk - P.upper_arm - P.forearm))
+    wrist_height = P.trunk - P.shoulder_drop - P.upper_arm - P.forearm
+    assert np.allclose(_at(model, X, "LWrist")[0], root + (0, P.shoulder_half_width, wrist_height))
 
 
 def test_bent_knee_heading_and_abduction_by_hand_in_one_batch() -> None:

@@ -21,19 +21,27 @@ DEG = np.pi / 180.0
 
 @dataclass(frozen=True)
 class Proportions:
-    """Segment lengths and half-widths of the default body, metres (an adult of about 1.75 m)."""
+    """Segment lengths and half-widths of the default body, metres (an adult of about 1.75 m).
+
+    ``trunk`` runs from the pelvis to the neck joint (BODY_25B's neck keypoint is at the top of the
+    neck); each clavicle runs from there ``shoulder_half_width`` out and ``shoulder_drop`` down to its
+    shoulder; the nose is ``nose_forward`` ahead of and ``nose_up`` above the neck joint; the toes
+    ``foot`` ahead of the ankle, the heel ``heel_back`` behind it, both ``ankle_height`` below it."""
 
     hip_half_width: float = 0.09
     thigh: float = 0.42
     shank: float = 0.42
     foot: float = 0.15
     ankle_height: float = 0.07
+    heel_back: float = 0.05
     trunk: float = 0.50
+    shoulder_drop: float = 0.05
     shoulder_half_width: float = 0.18
     upper_arm: float = 0.29
     forearm: float = 0.26
     neck_to_head_top: float = 0.24
     nose_forward: float = 0.10
+    nose_up: float = 0.12
 
 
 def human_model(p: Proportions = Proportions()) -> BodyModel:
@@ -52,14 +60,14 @@ def human_model(p: Proportions = Proportions()) -> BodyModel:
     add("Spine", "CHip", (0.0, 0.0, 0.0), "zxy", ((-40, 40), (-30, 30), (-30, 90)))
     add("Neck", "Spine", (0.0, 0.0, p.trunk), "xy", ((-40, 40), (-50, 60)))
     add("Head", "Neck", (0.0, 0.0, p.neck_to_head_top))
-    add("Nose", "Neck", (p.nose_forward, 0.0, 0.5 * p.neck_to_head_top))
+    add("Nose", "Neck", (p.nose_forward, 0.0, p.nose_up))
     for side, sign in (("R", -1.0), ("L", 1.0)):
         # Abduction about x is mirrored between sides: the limits are flipped with the sign.
         def mirrored(lo: float, hi: float, s: float = sign) -> tuple[float, float]:
             return (lo, hi) if s > 0 else (-hi, -lo)
 
         add(f"{side}Clavicle", "Spine", (0.0, 0.0, p.trunk), "xy", (mirrored(-10, 30), (-20, 20)))
-        add(f"{side}Shoulder", f"{side}Clavicle", (0.0, sign * p.shoulder_half_width, 0.0), "zxy",
+        add(f"{side}Shoulder", f"{side}Clavicle", (0.0, sign * p.shoulder_half_width, -p.shoulder_drop), "zxy",
             (mirrored(-90, 90), mirrored(-30, 180), (-180, 60)))
         add(f"{side}Elbow", f"{side}Shoulder", (0.0, 0.0, -p.upper_arm), "y", ((-160, 0),))
         add(f"{side}Wrist", f"{side}Elbow", (0.0, 0.0, -p.forearm))
@@ -69,7 +77,7 @@ def human_model(p: Proportions = Proportions()) -> BodyModel:
         add(f"{side}Ankle", f"{side}Knee", (0.0, 0.0, -p.shank), "y", ((-30, 50),))
         add(f"{side}BigToe", f"{side}Ankle", (p.foot, -sign * 0.01, -p.ankle_height))
         add(f"{side}SmallToe", f"{side}Ankle", (0.8 * p.foot, sign * 0.04, -p.ankle_height))
-        add(f"{side}Heel", f"{side}Ankle", (-0.05, 0.0, -p.ankle_height))
+        add(f"{side}Heel", f"{side}Ankle", (-p.heel_back, 0.0, -p.ankle_height))
     names = [n.name for n in nodes]
 
     def cone(a: str, b: str, r0: float, r1: float) -> Cone:

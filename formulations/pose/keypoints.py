@@ -8,6 +8,10 @@ model joint named like that keypoint projecting to p_ck(X),
 and E(X) = sum_c Sigma^k_c(X) (eq. 5's sum over cameras). rho is Cauchy's: quadratic for
 errors below sigma, logarithmic beyond, so a keypoint put on the wrong limb or person pulls
 without dominating. A camera without detections adds nothing.
+
+For a local refinement (``refine``) the same data give residuals, one per seen keypoint and image
+axis, f = sqrt(c_ck / sum_k c_ck) (p_ck(X) - u_ck) / sigma: under a Cauchy loss rho(f^2) = log(1 + f^2)
+summed over both axes they approximate the energy above (equal to first order for small errors).
 """
 
 from __future__ import annotations
@@ -62,6 +66,20 @@ class KeypointMeasurement:
     def _confidence(self) -> Array:
         confidence: Array = np.nan_to_num(self.detections[:, self.pairs.keypoints, 2])
         return confidence
+
+    def residuals(self, posed: Posed) -> Array:
+        """``(N, R)`` the module doc's residuals f for N posed particles, R = 2 x the seen keypoints."""
+        joints = posed.positions[:, self.pairs.nodes]
+        count = len(joints)
+        confidence = self._confidence()
+        parts = [np.empty((count, 0))]
+        for c in np.flatnonzero(confidence.sum(axis=1) > 0):
+            seen = confidence[c] > 0
+            pixels = self.rig.cameras[c].project(joints[:, seen].reshape(-1, 3)).reshape(count, -1, 2)
+            scale = np.sqrt(confidence[c, seen] / confidence[c, seen].sum())[:, None] / self.sigma
+            parts.append(((pixels - self.detections[c, self.pairs.keypoints[seen], :2]) * scale).reshape(count, -1))
+        residuals: Array = np.concatenate(parts, axis=1)
+        return residuals
 
     def energy(self, posed: Posed) -> Array:
         """``(N,)`` E(X) of the module doc for N posed particles."""

@@ -84,6 +84,12 @@ class PoseTracker:
         self._history.append(result.estimate)
         return result.estimate, True
 
+    def correct(self, estimate: Array) -> None:
+        """Replace the last frame's estimate by a refinement of it: the next prediction starts there."""
+        if not self._history:
+            raise FormulationError("tracker: no frame has been estimated yet")
+        self._history[-1] = self.model.clip(estimate[None])[0]
+
     def search(self, measurements: Sequence[Measurement], start: Array, schedule: AnnealingSchedule, spread: Array) -> Annealed:
         def energy(configurations: Array) -> Array:
             posed = forward_kinematics(self.model, configurations)

@@ -125,11 +125,14 @@ def pose(
     layers: Annotated[int, typer.Option(help="M: annealing layers per frame.")] = 10,
     rate: Annotated[float, typer.Option(help="Frames per second of the video (OpenPose JSON does not say).")] = 60.0,
     seed: Annotated[int, typer.Option(help="Seed of the particle filter.")] = 0,
+    refine: Annotated[bool, typer.Option(
+        help="Polish each keypoint fit by bounded least squares after the particle filter (--no-refine: the APF alone).",
+    )] = True,
 ) -> None:
     """Fit an articulated body to every frame by annealed particle filtering (Davison, Deutscher & Reid 2001)."""
     from service.cli.pose import run_pose
 
-    _guard(lambda: run_pose(input, calibration, out, model, particles, layers, rate, seed))
+    _guard(lambda: run_pose(input, calibration, out, model, particles, layers, rate, seed, refine))
 
 
 @app.command("best-view")

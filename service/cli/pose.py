@@ -34,8 +34,9 @@ from service.pose.run import PoseFit, fit_keypoints
 
 
 def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | None, particles: int, layers: int,
-             rate: float, seed: int) -> None:
-    """Fit the body to INPUT's keypoints frame by frame; write the joints as TRC and the overlay PNG beside it."""
+             rate: float, seed: int, refine: bool = True) -> None:
+    """Fit the body to INPUT's keypoints frame by frame; write the joints as TRC and the overlay PNG beside it.
+    ``refine``: polish each keypoint fit after the APF (``service.pose.run.fit_keypoints``)."""
     if output.suffix.lower() != ".trc":
         raise InputError(f"{output}: the pose is written as .trc")
     check_writable_output(output)
@@ -54,7 +55,7 @@ def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | No
         cameras = match_cameras(frames.cameras, load_calibration(calibration), calibration)
         detections = choose_participant(Rig.of(cameras), frames.people)
         with frame_progress(f"fitting {input.name}") as progress:
-            fit = fit_keypoints(cameras, detections, metres, model, schedule, seed, progress)
+            fit = fit_keypoints(cameras, detections, metres, model, schedule, seed, progress, refine)
         best = int(np.argmax((detections[..., 2] > 0).sum(axis=(0, 2))))
         write_overlay(picture, cameras[best], fit.model, fit.positions, input.name, detections=detections[:, best])
     else:
