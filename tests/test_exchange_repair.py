@@ -74,3 +74,21 @@ def test_a_right_labeling_is_left_alone_and_noise_moves_nothing():
         noisy = replace(state, position=state.position + rng.normal(0, 2.0, BODY.shape))
         _, moved = repair_exchanges(noisy, rng.uniform(-100, 400, (3, 3)))
         assert moved == 0
+
+
+def test_an_exchange_with_the_most_rigid_neighbour_is_undone():
+    """Markers 0 and 1 are each other's most rigid neighbour. Judged with the partner where
+    it sits now, each would look 53 mm off at its own point (the partner is there, at 0 mm):
+    the partner's term is left out of the deviation at the partner's position."""
+    state = _learned_state()
+    var = state.distance_var.copy()
+    for m, other in ((0, 1), (1, 0)):
+        k = list(state.neighbours[m]).index(other)
+        var[m] = 4.0
+        var[m, k] = 0.25
+    stiff = replace(state, distance_var=var)
+    order = np.arange(len(BODY))
+    order[[0, 1]] = [1, 0]
+    repaired, moved = repair_exchanges(_with_tracks(stiff, order), np.zeros((0, 3)))
+    assert moved == 2
+    assert np.allclose(repaired.position, state.position)

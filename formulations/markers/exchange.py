@@ -8,7 +8,8 @@ With D[m, p] the shape deviation of marker m placed at position r_p,
 
     D[m, p] = sum_j a_mj min(| ||r_p - r_j|| - dbar_mj |, c) / sum_j a_mj,
 
-a_mj = 1 / (var_mj + 1) over m's visible neighbours j (``MarkerState``), the tracks at the
+a_mj = 1 / (var_mj + 1) over m's visible neighbours j (``MarkerState``) but the one at r_p
+itself (in an exchange that is the partner, which moves too), the tracks at the
 template (the visible markers' points and the points nobody took) are reassigned by the
 assignment minimising sum_m D[m, track(m)], where a marker may hold no track at cost
 ``NONE_MM``. Each connected change (markers linked by the tracks they give and take) is
@@ -39,11 +40,13 @@ def shape_deviations(state: MarkerState, positions: np.ndarray) -> np.ndarray:
     """``(N, P)`` D[m, p] (module doc) for candidate positions ``(P, 3)``; inf for markers with
     no visible neighbour (nothing to judge them by)."""
     distance = np.linalg.norm(positions[None, :, None] - state.position[state.neighbours][:, None], axis=3)  # (N, P, K)
-    weight = state.visible[state.neighbours] / (state.distance_var + 1.0)  # (N, K)
+    # A neighbour that holds the position itself says nothing of it: in an exchange it is the
+    # partner, which moves too (their mutual distance is the same either way).
+    weight = (state.visible[state.neighbours] / (state.distance_var + 1.0))[:, None] * (distance > 1e-6)  # (N, P, K)
     deviation = np.minimum(np.abs(distance - state.distance_mean[:, None]), SHAPE_CAP_MM)
-    total = weight.sum(axis=1)
-    shape: np.ndarray = np.einsum("nk,npk->np", weight, deviation) / np.maximum(total, 1e-12)[:, None]
-    return np.where((total > 0)[:, None], shape, np.inf)
+    total = weight.sum(axis=2)
+    shape: np.ndarray = np.einsum("npk,npk->np", weight, deviation) / np.maximum(total, 1e-12)
+    return np.where(total > 0, shape, np.inf)
 
 
 def repair_exchanges(state: MarkerState, unclaimed: np.ndarray) -> tuple[MarkerState, int]:
