@@ -122,13 +122,18 @@ def _formulation_field(value: str | UploadFile | None) -> str | dict:
         raise InputError("formulation: give a name or a JSON object, not a file")
     if not value.lstrip().startswith("{"):
         return value
-    check_depth(value.encode(), "formulation")
+    return json_object_field(value, "formulation")
+
+
+def json_object_field(value: str, field: str) -> dict:
+    """A form field holding a JSON object, nesting checked before the parser sees it."""
+    check_depth(value.encode(), field)  # deep nesting would overflow the parser
     try:
         table = json.loads(value)
     except json.JSONDecodeError as error:
-        raise InputError(f"formulation: not a JSON object ({error})") from None
+        raise InputError(f"{field}: not a JSON object ({error})") from None
     if not isinstance(table, dict):
-        raise InputError("formulation: not a JSON object")
+        raise InputError(f'{field}: not a JSON object, e.g. {{"time_limit": 10}}')
     return table
 
 

@@ -18,7 +18,13 @@ from service.errors import InputError
 from service.server.limits import check_body_limits
 from service.server.prescan import check_depth
 from service.server.settings import Limits
-from service.server.submission import UPLOAD_SUFFIXES, Submission, document_submission, upload_submission
+from service.server.submission import (
+    UPLOAD_SUFFIXES,
+    Submission,
+    document_submission,
+    json_object_field,
+    upload_submission,
+)
 
 FIELDS = ("file", "formulation", "parameters", "window", "association", "model")
 MODEL_OPTION = "model" in CaptureDocument.model_fields  # a subject model in place of the labeled first frame
@@ -73,14 +79,7 @@ def _formulation(name: str, parameters: str) -> str:
     name and the parameters object the form's ``parameters`` field gives."""
     if not parameters:
         return name
-    check_depth(parameters.encode(), "parameters")  # deep nesting would overflow the parser
-    try:
-        table = json.loads(parameters)
-    except json.JSONDecodeError as error:
-        raise InputError(f"parameters: not a JSON object ({error})") from None
-    if not isinstance(table, dict):
-        raise InputError('parameters: not a JSON object, e.g. {"time_limit": 10}')
-    return json.dumps({**table, "name": name})
+    return json.dumps({**json_object_field(parameters, "parameters"), "name": name})
 
 
 def _whole(window: str) -> int:
