@@ -16,6 +16,7 @@ summed over both axes they approximate the energy above (equal to first order fo
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,27 +70,26 @@ class KeypointMeasurement:
 
     def residuals(self, posed: Posed) -> Array:
         """``(N, R)`` the module doc's residuals f for N posed particles, R = 2 x the seen keypoints."""
-        joints = posed.positions[:, self.pairs.nodes]
-        count = len(joints)
-        confidence = self._confidence()
-        parts = [np.empty((count, 0))]
-        for c in np.flatnonzero(confidence.sum(axis=1) > 0):
-            seen = confidence[c] > 0
-            pixels = self.rig.cameras[c].project(joints[:, seen].reshape(-1, 3)).reshape(count, -1, 2)
-            scale = np.sqrt(confidence[c, seen] / confidence[c, seen].sum())[:, None] / self.sigma
-            parts.append(((pixels - self.detections[c, self.pairs.keypoints[seen], :2]) * scale).reshape(count, -1))
+        count = len(posed.positions)
+        parts = [np.empty((count, 0))] + [
+            (offset * np.sqrt(weight)[:, None] / self.sigma).reshape(count, -1) for offset, weight in self._offsets(posed)
+        ]
         residuals: Array = np.concatenate(parts, axis=1)
         return residuals
 
     def energy(self, posed: Posed) -> Array:
         """``(N,)`` E(X) of the module doc for N posed particles."""
+        total = np.zeros(len(posed.positions))
+        for offset, weight in self._offsets(posed):
+            total += np.log1p((offset ** 2).sum(axis=2) / self.sigma ** 2) @ weight
+        return total
+
+    def _offsets(self, posed: Posed) -> Iterator[tuple[Array, Array]]:
+        """Per camera that sees a keypoint: ``(N, S, 2)`` p_ck(X) - u_ck over its S seen keypoints,
+        and their weights c_ck / sum_k c_ck."""
         joints = posed.positions[:, self.pairs.nodes]
-        count, k = joints.shape[:2]
         confidence = self._confidence()
-        total = np.zeros(count)
         for c in np.flatnonzero(confidence.sum(axis=1) > 0):
             seen = confidence[c] > 0
-            pixels = self.rig.cameras[c].project(joints[:, seen].reshape(-1, 3)).reshape(count, -1, 2)
-            squared = ((pixels - self.detections[c, self.pairs.keypoints[seen], :2]) ** 2).sum(axis=2)
-            total += np.log1p(squared / self.sigma ** 2) @ confidence[c, seen] / confidence[c, seen].sum()
-        return total
+            pixels = self.rig.cameras[c].project(joints[:, seen].reshape(-1, 3)).reshape(len(joints), -1, 2)
+            yield pixels - self.detections[c, self.pairs.keypoints[seen], :2], confidence[c, seen] / confidence[c, seen].sum()
