@@ -139,17 +139,17 @@ def _read_input(
     and the markers left out because they are absent in its labeled frame.
 
     ``span`` (start, end) relabels a recording from its own labels: at ``start``
-    (``recording_span``: markers absent there are left out), or when no start is given at
+    (``capture_from_span``: markers absent there are left out), or when no start is given at
     frame 0, which must then have every marker. None (a subject model names the markers):
     the whole input, as read. A capture JSON takes no start or end: its labels are of frame 0.
     """
     start, end = span or (None, None)
     if input.suffix.lower() != ".json":
         recording = read_labeled(input)
-        if span is not None and start is None:
-            require_complete_first_frame(recording, input.name)
-        if start is None and end is None:
+        if span is None:
             return capture_from_recording(recording, shuffle), LabelingOptions(), recording.source, []
+        if start is None:
+            require_complete_first_frame(recording, input.name)
         capture, absent = capture_from_span(recording, start or 0, end, shuffle)
         return capture, LabelingOptions(), recording.source, absent
     if start is not None or end is not None:
