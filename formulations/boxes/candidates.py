@@ -102,7 +102,7 @@ def box_window(
     if unborn is not None and unborn.any() and likelihood is None:
         newborn = unborn[obj]
         entry = template_cost.copy()
-        entry[newborn] += model.prediction * birth_cost(boxes[det[newborn]], birth_volume) - template_cost[newborn]
+        entry[newborn] = model.prediction * birth_cost(boxes[det[newborn]], birth_volume)
     hist_dist = None
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
