@@ -7,7 +7,8 @@ Before each window, at its template frame:
 
 - acquisition: markers unseen there are looked for again; a point the model names for such a
   marker, that no seen marker holds, becomes its position (``acquire``), so a marker absent
-  at the start is named when it appears, within one window;
+  at the start is named when it appears, within one window; not from a segment whose
+  reading moves one of its seen markers (``agreeing``);
 - recovery: segments whose labels contradict their constellation are re-read from the model
   (``recover``) instead of carrying the error forward;
 - prediction: unseen markers are anchored to their segments' poses (``follow_segments``),
@@ -32,6 +33,7 @@ from formulations.markers.guide import assign_nearest
 from formulations.markers.reacquire import REACQUISITION
 from formulations.markers.state import MarkerState
 from formulations.relaxation.components import coupled_components
+from formulations.subject.agreement import agreeing
 from formulations.subject.follow import follow_segments
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.identify import Identification, identify
@@ -144,7 +146,7 @@ class ModelChain:
         if state.visible.any():
             gap = np.linalg.norm(points[:, None] - state.position[state.visible][None], axis=2)
             held = (gap <= HELD_MM).any(axis=1)
-        new = np.flatnonzero(unseen & found.named)
+        new = np.flatnonzero(unseen & found.named & agreeing(self._geometry, state, points, found))
         new = new[~held[found.point[new]]]
         if not len(new):
             return state
