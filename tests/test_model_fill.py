@@ -20,7 +20,7 @@ from formulations.subject.start_state import model_start_state
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.model_input import model_names, with_model
 from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.model_start import segment_layout
+from service.labeling.model_start import ModelChain, segment_layout
 
 
 def _held_out():
@@ -129,3 +129,36 @@ def test_a_labeled_first_frame_is_kept_with_a_model() -> None:
     assert np.allclose(capture.first_frame, held[0])
     result, _ = CaptureLabeling(capture, LabelingOptions(window=10)).label()
     assert all((owner[f][result.point_index[f]] == np.arange(len(names))).all() for f in range(len(frames)))
+
+
+def test_a_marker_carried_by_its_segment_follows_its_rotation_with_two_mates_seen() -> None:
+    """Two seen mates fix no rotation about the line through them: the carried marker must
+    also follow the other seen neighbours (mates only gave 24-31 mm here, a translation)."""
+    model, geometry, held = _held_out()
+    segment = geometry.segments[1].markers
+    hidden, late = segment[:2], segment[2]
+    for template in (30, 60, 90, 120):
+        state = model_start_state(geometry, identify(geometry, held[0]), held[0], lost_after=3)
+        for f in range(1, template + 1):
+            seen = np.ones(len(held[f]), bool)
+            seen[hidden] = f <= template - 5
+            seen[late] = not template - 8 < f <= template - 3  # the anchor frame saw one mate only
+            state = state.advance(held[f], seen)
+        predicted = follow_segments(geometry, state).predict()
+        assert np.linalg.norm(predicted[hidden] - held[template + 1, hidden], axis=1).max() < 15.0
+
+
+def test_no_marker_is_acquired_from_a_reading_that_moves_a_seen_mate() -> None:
+    model, geometry, held = _held_out()
+    frame = held[50]
+    found = identify(geometry, frame)
+    state = model_start_state(geometry, found, frame, lost_after=3)
+    segment = geometry.segments[2].markers
+    unseen = segment[0]
+    state = replace(state, unseen=np.where(np.arange(len(frame)) == unseen, 5, state.unseen))
+    chain = ModelChain(inner=None, model=model, points=[frame])
+    assert chain._acquired(state, frame, lambda: found).visible[unseen]  # a reading that agrees is acquired from
+    turned = replace(found, point=found.point.copy())
+    turned.point[segment[[1, 2]]] = found.point[segment[[2, 1]]]  # the reading exchanges two seen mates
+    kept = chain._acquired(state, frame, lambda: turned)
+    assert not kept.visible[unseen] and np.array_equal(kept.position, state.position)

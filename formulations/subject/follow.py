@@ -6,10 +6,12 @@ A marker whose anchor frame saw three or more of its segment-mates follows only 
 mates (the motion of nearby markers on other segments is not its motion). Otherwise, at a
 template frame where the model poses the marker's segment (``segment_poses``: three
 labeled markers, else the joint chain), the anchor is moved to that frame: the marker at
-R u_p + d, each neighbour on the same segment where it is seen (or, unseen, where the pose
-puts it), and only those neighbours followed. The state's prediction is then the segment's
-pose in every later frame, R(t) u_p + d(t), estimated from whichever segment-mates are seen
-there, not a stale velocity nor the motion of nearby markers on other segments.
+R u_p + d, each neighbour where it is seen (segment-mates unseen: where the pose puts them).
+The state's prediction is then the segment's pose in every later frame, R(t) u_p + d(t),
+estimated from the neighbours seen there, segment-mates weighing most (their distances vary
+least), not a stale velocity. The other seen neighbours are followed too, with little
+weight: a segment of three markers leaves a carried marker two mates, whose motion fixes
+no rotation (about the line through them), and the state would only translate it.
 """
 
 from __future__ import annotations
@@ -45,5 +47,5 @@ def follow_segments(geometry: ModelGeometry, state: MarkerState) -> MarkerState:
         position=np.where(carried[:, None], placed, state.position),
         anchor=np.where(carried[:, None], placed, state.anchor),
         anchor_neighbours=np.where(carried[:, None, None], now[neighbours], state.anchor_neighbours),
-        anchor_valid=np.where(carried[:, None], mate, state.anchor_valid),
+        anchor_valid=np.where(carried[:, None], mate | seen[neighbours], state.anchor_valid),
     )
