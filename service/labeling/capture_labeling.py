@@ -25,6 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from formulations.cameras.rig import Rig
+from formulations.markers.gap_ends import tie_gap_ends
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.formulation_spec import resolve_formulation
@@ -90,6 +91,8 @@ class CaptureLabeling:
         """The labeled trajectories from all windows' outcomes; in camera mode with each
         marker's best view per frame (``service.best_view.markers``); with every label's confidence."""
         labels = self._association.assemble(outcomes)
+        if labels.filled.size:
+            labels.filled = np.where(labels.occluded[:, :, None], tie_gap_ends(labels.positions, labels.filled), np.nan)
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._view_choice is None:
             return labels
