@@ -31,7 +31,7 @@ def tie_gap_ends(positions: Array, filled: Array) -> Array:
     """``filled`` ``(F, N, 3)`` with every gap closed on both sides tied to ``positions``'
     ``(F, N, 3)`` sightings (NaN where not seen); other frames as they were."""
     tied = filled.copy()
-    seen = np.isfinite(positions).all(axis=2)
+    seen: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)
     for marker in range(positions.shape[1]):
         for start, end in _closed_gaps(seen[:, marker]):
             _tie(tied[start : end + 1, marker], positions[:, marker], start, end)
