@@ -14,8 +14,9 @@ The cost constants were chosen on TUD-Campus and MOT17-02; the other three are h
 Arcs are priced by Jiang's weighted costs, or with ``--likelihood`` as negative
 log-likelihoods (``formulations.boxes.likelihood``), the same for every formulation.
 
-With ``--returns-compete`` the chains a lost object took after a miss are offered to a newcomer
-too (``Lifecycle(returns_compete=True)``, ``formulations.boxes.lifecycle``), for every formulation.
+With ``--returns-compete`` a chain a lost object took after a miss is weighed as its return
+against a newcomer (``Lifecycle(returns_compete=True)``, ``formulations.boxes.returns``), for
+every formulation.
 
     .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--returns-compete]
 """
@@ -58,7 +59,7 @@ def main() -> None:
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
-    parser.add_argument("--returns-compete", action="store_true", help="offer a lost object's chain to a newcomer too")
+    parser.add_argument("--returns-compete", action="store_true", help="weigh a lost object's return against a newcomer")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
     print("|---|---|---|---|---|---|---|")

@@ -135,8 +135,8 @@ def _crossing_scene(seed, frames=60, n=4, noise=3.0):
     return BoxDetections(r[:, 0].astype(int), r[:, 1:], np.ones(len(r)), frames, (640.0, 480.0)), np.array(who)
 
 
-def _identity_changes(detections, who, formulation):
-    tracks = track_boxes(detections, formulation, window=10).tracks
+def _identity_changes(detections, who, formulation, lifecycle=Lifecycle()):
+    tracks = track_boxes(detections, formulation, window=10, lifecycle=lifecycle).tracks
     person = {(int(f), float(b[0])): w for f, b, w in zip(detections.frame, detections.box, who)}
     per_person: dict[int, list[int]] = {}
     for f, ident, box in sorted(zip(tracks.frame, tracks.track_id, tracks.box.tolist()), key=lambda t: t[0]):
@@ -151,6 +151,8 @@ def test_window_keeps_identities_where_frame_by_frame_swaps():
     detections, who = _crossing_scene(31)
     assert _identity_changes(detections, who, "nn-hungarian") > 0
     assert _identity_changes(detections, who, "lp-l1") == 0
+    # Weighing each return against a newcomer hands none of them to a new object here.
+    assert _identity_changes(detections, who, "lp-l1", Lifecycle(returns_compete=True)) == 0
 
 
 def test_bad_detection_files_are_one_line_errors(tmp_path):

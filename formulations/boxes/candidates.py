@@ -6,7 +6,8 @@ candidates. Every detection inside an object's gate around its Kalman forecast
 (Jiang's 4-vector p) in the object's heights, template cost g(s_n, v) and, as resources, the conflict sets it belongs to
 (``conflicts.conflict_resources``): a detection is never taken twice, nor two boxes that
 are one spatial location. An object not seen at t0 starts from its prediction with an
-occluded template, so its first arc costs like leaving an occlusion.
+occluded template, so its first arc costs like leaving an occlusion. A detection a
+newcomer has won from an object (``returns``) is barred from that object's candidates.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from numpy.typing import NDArray
 
 from formulations.boxes import kalman
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
-from formulations.boxes.costs import BoxCostModel, birth_cost, histogram_distance
+from formulations.boxes.costs import BoxCostModel, histogram_distance
 from formulations.boxes.geometry import centre, height
 from formulations.boxes.kalman import box_corners, corner_rates
 from formulations.boxes.likelihood import DetectionRates, box_likelihood, clutter_volume
@@ -53,7 +54,7 @@ class BoxWindow:
 def box_window(
     objects: BoxObjects, template_frame: int, n_frames: int, frame: Ints, boxes: Array, histograms: Array | None,
     model: BoxCostModel, rule: ConflictRule, rates: DetectionRates | None = None, image: Array | None = None,
-    unborn: NDArray[np.bool_] | None = None, birth_volume: float = 1.0,
+    barred: NDArray[np.bool_] | None = None,
 ) -> BoxWindow:
     """Pose frames ``template_frame+1 .. template_frame+n_frames`` for ``objects``.
 
@@ -72,10 +73,7 @@ def box_window(
             (``formulations.boxes.likelihood``; the template term keeps only the histogram),
             or None for Jiang's weighted costs.
         image: ``(4,)`` the image rectangle (x1, y1, x2, y2), where false alarms fall; needed with ``rates``.
-        unborn: ``(N,)`` True for new objects not yet seen (``lifecycle.born``): they start
-            occluded and, with Jiang's costs, enter by the birth density (``costs.birth_cost``)
-            rather than by their forecast (with ``rates``, by their forecast).
-        birth_volume: V of ``costs.birth_cost``, pixel^4.
+        barred: ``(N, K)`` True where object n may not take detection k (of those handed in).
     """
     frames = template_frame + np.arange(1, n_frames + 1)
     predicted, spread = objects.forecast(n_frames)  # (N, M, 4), (N, M, 4, 4)
@@ -84,6 +82,8 @@ def box_window(
         index = np.flatnonzero(frame == f)
         inside, cost = model.gate_and_cost(predicted[:, m], spread[:, m], boxes[index])
         inside &= (f > objects.last_seen)[:, None]  # a newborn takes nothing before its first box
+        if barred is not None:
+            inside &= ~barred[:, index]
         n, b = np.nonzero(inside)
         objs.append(n)
         dets.append(index[b])
@@ -98,27 +98,21 @@ def box_window(
         likelihood = box_likelihood(objects, rates, log_clutter, predicted, spread, obj, frame[det] - template_frame,
                                     kalman.measurement(boxes[det]))
         template_cost = np.zeros(len(det))  # the forecast is in the reappear cost
-    entry = None
-    if unborn is not None and unborn.any() and likelihood is None:
-        newborn = unborn[obj]
-        entry = template_cost.copy()
-        entry[newborn] = model.prediction * birth_cost(boxes[det[newborn]], birth_volume)
     hist_dist = None
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
         template_cost = template_cost + model.histogram * hist_dist
-        entry = None if entry is None else entry + model.histogram * hist_dist
     unit = np.maximum(objects.mean[:, 3], 1.0)  # each object's height at t0
     resources = sp.csr_matrix(conflict_resources(rule, frame, boxes)[det])
     start = objects.box
     velocity = np.repeat((corner_rates(objects.mean) / unit[:, None])[:, None, :], n_frames, axis=1)
     candidates = WindowCandidates(
         template_location=start / unit[:, None],
-        template_occluded=(objects.last_seen < template_frame) | (False if unborn is None else unborn),
+        template_occluded=objects.last_seen < template_frame,
         n_frames=n_frames, object=obj, frame=frame[det] - template_frame, location=boxes[det] / unit[obj, None],
         template_cost=template_cost, resources=resources, occlusion_location=box_corners(predicted) / unit[:, None, None],
         motion=velocity, appearance=None if hist_dist is None or histograms is None else histograms[det],
-        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood, entry_cost=entry,
+        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood,
     )
     weights = ArcCostWeights(  # floats: integer weights would make the arc cost array integer
         appearance_change=float(model.histogram_change) if hist_dist is not None else 0.0,

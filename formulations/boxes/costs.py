@@ -94,16 +94,3 @@ def histogram_distance(a: Array, b: Array) -> Array:
     result: Array = 0.5 * np.abs(a - b).sum(axis=1)
     return result
 
-
-def birth_cost(boxes: Array, volume: float) -> Array:
-    """``(B,)`` the prediction part of g for boxes of an object not yet seen: log V - log det(2 pi R) / 2.
-
-    The box is as likely anywhere in the volume V (pixel^4) where new objects appear,
-    density 1 / V, against a box seen where predicted (R the measurement noise at its size):
-    the same likelihood ratio as ``gate_and_cost``, with the uniform birth density in place
-    of the Kalman forecast.
-    """
-    z = kalman.measurement(boxes)
-    noise = (kalman.MEASUREMENT_SD * np.maximum(z[:, 2:], 1.0)) ** 2
-    result: Array = np.log(volume) - 2.0 * np.log(2.0 * np.pi) - np.log(noise).sum(axis=1)
-    return result

@@ -6,21 +6,27 @@ list; here consistency is a chain of boxes):
 
 - **Birth.** After a window is solved, the detections of its frames t0..t0+M that no object
   explains (took, or holds a box in the same conflict set), and, with ``returns_compete``,
-  those an object took after a miss in or before the window (``reentries``), are linked frame to frame (an optimal
-  assignment on IoU, pairs with IoU >= ``link_iou``, consecutive frames only). A chain of
-  at least ``min_hits`` boxes is a new object, placed at the chain's first box with the
-  chain's fitted velocity and mean histogram (``born``), and the window is solved again
-  with it: from its first frame on, the new object competes for boxes with the others in
-  the window optimisation, and the chain only says where it starts. With ``returns_compete``
-  a new object first seen after t0 enters the window from an occluded template, its entry priced by the birth
-  density (a box as likely anywhere in the image and the range of box sizes,
-  ``costs.birth_cost``) where a lost object's re-entry is priced by its Kalman forecast:
-  the two are the same likelihood ratio (against a box seen where predicted), so which
-  explains a chain is decided by the window's costs over all its frames, with no constant
-  added (equal prior odds of a newcomer and a return). Without the re-entered chains a lost
-  object often takes a newcomer inside its widening gate: the window sums one costly jump with
-  the cheap steps after it, and nothing else is on offer. A new object that takes no box
-  when the window is solved again (a return the lost object won) is dropped.
+  those an object took after a miss in or before the window (``reentries``), are linked frame
+  to frame (an optimal assignment on IoU, pairs with IoU >= ``link_iou``, consecutive frames
+  only). A chain of at least ``min_hits`` boxes that starts in the window is a new object,
+  placed at the chain's first box with the chain's fitted velocity and mean histogram
+  (``born``), and the window is solved again with it: from its first frame on, the new
+  object competes for boxes with the others in the window optimisation, and the chain only
+  says where it starts. A new object that takes no box when the window is solved again is dropped.
+- **Returns against newcomers** (``returns_compete``). A chain holding boxes a lost object
+  took after a miss is either that object back or a new person. The two are weighed by the
+  chain's likelihood under each, one box at a time from the boxes before it, with the prior
+  odds of a return and a birth learned from the take (``returns.newcomer_wins``,
+  ``births.BirthRates``). If the object wins, the chain is not a new object; if the
+  newcomer wins, it is one, and the object may not take the chain's boxes when the window is
+  solved again. Without this test a lost object often takes a newcomer inside its widening
+  gate: the window sums one costly jump with the cheap steps after it, and nothing else is on
+  offer. Such a chain runs on past the window, as many frames as the window has after its
+  template (into frames not solved yet, whose boxes are all free): a newcomer a lost object
+  took in the window's last frames is not offered again, since in the next window those
+  boxes are the object's, and a longer chain is more evidence for the test. A chain of
+  boxes nobody took needs ``min_hits`` of them in the window and is cut at its end (it is
+  offered again from the next window's template).
 - **Death.** An object unseen for more than ``max_occluded`` frames leaves. One whose
   prediction has crossed the image border leaves sooner, after ``border_occluded`` frames:
   a person walking out of the picture is not behind someone. In the window itself an
@@ -53,10 +59,8 @@ class Lifecycle:
         link_iou: Smallest IoU between consecutive boxes of a chain.
         max_occluded: Frames unseen after which an object leaves.
         border_occluded: Frames unseen after which an object predicted across the image border leaves.
-        returns_compete: Offer the chains a lost object took after a miss to a newcomer too,
-            and price a newcomer's entry by the birth density (module docstring). Off by
-            default: it lifts lp-l1 on MOT17 but costs ID switches, and where few people
-            enter a small image (TUD, the crossing scene of the tests) it gives returns to newcomers (README, Boxes).
+        returns_compete: Test the chains a lost object took after a miss against a newcomer
+            (module docstring).
     """
 
     min_hits: int = 3
@@ -86,6 +90,19 @@ class Lifecycle:
             closed += [alive[r] for r in range(len(alive)) if r not in set(rows[linked].tolist())]
             open_chains = [alive[r] for r in rows[linked]] + [[int(index[c])] for c in range(len(index)) if c not in taken]
         return [np.array(c) for c in closed + open_chains if len(c) >= self.min_hits]
+
+    def window_chains(self, frame: Ints, boxes: Array, free: NDArray[np.bool_], returned: NDArray[np.bool_],
+                      template_frame: int, n_frames: int, last_frame: int) -> list[Ints]:
+        """Chains of ``free`` boxes starting in frames t0..t0+M (``template_frame``, ``n_frames``)
+        with ``min_hits`` boxes there (cut at the window's end), or, if they hold a ``returned``
+        box, ``min_hits`` boxes up to ``n_frames`` frames past the window (no further than
+        ``last_frame``; module doc)."""
+        end = template_frame + n_frames
+        reach = min(end + n_frames, last_frame) if returned.any() else end
+        found = self.chains(frame, boxes, free & (frame >= template_frame) & (frame <= reach))
+        straddling = [c for c in found if frame[c[0]] <= end and returned[c].any()]
+        inside = [c[frame[c] <= end] for c in found if not returned[c].any()]
+        return straddling + [c for c in inside if len(c) >= self.min_hits]
 
     def leaving(self, objects: BoxObjects, now: int, image: Array) -> NDArray[np.bool_]:
         """True for the objects that leave at frame ``now``; ``image`` is (x1, y1, x2, y2)."""

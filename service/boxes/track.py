@@ -12,9 +12,11 @@ Windows of ``window`` frames overlap by one frame, the template. For each window
 3. the detections no object explains (neither taken nor in the conflict set of a taken
    box) are chained into new objects, and the window is solved again with them; a new
    object that takes no box there is dropped; objects unseen too long leave
-   (``formulations.boxes.lifecycle``). With ``Lifecycle(returns_compete=True)`` the chains an
-   object took after a miss are offered to a newcomer too, which enters by the birth
-   density: a lost object and a newcomer compete for a chain on the window's whole look-ahead.
+   (``formulations.boxes.lifecycle``). With ``Lifecycle(returns_compete=True)`` a chain an
+   object took after a miss is weighed as its return against a newcomer by the chain's
+   filtered likelihood under each and the birth and return rates learned so far
+   (``formulations.boxes.returns``, ``formulations.boxes.births``); a newcomer that wins is
+   a new object, and the window is solved again with the lost object barred from its boxes.
 
 With ``formulation="nn-hungarian"`` the same loop runs frame-by-frame optimal assignment on
 the same costs: SORT's association (Hungarian, gated) on the same Kalman forecast, which,
@@ -34,6 +36,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from formulations import build_window, get_formulation
+from formulations.boxes.births import BirthRates
 from formulations.boxes.candidates import box_window
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel
@@ -41,6 +44,7 @@ from formulations.boxes.geometry import corners
 from formulations.boxes.lifecycle import Lifecycle, born, reentries
 from formulations.boxes.likelihood import DetectionRates, clutter_volume
 from formulations.boxes.objects import BoxObjects, advance
+from formulations.boxes.returns import tested_chains
 from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
 from formulations.window.build import taken_candidates
@@ -106,34 +110,43 @@ def track_boxes(
     objects = BoxObjects.empty(None if histograms is None else histograms.shape[1])
     owner = np.zeros(len(frame), dtype=int)  # track id of each detection, 0 = none
     rates = DetectionRates() if likelihood else None
+    births = BirthRates()
     windows = integral = 0
     t0, next_ident = 1, 1
     while t0 < detections.n_frames:
         m = min(window - 1, detections.n_frames - t0)
         inside = (frame > t0) & (frame <= t0 + m)
-        posing = _Posing(t0, m, frame, boxes, histograms, model, rule, rates, image, volume)
+        posing = _Posing(t0, m, frame, boxes, histograms, model, rule, rates, image)
         before = objects
         taken = np.zeros((0, m), int)
         if objects.n_objects:
             objects, taken, certified = _solve(solver, before, posing, owner)
             windows, integral = windows + 1, integral + certified
-        unclaimed = owner.copy()
-        if lifecycle.returns_compete:  # a lost object's chain: offered to a newcomer too
-            unclaimed[reentries(before.last_seen, taken, t0)] = 0
-        chains = lifecycle.chains(frame, boxes, (frame >= t0) & (frame <= t0 + m) & ~_explained(unclaimed, conflicting))
+        old, born_after = before.n_objects, 0
+        unclaimed, returned = owner.copy(), np.zeros(len(frame), bool)
+        if lifecycle.returns_compete:  # a lost object's chain: a return or a newcomer
+            returned[reentries(before.last_seen, taken, t0)] = True
+            unclaimed[returned] = 0
+        chains = lifecycle.window_chains(frame, boxes, ~_explained(unclaimed, conflicting), returned, t0, m,
+                                         detections.n_frames)
+        barred: list[tuple[int, np.ndarray]] = []
+        if lifecycle.returns_compete:
+            chains, barred = tested_chains(chains, before, owner, frame, boxes, t0, volume, births.newcomer_cost)
         if chains:
             new = born(chains, frame, boxes, histograms, next_ident, t0)
             starts = np.array([frame[c[0]] for c in chains])
             owner[[c[0] for c in chains if frame[c[0]] == t0]] = new.ident[starts == t0]
             owner[inside] = 0  # the window again, with the new objects competing from their first box
-            old = before.n_objects
             before = before.joined(new)
-            unborn = np.r_[np.zeros(old, bool), starts > t0] if lifecycle.returns_compete else None
-            objects, taken, certified = _solve(solver, before, posing, owner, unborn)
+            objects, taken, certified = _solve(solver, before, posing, owner, barred)
             windows, integral = windows + 1, integral + certified
-            keep = np.r_[np.ones(old, bool), (starts == t0) | (taken[old:] >= 0).any(axis=1)]
+            kept = (starts == t0) | (taken[old:] >= 0).any(axis=1)
+            keep = np.r_[np.ones(old, bool), kept]
             objects, next_ident = _named(objects.subset(keep), old, owner, next_ident)
             before, taken = before.subset(keep), taken[keep]
+            born_after = int((kept & (starts > frame.min())).sum())
+        if lifecycle.returns_compete:
+            births = births.counted(born_after, m, before.last_seen, taken, t0, np.arange(before.n_objects) < old)
         if rates is not None:
             rates = _counted(rates, before, taken, t0, inside & ~_explained(owner, conflicting))
         objects = objects.subset(~lifecycle.leaving(objects, t0 + m, image))
@@ -157,20 +170,25 @@ class _Posing:
     rule: ConflictRule
     rates: DetectionRates | None
     image: np.ndarray
-    birth_volume: float
 
 
 def _solve(
-    solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray, unborn: np.ndarray | None = None,
+    solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray,
+    barred: list[tuple[int, np.ndarray]] | None = None,
 ) -> tuple[BoxObjects, np.ndarray, bool]:
     """Solve one window; write each taken detection's owner; return the objects moved on, the
-    ``(N, M)`` detection each took (-1 occluded) and the certificate. ``unborn``: ``(N,)`` the new
-    objects whose first box is after the template (``box_window``)."""
+    ``(N, M)`` detection each took (-1 occluded) and the certificate. ``barred``: (object row,
+    detections) it may not take (``returns.tested_chains``)."""
     p = posing
     index = np.flatnonzero((p.frame > p.t0) & (p.frame <= p.t0 + p.m))
     hist = None if p.histograms is None else p.histograms[index]
+    mask = None
+    if barred:
+        mask = np.zeros((objects.n_objects, len(index)), bool)
+        for row, c in barred:
+            mask[row, np.searchsorted(index, c[np.isin(c, index)])] = True
     posed = box_window(objects, p.t0, p.m, p.frame[index], p.boxes[index], hist, p.model, p.rule, p.rates, p.image,
-                       unborn, p.birth_volume)
+                       mask)
     problem, node_candidate = build_window(posed.candidates, posed.weights, posed.layout_pairs, posed.layout_weight)
     solution = solver.solve(problem)
     taken = taken_candidates(node_candidate, solution.path, index[posed.detection])  # (N, M), -1 occluded
