@@ -52,10 +52,6 @@ def build_window(
     template_cost = np.zeros(len(order))
     is_candidate = candidate_of >= 0
     template_cost[is_candidate] = candidates.template_cost[candidate_of[is_candidate]]
-    entry_cost = None
-    if candidates.entry_cost is not None:
-        entry_cost = template_cost.copy()
-        entry_cost[is_candidate] = candidates.entry_cost[candidate_of[is_candidate]]
 
     tail, head, block_pairs = _layer_arcs(node_object, node_frame)
     motion = np.zeros_like(location)
@@ -66,7 +62,7 @@ def build_window(
     if candidates.likelihood is None:
         cost = arc_costs(
             weights, tail, head, node_kind, location, template_cost, motion,
-            _appearance_change(_node_appearance(candidates, order), block_pairs), source_occluded, entry_cost,
+            _appearance_change(_node_appearance(candidates, order), block_pairs), source_occluded,
         )
     else:
         cost = likelihood_arc_costs(

@@ -34,9 +34,6 @@ class WindowCandidates:
         template_appearance: ``(N, H)`` histograms of the templates, or None.
         likelihood: Negative log-likelihood costs that replace the weights' constants
             (``likelihood``), or None for Jiang's weighted costs.
-        entry_cost: ``(C,)`` what entering the candidate after a gap costs in place of
-            g(s_n, j) (``costs``: c_a + entry), or None for g(s_n, j): an object not yet
-            seen is priced by where a new object may appear, not by a prediction.
     """
 
     template_location: np.ndarray
@@ -52,7 +49,6 @@ class WindowCandidates:
     appearance: np.ndarray | None = None
     template_appearance: np.ndarray | None = None
     likelihood: CandidateLikelihood | None = None
-    entry_cost: np.ndarray | None = None
 
     @property
     def n_objects(self) -> int:
@@ -72,7 +68,5 @@ class WindowCandidates:
             raise ValueError(f"candidate objects must lie in 0..{n - 1}")
         if self.occlusion_location.shape[:2] != (n, m) or self.motion.shape[:2] != (n, m):
             raise ValueError("occlusion_location and motion must be (objects, frames, D)")
-        if self.entry_cost is not None and (len(self.entry_cost) != c or not np.isfinite(self.entry_cost).all()):
-            raise ValueError("entry_cost must hold one finite cost per candidate")
         if not np.isfinite(self.location).all() or not np.isfinite(self.template_cost).all():
             raise ValueError("candidate locations and template costs must be finite")

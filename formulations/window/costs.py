@@ -17,8 +17,7 @@ markers). d is the displacement off the expected motion of the object,
 
 which is Jiang's plain distance when the expected displacement delta is zero (boxes) and
 a constant-velocity residual when delta is a velocity estimate (markers). Where delta is
-unknown (NaN: a marker seen in one frame only) the d term is left out. Where the candidate
-generator gives an entry cost (an object not yet seen), it replaces g(s_n, j) out of a gap.
+unknown (NaN: a marker seen in one frame only) the d term is left out.
 """
 
 from __future__ import annotations
@@ -65,7 +64,6 @@ def arc_costs(
     motion: np.ndarray,
     appearance_change: np.ndarray | None,
     source_occluded: np.ndarray,
-    entry_cost: np.ndarray | None = None,
 ) -> np.ndarray:
     """Cost of every arc, vectorised over arcs.
 
@@ -79,8 +77,6 @@ def arc_costs(
         appearance_change: ``(A,)`` g(tail, head) per arc, or None when there is no appearance.
         source_occluded: ``(V,)`` True for sources whose template is not visible: their
             out-arcs cost like arcs out of an occlusion node.
-        entry_cost: ``(V,)`` what replaces g(s_n, j) on an arc into j out of a gap, or
-            None for g(s_n, j) itself (``WindowCandidates.entry_cost``).
 
     Returns:
         ``(A,)`` arc costs.
@@ -93,8 +89,7 @@ def arc_costs(
 
     cost = np.full(len(tail), float(c_ab))  # integer weights must not make integer costs
     reappearing = (head_kind == OBSERVATION) & from_gap
-    entry = template_cost if entry_cost is None else entry_cost
-    cost[reappearing] = weights.reappear + entry[head[reappearing]]
+    cost[reappearing] = weights.reappear + template_cost[head[reappearing]]
 
     t, h = tail[observed], head[observed]
     step = location[h] - location[t] - motion[h]
