@@ -12,6 +12,7 @@ from formulations.subject.distances import distance_spread
 from formulations.subject.grouping import Grouping, group_markers, settle
 from formulations.subject.joint_fit import JointFit
 from formulations.subject.model import Joint, Limb, Segment, SingleMarker, SubjectModel
+from formulations.subject.pair_fit import attach_pairs
 from formulations.subject.segment_fit import SegmentFit, fit_segment
 from formulations.subject.skeleton import Skeleton, build_skeleton, limb_lengths
 
@@ -51,6 +52,10 @@ def fit_subject(names: list[str], positions: Array, options: FitOptions = FitOpt
     groups = [g for g in grouping.groups if len(g) >= 3]
     _check_separable(names, groups, spread, frames, options)
     segments = [fit_segment(positions, g) for g in groups]
+    posed_alone = len(segments)  # singles are measured from these: a frame poses them without joints
+    pairs = [g for g in grouping.groups if len(g) == 2]
+    segments = attach_pairs(pairs, segments, positions, options.joint_rms, options.min_frames)
+    groups = [s.markers for s in segments]
     skeleton = build_skeleton(segments, positions, options.joint_rms)
     if not skeleton.joints:
         listed = "; ".join(", ".join(names[m] for m in g) for g in groups)
@@ -59,7 +64,8 @@ def fit_subject(names: list[str], positions: Array, options: FitOptions = FitOpt
         )
     seg_names = [names[g[0]] for g in groups]
     on_segment = {m for g in groups for m in g}
-    singles = [_single(names[m], positions[:, m], segments, seg_names) for m in range(len(names)) if m not in on_segment]
+    singles = [_single(names[m], positions[:, m], segments[:posed_alone], seg_names) for m in range(len(names))
+               if m not in on_segment]
     model = SubjectModel(
         [_segment(s, names, n) for s, n in zip(segments, seg_names)],
         [_joint(a, b, fit, seg_names) for a, b, fit in skeleton.joints],

@@ -110,10 +110,13 @@ def _follow_joints(geometry: ModelGeometry, points: Array, poses: dict[int, Pose
         placed = pose_s.place(segment_s.coordinates)
         claimed |= _near(points, placed, segment_s.tolerance)
     tried: set[int] = set()
+    # Segments with more markers first: a two-marker segment rests on its joint alone, and
+    # the points it claims would decide between the readings of a fuller segment.
+    joints = sorted(geometry.joints, key=lambda j: -min(len(geometry.segments[s].markers) for s in (j.a, j.b)))
     progress = True
     while progress:
         progress = False
-        for joint in geometry.joints:
+        for joint in joints:
             for known, unknown, c_known, c_unknown in ((joint.a, joint.b, joint.centre_a, joint.centre_b),
                                                       (joint.b, joint.a, joint.centre_b, joint.centre_a)):
                 if known not in poses or unknown in poses or unknown in tried:
