@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from formulations.subject.fit import fit_subject  # noqa: E402
+from service.capture.capture import Capture  # noqa: E402
 from service.capture.model_input import with_model  # noqa: E402
 from service.evaluation.scenario import Scenario  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
@@ -53,7 +54,7 @@ def measure(path: Path, frames: int, runs: int, model: bool = False) -> dict[str
     return {k: float(np.median([r[k] for r in rows])) for k in rows[0]} | {"frames": simulated.cloud.n_frames}
 
 
-def _run(capture, n: int) -> dict[str, float]:
+def _run(capture: Capture, n: int) -> dict[str, float]:
     start = time.perf_counter()
     _, windows = CaptureLabeling(capture).label()
     total = time.perf_counter() - start

@@ -92,7 +92,7 @@ class CaptureLabeling:
         marker's best view per frame (``service.best_view.markers``); with every label's confidence."""
         labels = self._association.assemble(outcomes)
         if labels.filled.size:
-            labels.filled = np.where(labels.occluded[:, :, None], tie_gap_ends(labels.positions, labels.filled), np.nan)
+            labels.filled = tie_gap_ends(labels.positions, labels.filled)
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._view_choice is None:
             return labels
