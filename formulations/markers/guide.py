@@ -17,6 +17,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from formulations.markers.reacquire import REACQUISITION, Reacquisition, realign_lost, refine_by_segment
+from formulations.markers.shape_reacquire import reacquire_by_shape
 from formulations.markers.state import MarkerState
 
 
@@ -100,6 +101,7 @@ def guide_track(
         if lost.any():
             guess = realign_lost(guess, lost, state.visible, points, reacquisition)
             guess = refine_by_segment(guess, lost, state.neighbours, state.distance_var, points, reacquisition)
+        guess = reacquire_by_shape(guess, state, points)
         predicted[f], tracked[f], unseen[f] = guess, state.streak >= trust_after, state.unseen
         # Predicted displacement: a marker's own velocity while seen, its neighbours'
         # motion while occluded; unknown only right after the labeled first frame.

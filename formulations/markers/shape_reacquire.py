@@ -1,0 +1,128 @@
+"""Where to look for a marker whose prediction has lost it: the free point its shape fits.
+
+A marker occluded while its limb moved fast (a tennis serve at 50 Hz) may be predicted
+far from where it is: it followed the neighbours seen at its last sighting, and when the
+rigid ones were lost with it only loose ones (the trunk) were left. Its gate never reaches
+its point again, and the error lasts to the end of the take. Its learned distances to the
+rigid neighbours seen now still say where it is (Ringer & Lasenby 2004: markers on one
+segment keep their distances). For a marker unseen ``after`` frames or more, each free
+point p (no seen marker's prediction within ``claim_mm``) is scored against its ``rigid``
+most rigid neighbours k seen now, by
+
+    chi2(p) = sum_k (||p - x_k|| - dbar_nk)^2 / (var_nk + noise_var),
+
+and the markers are matched to the free points by ``linear_sum_assignment`` on chi2. A
+marker moves to its point only when chi2 is inside the chi-square ``quantile`` gate, every
+other free point is outside it (a mirror image or a lost neighbour's point must not be
+taken on a coin toss), and its current prediction fits worse. Four neighbours at the
+0.999 quantile: a point within about 3 sd of all four learned distances.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
+from scipy.stats import chi2 as chi_square
+
+from formulations.markers.state import MarkerState
+
+
+@dataclass(frozen=True)
+class ShapeReacquisition:
+    """When a lost marker's prediction moves to the free point its shape fits.
+
+    Attributes:
+        after: Frames unseen before a marker is looked for by its shape.
+        rigid: Neighbours, the most rigid seen now, that judge a point (at most).
+        min_rigid: Fewer rigid neighbours seen than this, and the marker is not looked for
+            (two distances leave a circle, but the free points on it are few).
+        max_sd_mm: A neighbour whose distance varies more than this is not rigid with the
+            marker (skin markers on one segment keep their distances within a few mm).
+        noise_var_mm2: Added to each learned distance variance: the noise of two points.
+        quantile: Chi-square quantile of the gate.
+        claim_mm: Points this close to a seen marker's prediction are that marker's.
+    """
+
+    after: int = 3
+    rigid: int = 4
+    min_rigid: int = 2
+    max_sd_mm: float = 10.0
+    noise_var_mm2: float = 4.0
+    quantile: float = 0.999
+    claim_mm: float = 30.0
+
+
+SHAPE_REACQUISITION = ShapeReacquisition()
+
+
+def reacquire_by_shape(
+    guess: np.ndarray, state: MarkerState, points: np.ndarray, settings: ShapeReacquisition = SHAPE_REACQUISITION,
+) -> np.ndarray:
+    """``(N, 3)`` predictions, a lost marker's moved onto the free point its shape fits."""
+    looked_for = np.flatnonzero(state.unseen >= settings.after)
+    if len(looked_for) == 0 or len(points) == 0:
+        return guess
+    judges = _judges(state, looked_for, settings)
+    kept = judges.count >= settings.min_rigid
+    looked_for, judges = looked_for[kept], judges.subset(kept)
+    free = _free(points, guess[state.visible], settings.claim_mm) if len(looked_for) else points[:0]
+    if len(free) == 0:
+        return guess
+    score = judges.chi_square(guess, np.vstack([free, guess[looked_for]]))
+    own = score[np.arange(len(looked_for)), len(free) + np.arange(len(looked_for))]  # each prediction's own fit
+    score = score[:, : len(free)]
+    inside = score <= chi_square.ppf(settings.quantile, judges.count)[:, None]
+    outside = (min(score.shape) + 1) * (score.max() + 1.0)  # above any sum of inside scores
+    rows, cols = linear_sum_assignment(np.where(inside, score, outside))
+    moved = guess.copy()
+    for row, col in zip(rows, cols):
+        alone = inside[row].sum() == 1 and inside[:, col].sum() == 1
+        if inside[row, col] and alone and score[row, col] < own[row]:
+            moved[looked_for[row]] = free[col]
+    return moved
+
+
+@dataclass(frozen=True)
+class _Judges:
+    """Per looked-for marker, the rigid neighbours seen now that judge a point."""
+
+    neighbour: np.ndarray  # (L, R) marker index
+    counted: np.ndarray  # (L, R) a rigid neighbour seen now (False pads)
+    mean: np.ndarray  # (L, R) learned distance, mm
+    spread: np.ndarray  # (L, R) its variance plus the noise of two points, mm^2
+
+    @property
+    def count(self) -> np.ndarray:
+        count: np.ndarray = self.counted.sum(axis=1)
+        return count
+
+    def subset(self, keep: np.ndarray) -> _Judges:
+        return _Judges(self.neighbour[keep], self.counted[keep], self.mean[keep], self.spread[keep])
+
+    def chi_square(self, guess: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """``(L, P)`` chi2 of every point for each marker (module doc)."""
+        distance = np.linalg.norm(points[None, :, None] - guess[self.neighbour][:, None], axis=3)  # (L, P, R)
+        score: np.ndarray = (self.counted[:, None] * (distance - self.mean[:, None]) ** 2 / self.spread[:, None]).sum(axis=2)
+        return score
+
+
+def _judges(state: MarkerState, markers: np.ndarray, settings: ShapeReacquisition) -> _Judges:
+    """The ``rigid`` most rigid neighbours of each marker among those seen now with sd <= ``max_sd_mm``."""
+    neighbours, var = state.neighbours[markers], state.distance_var[markers]
+    usable = state.visible[neighbours] & (var <= settings.max_sd_mm**2)
+    order = np.argsort(np.where(usable, var, np.inf), axis=1)[:, : settings.rigid]
+    pick = partial(np.take_along_axis, indices=order, axis=1)
+    return _Judges(pick(neighbours), pick(usable), pick(state.distance_mean[markers]), pick(var) + settings.noise_var_mm2)
+
+
+def _free(points: np.ndarray, claimed: np.ndarray, claim_mm: float) -> np.ndarray:
+    """The points no claimed position lies within ``claim_mm`` of."""
+    if len(claimed) == 0:
+        return points
+    near, _ = cKDTree(claimed).query(points)
+    free: np.ndarray = points[near > claim_mm]
+    return free
