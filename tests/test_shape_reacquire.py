@@ -115,11 +115,14 @@ def test_without_it_the_guide_never_reaches_the_lost_marker():
     assert np.linalg.norm(astray.predicted[0, 2] - truth[2]) > 300.0
 
 
-def test_a_followed_marker_does_not_learn_distances_from_its_prediction():
-    """An occluded marker's distances to its neighbours are learned only from sightings: a
-    prediction that went astray must not teach the shape that would find it again."""
+def test_a_loosely_followed_marker_does_not_learn_distances_from_its_prediction():
+    """An occluded marker followed by fewer than three neighbours (a translation, no firm
+    rigid fit) does not teach the distance statistics its guessed position: a guess that went
+    astray must not teach the shape that would find it again."""
     state = _learned_state()
-    state = replace(state, unseen=np.where(np.arange(len(BODY)) == 2, 1, 0))  # occluded since the last frame
+    anchor_valid = state.anchor_valid.copy()
+    anchor_valid[2] = np.isin(state.neighbours[2], [4, 5])  # only two trunk markers were seen with it
+    state = replace(state, unseen=np.where(np.arange(len(BODY)) == 2, 1, 0), anchor_valid=anchor_valid)
     before = state.distance_mean.copy(), state.distance_var.copy()
     seen = np.ones(len(BODY), bool)
     seen[2] = False
@@ -129,3 +132,16 @@ def test_a_followed_marker_does_not_learn_distances_from_its_prediction():
     assert np.array_equal(after.distance_var[2], before[1][2])
     partner = state.neighbours == 2
     assert np.array_equal(after.distance_mean[partner], before[0][partner])
+
+
+def test_a_firmly_carried_marker_still_learns_from_its_seen_neighbours():
+    """Carried by its rigid hand (three neighbours, one motion), the marker keeps learning:
+    what it is rigid with stays rigid with it while they too are lost (``test_drift``)."""
+    state = _learned_state()
+    state = replace(state, unseen=np.where(np.arange(len(BODY)) == 2, 1, 0))
+    seen = np.ones(len(BODY), bool)
+    seen[2] = False
+    frame = state.position + np.where(np.arange(len(BODY))[:, None] >= 4, 0.0, 25.0)
+    after = state.advance(frame, seen)
+    trunk = state.neighbours[2] >= 4
+    assert not np.array_equal(after.distance_mean[2, trunk], state.distance_mean[2, trunk])

@@ -109,11 +109,14 @@ class MarkerState:
         # was lost (the lost neighbour may have been the only one on its segment). A loose
         # fit is not locked in: its error would compound.
         anchored = seen | (carried & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
-        # Distances learn from seen pairs only. A followed marker's position is a guess: when
-        # the neighbours it followed were the wrong ones (its rigid ones lost with it), the
-        # guess drifts, and learning from it taught the shape the drift, so the shape could
-        # no longer find the marker (``shape_reacquire``).
-        both = seen[:, None] & seen[self.neighbours]
+        # Distances learn from seen pairs, and from a seen marker and one a firm rigid fit
+        # carries (it moves with its neighbours, so what it learns to be rigid with stays
+        # rigid with them when they too are lost). Not from a marker only loosely followed:
+        # when the neighbours it followed were the wrong ones (its rigid ones lost with it),
+        # its position drifts, and learning from it taught the shape the drift, so the shape
+        # could no longer find the marker (``shape_reacquire``).
+        known = seen | carried
+        both = known[:, None] & known[self.neighbours] & (seen[:, None] | seen[self.neighbours])
         deviation = np.linalg.norm(position[:, None] - position[self.neighbours], axis=2) - self.distance_mean
         return replace(
             self, position=position, velocity=velocity, velocity_known=self.velocity_known | was_seen,
