@@ -65,7 +65,7 @@ def realign_lost(
         points: ``(P, 3)`` this frame's points.
     """
     source = predicted[lost]
-    free = _free_points(points, predicted[seen], settings.claim_mm)
+    free = free_points(points, predicted[seen], settings.claim_mm)
     if len(source) < settings.min_inliers or len(free) < settings.min_inliers:
         return predicted
     tree = cKDTree(free)
@@ -128,7 +128,7 @@ def _icp(
     return int((distance <= settings.inlier_mm).sum()), moved
 
 
-def _free_points(points: np.ndarray, trusted: np.ndarray, claim_mm: float) -> np.ndarray:
+def free_points(points: np.ndarray, trusted: np.ndarray, claim_mm: float) -> np.ndarray:
     """The points no trusted prediction lies within ``claim_mm`` of."""
     if len(trusted) == 0 or len(points) == 0:
         return points

@@ -25,9 +25,9 @@ from functools import partial
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.spatial import cKDTree
 from scipy.stats import chi2 as chi_square
 
+from formulations.markers.reacquire import free_points
 from formulations.markers.state import MarkerState
 
 
@@ -69,7 +69,7 @@ def reacquire_by_shape(
     judges = _judges(state, looked_for, settings)
     kept = judges.count >= settings.min_rigid
     looked_for, judges = looked_for[kept], judges.subset(kept)
-    free = _free(points, guess[state.visible], settings.claim_mm) if len(looked_for) else points[:0]
+    free = free_points(points, guess[state.visible], settings.claim_mm) if len(looked_for) else points[:0]
     if len(free) == 0:
         return guess
     score = judges.chi_square(guess, np.vstack([free, guess[looked_for]]))
@@ -118,11 +118,3 @@ def _judges(state: MarkerState, markers: np.ndarray, settings: ShapeReacquisitio
     pick = partial(np.take_along_axis, indices=order, axis=1)
     return _Judges(pick(neighbours), pick(usable), pick(state.distance_mean[markers]), pick(var) + settings.noise_var_mm2)
 
-
-def _free(points: np.ndarray, claimed: np.ndarray, claim_mm: float) -> np.ndarray:
-    """The points no claimed position lies within ``claim_mm`` of."""
-    if len(claimed) == 0:
-        return points
-    near, _ = cKDTree(claimed).query(points)
-    free: np.ndarray = points[near > claim_mm]
-    return free
