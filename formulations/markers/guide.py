@@ -10,12 +10,13 @@ it only decides *where to look*. The window LP decides *what to take*.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from formulations.markers.first_step import coherent_steps, first_velocities
 from formulations.markers.reacquire import REACQUISITION, Reacquisition, realign_lost, refine_by_segment
 from formulations.markers.shape_reacquire import reacquire_by_shape
 from formulations.markers.state import MarkerState
@@ -32,6 +33,8 @@ class Gate:
         unknown_velocity_radius_mm: Radius while a marker's velocity is unknown (just
             after the labeled first frame): it must cover one frame of fast motion.
         motion_sigmas: Gate half-width in sds of the marker's motion residual (3D).
+        first_step_reach_mm: Longest first step looked for after a labeled frame
+            (``first_step``): twice the unknown-velocity gate.
     """
 
     radius_mm: float = 60.0
@@ -39,6 +42,7 @@ class Gate:
     max_radius_mm: float = 400.0
     unknown_velocity_radius_mm: float = 100.0
     motion_sigmas: float = 5.0
+    first_step_reach_mm: float = 200.0
 
     def miss_cost(self, state: MarkerState) -> np.ndarray:
         """``(N,)`` cost of leaving a marker without a point in the nearest-neighbour track.
@@ -48,7 +52,7 @@ class Gate:
         marker seen last frame may move as far as its own motion says
         (``motion_sigmas`` sd of its learned residual): a fast limb must not be dropped.
         """
-        own = self.motion_sigmas * np.sqrt(3 * state.motion_var)
+        own = self.motion_sigmas * np.sqrt(3 * state.step_var)
         miss: np.ndarray = np.where(state.visible & state.velocity_known, np.maximum(own, self.radius_mm), self.radius_mm)
         return miss
 
@@ -78,6 +82,7 @@ class GuideTrack:
     velocity: np.ndarray  # (M, N, 3) displacement per frame expected into frame m; NaN if unknown
     tracked: np.ndarray  # (M, N) seen in the frames before m, long enough to trust its prediction
     unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
+    burst_var: np.ndarray  # (M, N) the guide's burst variance before frame m (``MarkerState.burst_var``)
 
 
 def guide_track(
@@ -95,6 +100,8 @@ def guide_track(
     predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
     radius, tracked = np.empty((m, n)), np.empty((m, n), bool)
     unseen = np.empty((m, n), dtype=int)
+    burst_var = np.empty((m, n))
+    state = _moving_start(state, frames, gate)
     for f, points in enumerate(frames):
         lost = state.stranded(reacquisition.lost_after)
         guess = state.predict()
@@ -102,7 +109,7 @@ def guide_track(
             guess = realign_lost(guess, lost, state.visible, points, reacquisition)
             guess = refine_by_segment(guess, lost, state.neighbours, state.distance_var, points, reacquisition)
         guess = reacquire_by_shape(guess, state, points)
-        predicted[f], tracked[f], unseen[f] = guess, state.streak >= trust_after, state.unseen
+        predicted[f], tracked[f], unseen[f], burst_var[f] = guess, state.streak >= trust_after, state.unseen, state.burst_var
         # Predicted displacement: a marker's own velocity while seen, its neighbours'
         # motion while occluded; unknown only right after the labeled first frame.
         unknown = state.visible & ~state.velocity_known
@@ -120,8 +127,22 @@ def guide_track(
         taken[seen] = points[assigned[seen]]
         state = state.advance(taken, seen)
     return GuideTrack(
-        predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen,
+        predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen, burst_var=burst_var,
     )
+
+
+def _moving_start(state: MarkerState, frames: list[np.ndarray], gate: Gate) -> MarkerState:
+    """The state with each seen marker of unknown velocity given its minimum-acceleration
+    first step (``first_step``) as velocity (still unknown: its gate stays wide), when most
+    seen markers are such (a labeled start, not one re-acquired marker)."""
+    unknown = state.visible & ~state.velocity_known
+    if len(frames) < 2 or unknown.sum() < max(3, state.visible.sum() // 2):
+        return state
+    start = state.position[unknown]
+    velocity = coherent_steps(start, first_velocities(start, frames[0], frames[1], gate.first_step_reach_mm))
+    moved = state.velocity.copy()
+    moved[unknown] = velocity
+    return replace(state, velocity=moved)
 
 
 def shared_motion(state: MarkerState, predicted: np.ndarray, points: np.ndarray, assigned: np.ndarray) -> np.ndarray | None:

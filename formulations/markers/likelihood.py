@@ -1,12 +1,15 @@
 """The window's likelihood terms for markers in a 3D cloud (``window.likelihood``).
 
-Per marker n the step residual's sd per axis is s_n = sqrt(motion_var_n), learned from
-the take as it is labeled (``markers.motion``: 6 sigma^2 + q_n^2, the take's noise and the
-marker's own acceleration). A marker unseen for u frames is predicted by following its
-neighbours (``MarkerState.predict``) with a per-axis sd s_u = sqrt(s_n^2 + g^2 u), g^2 the
-drift per frame learned from earlier reappearances: an old prediction is wide, not wrong,
-and nothing caps the distance term, so a marker's own point and its neighbour's never
-cost the same. Reappearing at r, predicted at p:
+Per marker n and frame the step residual's sd per axis is s_n, learned from the take as it
+is labeled (``markers.motion``): s_n^2 is 6 sigma^2 + q_n^2, the take's noise and the
+marker's own acceleration, as the labels so far teach it, or the burst variance the guide
+track had before that frame when wider (a burst starts within a window; the guide's own
+slow envelope is not used, it learns from unverified nearest-neighbour points). A marker
+unseen for u frames is predicted by following its neighbours (``MarkerState.predict``)
+with a per-axis sd s_u = sqrt(s_n^2 + g^2 u), g^2 the drift per frame learned from earlier
+reappearances: an old prediction is wide, not wrong, and nothing caps the distance term,
+so a marker's own point and its neighbour's never cost the same. Reappearing at r,
+predicted at p:
 
     r_j = rho(|r - p| / s_u) + 3 log s_u + (3/2) log 2 pi - log P_D + log lambda_FA + K.
 
@@ -41,17 +44,18 @@ def marker_likelihood(
     detection = _detection_probability(guide, n)
     log_clutter = np.log(_clutter_density(guide, frames))
     base = LOG_2PI_3D - np.log(detection) + log_clutter
-    step_var = np.where(state.velocity_known, state.motion_var, np.maximum(state.motion_var, MOTION_VAR_PRIOR_MM2))
+    step_var = np.maximum(state.motion_var[obj], guide.burst_var[frame - 1, obj])
+    step_var = np.where(state.velocity_known[obj], step_var, np.maximum(step_var, MOTION_VAR_PRIOR_MM2))
     step_sigma = np.sqrt(step_var)
-    predicted_sigma = np.sqrt(step_var[obj] + state.drift_var[obj] * guide.unseen[frame - 1, obj])
+    predicted_sigma = np.sqrt(step_var + state.drift_var[obj] * guide.unseen[frame - 1, obj])
     off = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1) / predicted_sigma
     reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
-    offset = 3 * np.log(step_sigma[obj]) + base
+    offset = 3 * np.log(step_sigma) + base
     # K: the lowest cost an observation can have (its residual 0) is lifted to 0.
     shift = -float(min(offset.min(initial=0.0), (reappear - step_loss(off)).min(initial=0.0)))
     miss = np.full((n, m), -np.log1p(-detection) + shift)
     return CandidateLikelihood(
-        step_sigma=step_sigma[obj], step_offset=offset + shift, reappear_cost=reappear + shift, miss_cost=miss,
+        step_sigma=step_sigma, step_offset=offset + shift, reappear_cost=reappear + shift, miss_cost=miss,
     )
 
 

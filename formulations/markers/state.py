@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial import cKDTree
 
-from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_drift, learn_motion
+from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_burst, learn_drift, learn_motion
 from formulations.markers.rigid import follow_neighbours
 
 
@@ -36,6 +36,9 @@ class MarkerState:
             the take's own noise and the marker's own acceleration, learned as it is labeled
             (``motion.learn_motion``: an envelope that calm lowers slowly).
         motion_samples: ``(N,)`` residuals that went into ``motion_var``.
+        burst_var: ``(N,)`` the same residual's variance per axis over the last few frames
+            (``motion.learn_burst``): high while a limb accelerates, 0 when unknown.
+        last_residual: ``(N, 3)`` the last frame's motion residual, 0 where it had none.
         drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) the
             prediction of an occluded marker drifts from where it reappears, and the
             reappearances it was learned from (``motion.learn_drift``; one value for all
@@ -55,6 +58,8 @@ class MarkerState:
     distance_var: np.ndarray
     motion_var: np.ndarray
     motion_samples: np.ndarray
+    burst_var: np.ndarray
+    last_residual: np.ndarray
     drift_var: np.ndarray
     drift_samples: np.ndarray
 
@@ -73,6 +78,7 @@ class MarkerState:
             distance_mean=np.linalg.norm(position[:, None] - position[neighbours], axis=2),
             distance_var=np.full(neighbours.shape, 100.0),
             motion_var=np.full(n, MOTION_VAR_PRIOR_MM2), motion_samples=np.zeros(n, int),
+            burst_var=np.zeros(n), last_residual=np.zeros((n, 3)),
             drift_var=np.full(n, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(n, int),
         )
 
@@ -100,7 +106,8 @@ class MarkerState:
         implied = np.where(followed[:, None], predicted - self.position, self.velocity * damping)
         velocity = np.where(was_seen[:, None], observed - self.position, implied)
         residual = observed - predicted
-        motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, seen & (self.streak >= 2))
+        usable = seen & (self.streak >= 2)
+        motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, usable)
         drift_var, drift_samples = learn_drift(
             self.drift_var, self.drift_samples, residual, seen & ~self.visible, self.unseen, self.motion_var,
         )
@@ -126,13 +133,23 @@ class MarkerState:
             anchor_valid=np.where(anchored[:, None], seen[self.neighbours], self.anchor_valid),
             distance_mean=np.where(both, self.distance_mean + rate * deviation, self.distance_mean),
             distance_var=np.where(both, (1 - rate) * (self.distance_var + rate * deviation**2), self.distance_var),
-            motion_var=motion_var, motion_samples=motion_samples, drift_var=drift_var, drift_samples=drift_samples,
+            motion_var=motion_var, motion_samples=motion_samples,
+            burst_var=learn_burst(self.burst_var, residual, self.last_residual, usable, self.step_var),
+            last_residual=np.where(usable[:, None], residual, 0.0),
+            drift_var=drift_var, drift_samples=drift_samples,
         )
+
+    @property
+    def step_var(self) -> np.ndarray:
+        """``(N,)`` per-axis variance (mm^2) of the next constant-velocity step's residual:
+        the take's learned envelope, or the last frames' burst when that is wider."""
+        var: np.ndarray = np.maximum(self.motion_var, self.burst_var)
+        return var
 
     def prediction_var(self, unseen: np.ndarray) -> np.ndarray:
         """Per-axis variance (mm^2) of a prediction ``unseen + 1`` frames past the last sighting:
         one frame's motion residual plus the learned drift per further frame."""
-        var: np.ndarray = self.motion_var + self.drift_var * unseen
+        var: np.ndarray = self.step_var + self.drift_var * unseen
         return var
 
     def predict(self) -> np.ndarray:
