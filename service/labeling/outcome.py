@@ -20,6 +20,11 @@ from service.labeling.stats import WindowStats
 _OPTIONAL = ("views", "positions", "confidence", "carry")  # stored only when present
 
 
+class StaleOutcome(ValueError):
+    """A stored outcome whose marker state lacks fields this version needs (stored by an
+    older markerflow): its window cannot be resumed from, only relabeled."""
+
+
 @dataclass(frozen=True)
 class WindowOutcome:
     """One labeled window.
@@ -66,6 +71,9 @@ class WindowOutcome:
     def from_bytes(cls, data: bytes) -> WindowOutcome:
         with np.load(io.BytesIO(data), allow_pickle=False) as stored:
             header = json.loads(str(stored["header"]))
+            missing = [f.name for f in fields(MarkerState) if f"state.{f.name}" not in stored.files]
+            if missing:
+                raise StaleOutcome(f"window {header['index']} was stored without marker state {', '.join(missing)}")
             state = MarkerState(**{f.name: stored[f"state.{f.name}"] for f in fields(MarkerState)})
             return cls(
                 index=int(header["index"]), point_index=stored["point_index"], filled=stored["filled"],

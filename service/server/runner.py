@@ -2,7 +2,9 @@
 
 Each finished window is committed (outcome + stats + count) before the next is computed,
 so a restart resumes after the last stored window and recomputes nothing: the library
-guarantees ``windows(after=last)`` gives what an uninterrupted run would.
+guarantees ``windows(after=last)`` gives what an uninterrupted run would. Windows stored by
+a markerflow with another marker state (upgraded while the job was queued or running) are
+dropped and the job relabels from its start: the result is this version's, never a mix.
 
 A window that raises fails the job with the window's index and message; the windows
 stored before it stay, and ``GET /v1/jobs/{id}/result?partial=true`` assembles them.
@@ -18,8 +20,9 @@ from collections.abc import Callable
 from service.capture.document import CaptureDocument
 from service.errors import InputError
 from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.outcome import StaleOutcome, WindowOutcome
 from service.server.results import trajectories_to_bytes
-from service.server.store import WindowTaken, store_for
+from service.server.store import JobStore, WindowTaken, store_for
 
 log = logging.getLogger("markerflow.server")
 
@@ -40,7 +43,7 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     try:
         document = CaptureDocument.model_validate_json(store.input(job_id))
         labeling = CaptureLabeling(document.capture(), document.options())
-        outcomes = store.outcomes(job_id)
+        outcomes = _resumable_outcomes(store, job_id)
         where = f"window {len(outcomes)}: "
         for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
             store.save_window(job_id, outcome, worker)
@@ -58,3 +61,14 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         log.exception("job %s failed", job_id)
         store.fail(job_id, f"{where}internal error: {type(error).__name__}: {error}")
     return store.known(job_id).state
+
+
+def _resumable_outcomes(store: JobStore, job_id: str) -> list[WindowOutcome]:
+    """The job's stored windows to resume after; none (the job relabels from its start) when
+    they were stored by a markerflow whose marker state differs (an upgrade mid-job)."""
+    try:
+        return store.outcomes(job_id)
+    except StaleOutcome as stale:
+        log.warning("job %s: %s; relabeling from the first window", job_id, stale)
+        store.forget_windows(job_id)
+        return []

@@ -15,7 +15,7 @@ from datetime import UTC, datetime
 from functools import cache
 from typing import Any, cast, get_args
 
-from sqlalchemy import case, func, select, update
+from sqlalchemy import case, delete, func, select, update
 from sqlalchemy.engine import CursorResult
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
@@ -189,6 +189,12 @@ class JobStore:
                                 .values(windows_done=outcome.index + 1, updated_at=_now()))
         except IntegrityError:
             raise WindowTaken(f"job {job_id} window {outcome.index} is already stored") from None
+
+    def forget_windows(self, job_id: str) -> None:
+        """Drop the job's stored windows (they cannot be resumed from: ``StaleOutcome``)."""
+        with self.session.begin() as session:
+            session.execute(delete(WindowRow).where(WindowRow.job_id == job_id))
+            session.execute(update(JobRow).where(JobRow.id == job_id).values(windows_done=0, updated_at=_now()))
 
     def finish(self, job_id: str, result: bytes) -> bool:
         return self._move(job_id, ("running",), state="done", result=result)
