@@ -18,6 +18,7 @@ import scipy.sparse as sp
 from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
 from formulations.relaxation.certify import Relaxation, round_and_certify
+from formulations.solvers.quiet import stdout_to_stderr
 from formulations.window.problem import SOURCE, WindowProblem
 from formulations.window.solution import WindowSolution
 
@@ -46,7 +47,8 @@ class LpL1Cvxpy(Formulation):
         start = time.perf_counter()
         xi, lp = self.model(problem)
         build = time.perf_counter() - start
-        lp.solve(solver=self.solver)  # type: ignore[no-untyped-call]  # cvxpy is unannotated
+        with stdout_to_stderr():  # cvxpy's HiGHS prints a banner on construction
+            lp.solve(solver=self.solver)  # type: ignore[no-untyped-call]  # cvxpy is unannotated
         optimal = lp.status == cp.OPTIMAL
         relaxation = Relaxation(
             xi=np.zeros(problem.n_arcs) if xi.value is None else np.clip(np.asarray(xi.value, dtype=float), 0.0, 1.0),

@@ -13,12 +13,29 @@ from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 PRIMAL_SIMPLEX = 4  # HiGHS simplex_strategy: primal
 
 
+class _SilentHighs(highspy.Highs):
+    """``highspy.Highs`` that prints nothing, not even on construction.
+
+    From highspy 1.16 the constructor registers its callback, a logged call, before any
+    option can be set, so every instance printed the licence banner on stdout (and broke
+    ``--json`` output). The constructor's ``enableCallbacks`` is where it happens; logging
+    is switched off first.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()  # type: ignore[no-untyped-call]
+        self.setOptionValue("output_flag", False)  # whether or not the constructor reached the hook below
+
+    def enableCallbacks(self) -> None:  # noqa: N802  # highspy's name
+        self.setOptionValue("output_flag", False)
+        super().enableCallbacks()  # type: ignore[no-untyped-call]
+
+
 class HighsBackend(SolverBackend):
     """Dual simplex for LPs (warm-startable after adding columns), branch and bound for MIPs."""
 
     def __init__(self) -> None:
-        self._highs = highspy.Highs()  # type: ignore[no-untyped-call]  # highspy leaves Highs.__init__ unannotated
-        self._set("output_flag", False)
+        self._highs = _SilentHighs()
         # One thread: windows are solved many at a time by the caller; HiGHS' parallel
         # simplex only adds overhead on problems this small.
         self._set("threads", 1)
