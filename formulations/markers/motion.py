@@ -103,7 +103,6 @@ def learn_burst(
             little, while an acceleration that grows over frames (a serve's, about doubling
             each frame) is followed.
     """
-    product = np.maximum((residual * last_residual).mean(axis=1), 0.0)
-    sample = np.where(usable, np.minimum(product, MOTION_CLIP * step_var), 0.0)
+    sample = np.minimum(np.maximum((residual * last_residual).mean(axis=1), 0.0), MOTION_CLIP * step_var)
     learned: np.ndarray = np.where(usable, var + BURST_RATE * (sample - var), 0.0)
     return learned

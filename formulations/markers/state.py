@@ -36,8 +36,9 @@ class MarkerState:
             the take's own noise and the marker's own acceleration, learned as it is labeled
             (``motion.learn_motion``: an envelope that calm lowers slowly).
         motion_samples: ``(N,)`` residuals that went into ``motion_var``.
-        burst_var: ``(N,)`` the same residual's variance per axis over the last few frames
-            (``motion.learn_burst``): high while a limb accelerates, 0 when unknown.
+        burst_var: ``(N,)`` the same residual's persisting part over the last few frames, per
+            axis (``motion.learn_burst``, from lag products): high while a limb accelerates,
+            about 0 under noise alone, 0 when unknown.
         last_residual: ``(N, 3)`` the last frame's motion residual, 0 where it had none.
         drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) the
             prediction of an occluded marker drifts from where it reappears, and the
