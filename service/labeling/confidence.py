@@ -5,18 +5,56 @@ marker (``per-camera``, object ``c N + n``). There a marker's position is made f
 views it kept, so its label is as doubtful as the least confident of those views; a
 marker that kept no view is as doubtful as its least confident "not seen here".
 
-The window's margins are then checked against the learned shape (``shape_checked``).
+The window's margins are then checked against the learned shape (``shape_checked``), and a
+doubtful marker against the shape it had when last trusted (``lifted``). ``window_confidence``
+runs the three; ``IdentityCarry`` is what a window hands the next.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from formulations.confidence import label_confidence
 from formulations.confidence.shape import shape_identity
+from formulations.confidence.trusted_shape import TrustedShape, confirmed
 from formulations.markers.state import MarkerState
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
+from service.labeling.stats import DOUBTFUL_BELOW
+
+
+@dataclass(frozen=True)
+class IdentityCarry:
+    """What one window hands the next about each marker's identity.
+
+    Attributes:
+        confidence: ``(N,)`` the confidence at the marker's last label so far (``carried``).
+        shape: The marker's shape when its label was last trusted (``lifted``).
+    """
+
+    confidence: np.ndarray
+    shape: TrustedShape
+
+    @classmethod
+    def start(cls, state: MarkerState) -> IdentityCarry:
+        """From the first frame: every label given, so trusted."""
+        return cls(np.ones(len(state.position)), TrustedShape.of(state))
+
+
+def window_confidence(
+    problem: WindowProblem, solution: WindowSolution, views: np.ndarray | None, occluded: np.ndarray,
+    carry: IdentityCarry, template: MarkerState, end: MarkerState,
+) -> tuple[np.ndarray, IdentityCarry]:
+    """``(M, N)`` the window's label confidences and the carry into the next window.
+
+    ``occluded``: ``(M, N)`` markers without a label; ``template``, ``end``: the marker states
+    at the window's template and last frame; ``views`` as in ``marker_confidence``.
+    """
+    own = marker_confidence(problem, solution, len(carry.confidence), views)
+    checked, after = shape_checked(carried(own, carry.confidence), occluded, carry.confidence, template, end)
+    return lifted(checked, own, occluded, IdentityCarry(after, carry.shape), end)
 
 
 def marker_confidence(
@@ -101,3 +139,35 @@ def shape_checked(
     since = np.arange(frames)[:, None] >= (frames - end.streak)[None, :]
     checked = np.where(reacquired[None, :] & since, np.minimum(confidence, identity[None, :]), confidence)
     return checked, last_labeled(checked, occluded, before)
+
+
+def lifted(
+    confidence: np.ndarray, own: np.ndarray, occluded: np.ndarray, carry: IdentityCarry, end: MarkerState,
+) -> tuple[np.ndarray, IdentityCarry]:
+    """Doubts the trusted shape settles, and the carry on (``formulations.confidence.trusted_shape``).
+
+    A marker doubtful after the window and seen at its end is judged by the shape it had when
+    last trusted: p(m) from ``confirmed``. Its labels since its current sighting began (one
+    track, so one identity) then get the window's own confidence times p(m) where that is
+    higher than the carried doubt: the trusted shape is evidence about the identity that the
+    doubt's cause did not touch, and it replaces the carried factor p(identity right so far).
+    Markers trusted after the window hand on their shape as learned at its end.
+
+    Args:
+        confidence: ``(M, N)`` the window's checked confidences (``shape_checked``).
+        own: ``(M, N)`` the window's own confidences, before carrying (``marker_confidence``).
+        occluded: ``(M, N)`` markers without a label.
+        carry: The carried confidence after the window (``shape_checked``) and the trusted shapes.
+        end: The marker state at the window's last frame.
+    """
+    trusted = carry.confidence >= DOUBTFUL_BELOW
+    doubtful = np.flatnonzero(~trusted & end.visible)
+    after = carry.confidence
+    if len(doubtful):
+        judged = np.nan_to_num(confirmed(carry.shape, end, doubtful, trusted), nan=0.0)
+        frames = confidence.shape[0]
+        since = np.arange(frames)[:, None] >= (frames - end.streak[doubtful])[None, :]
+        confidence = confidence.copy()
+        confidence[:, doubtful] = np.maximum(confidence[:, doubtful], np.where(since, own[:, doubtful] * judged, 0.0))
+        after = last_labeled(confidence, occluded, carry.confidence)
+    return confidence, IdentityCarry(after, carry.shape.updated(end, after >= DOUBTFUL_BELOW))

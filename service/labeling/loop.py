@@ -21,13 +21,14 @@ from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
+from formulations.confidence.trusted_shape import TrustedShape
 from formulations.errors import FormulationError
 from formulations.markers.state import MarkerState
 from formulations.methods.formulation import Formulation
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
 from service.errors import InputError
-from service.labeling.confidence import carried, marker_confidence, shape_checked
+from service.labeling.confidence import IdentityCarry, window_confidence
 from service.labeling.outcome import WindowOutcome
 from service.labeling.spans import window_spans
 from service.labeling.stats import DoubtCount, WindowStats
@@ -78,7 +79,7 @@ def label_windows(
     """
     spans = window_spans(n_frames, window)
     state = first if after is None else after.state
-    carry = _template_confidence(first, after)
+    carry = _template_carry(first, after)
     for k in range(0 if after is None else after.index + 1, len(spans)):
         template, last = spans[k]
         began = time.perf_counter()
@@ -88,8 +89,7 @@ def label_windows(
         labels = chain.invert(solution, inverse)
         judged = time.perf_counter()
         occluded = _occluded(labels)
-        confidence = carried(marker_confidence(problem, solution, len(carry), labels.views), carry)
-        confidence, carry = shape_checked(confidence, occluded, carry, state, labels.state)
+        confidence, carry = window_confidence(problem, solution, labels.views, occluded, carry, state, labels.state)
         doubt = DoubtCount.of(confidence, occluded, time.perf_counter() - judged)
         stats = WindowStats.of(template, last, solution, prepared, time.perf_counter() - began, doubt)
         if observer:
@@ -99,16 +99,21 @@ def label_windows(
         state = labels.state
         yield WindowOutcome(
             index=k, point_index=labels.point_index, filled=labels.filled, stats=stats, state=state,
-            views=labels.views, positions=labels.positions, confidence=confidence, carry=carry,
+            views=labels.views, positions=labels.positions, confidence=confidence, carry=carry.confidence,
+            trusted_mean=carry.shape.distance_mean, trusted_var=carry.shape.distance_var,
         )
 
 
-def _template_confidence(first: MarkerState, after: WindowOutcome | None) -> np.ndarray:
-    """``(N,)`` each marker's confidence carried into the first window: 1 from the given
-    first frame; after ``after``, its ``carry`` (1 for an outcome stored without)."""
-    if after is None or after.carry is None:
-        return np.ones(first.position.shape[0])
-    return after.carry
+def _template_carry(first: MarkerState, after: WindowOutcome | None) -> IdentityCarry:
+    """What the first window to label is carried on from: from the given first frame, every
+    label trusted; after ``after``, its carry. An outcome stored before confidences (or
+    trusted shapes) existed hands on 1 (its state's shapes): it was labeled without doubts."""
+    if after is None:
+        return IdentityCarry.start(first)
+    confidence = after.carry if after.carry is not None else np.ones(first.position.shape[0])
+    if after.trusted_mean is None or after.trusted_var is None:
+        return IdentityCarry(confidence, TrustedShape.of(after.state))
+    return IdentityCarry(confidence, TrustedShape(after.trusted_mean, after.trusted_var))
 
 
 def _occluded(labels: WindowLabels) -> np.ndarray:

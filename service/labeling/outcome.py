@@ -17,7 +17,7 @@ import numpy as np
 from formulations.markers.state import MarkerState
 from service.labeling.stats import WindowStats
 
-_OPTIONAL = ("views", "positions", "confidence", "carry")  # stored only when present
+_OPTIONAL = ("views", "positions", "confidence", "carry", "trusted_mean", "trusted_var")  # stored only when present
 
 
 class StaleOutcome(ValueError):
@@ -45,6 +45,8 @@ class WindowOutcome:
             (``service.labeling.confidence``); None in outcomes stored before it existed.
         carry: ``(N,)`` each marker's confidence at its last label so far: what the next
             window's confidences are carried on from (``carried``); None as above.
+        trusted_mean, trusted_var: ``(N, K)`` each marker's neighbour distance statistics
+            when its label was last trusted (``confidence.lifted``); None as above.
     """
 
     index: int
@@ -56,6 +58,8 @@ class WindowOutcome:
     positions: np.ndarray | None = None
     confidence: np.ndarray | None = None
     carry: np.ndarray | None = None
+    trusted_mean: np.ndarray | None = None
+    trusted_var: np.ndarray | None = None
 
     def to_bytes(self) -> bytes:
         arrays = {f"state.{f.name}": getattr(self.state, f.name) for f in fields(MarkerState)}

@@ -1,0 +1,76 @@
+"""Lifting a doubt: a doubtful label judged by the shape its marker had when last trusted.
+
+A label's confidence is carried from window to window (``service.labeling.confidence``):
+once a marker's identity is doubtful, later windows, which follow the track they were given,
+cannot tell whether it is right. The learned shape cannot tell either: the distance
+statistics learn a wrong label's shape within about 1 / rate frames
+(``MarkerState.advance``), after which a wrong label fits as well as a right one. So a
+doubt, right or wrong, stayed to the end of the take (on the rolling and tennis takes 80 %
+of the doubtful labels were right ones, flagged for hundreds of frames).
+
+The shape a marker had when its label was last trusted was learned before the doubt arose,
+so it is evidence the doubt has not touched. ``TrustedShape`` keeps, per marker, the distance
+statistics of its last trusted window; ``confirmed`` judges a doubtful marker by them:
+p(m) of ``shape.shape_identity`` (its own point against an exchange with any seen neighbour
+or a lost marker's point), with the learned statistics replaced by the trusted ones.
+
+Only firm evidence judges: at least ``min_rigid`` of the marker's neighbours that are rigid
+with it (trusted distance s.d. at most ``max_sd_mm``) must be seen and trusted themselves
+(``ShapeReacquisition``'s rule for judging a point by its shape); otherwise nothing is said
+and the doubt stays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.confidence.shape import shape_identity
+from formulations.markers.shape_reacquire import SHAPE_REACQUISITION, ShapeReacquisition
+from formulations.markers.state import MarkerState
+
+Array = NDArray[np.float64]
+Mask = NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class TrustedShape:
+    """``(N, K)`` each marker's neighbour distance means and variances (mm, mm^2), as learned
+    at the end of the last window in which its label was trusted (neighbours: ``MarkerState``'s)."""
+
+    distance_mean: Array
+    distance_var: Array
+
+    @classmethod
+    def of(cls, state: MarkerState) -> TrustedShape:
+        return cls(state.distance_mean.copy(), state.distance_var.copy())
+
+    def updated(self, end: MarkerState, trusted: Mask) -> TrustedShape:
+        """The shapes of ``trusted`` markers taken from ``end``; the others' kept as they were."""
+        return TrustedShape(
+            np.where(trusted[:, None], end.distance_mean, self.distance_mean),
+            np.where(trusted[:, None], end.distance_var, self.distance_var),
+        )
+
+
+def confirmed(
+    shape: TrustedShape, end: MarkerState, doubtful: NDArray[np.intp], trusted: Mask,
+    settings: ShapeReacquisition = SHAPE_REACQUISITION,
+) -> Array:
+    """``(D,)`` p(m) for the seen markers ``doubtful`` judged by their trusted shape; NaN where
+    the evidence is not firm (module doc).
+
+    Args:
+        shape: The trusted shapes.
+        end: The state at the window's last frame (positions, who is seen).
+        doubtful: Markers seen at ``end`` whose labels are doubtful.
+        trusted: ``(N,)`` markers whose labels are trusted now.
+    """
+    neighbours = end.neighbours[doubtful]
+    rigid = shape.distance_var[doubtful] <= settings.max_sd_mm**2
+    firm = (rigid & end.visible[neighbours] & trusted[neighbours]).sum(axis=1) >= settings.min_rigid
+    reference = replace(end, distance_mean=shape.distance_mean, distance_var=shape.distance_var)
+    probability = shape_identity(reference, end, doubtful)
+    return np.where(firm, probability, np.nan)
