@@ -81,6 +81,9 @@ def test_stored_windows_keep_confidence_and_a_resumed_run_carries_it_alike() -> 
     outcomes = list(labeling.windows())
     stored = [WindowOutcome.from_bytes(o.to_bytes()) for o in outcomes]
     resumed = stored[:2] + list(labeling.windows(after=stored[1]))
+    for kept, made in zip(stored, outcomes):  # the trusted shapes a resumed run is carried on from
+        assert kept.trusted_mean is not None and kept.trusted_var is not None
+        assert np.array_equal(kept.trusted_mean, made.trusted_mean) and np.array_equal(kept.trusted_var, made.trusted_var)
     whole = labeling.result(outcomes).confidence
     assert np.isfinite(whole).all() and (whole[0] == 1).all() and whole.min() < 1
     assert np.array_equal(labeling.result(resumed).confidence, whole)

@@ -106,8 +106,9 @@ def label_windows(
 
 def _template_carry(first: MarkerState, after: WindowOutcome | None) -> IdentityCarry:
     """What the first window to label is carried on from: from the given first frame, every
-    label trusted; after ``after``, its carry. An outcome stored before confidences (or
-    trusted shapes) existed hands on 1 (its state's shapes): it was labeled without doubts."""
+    label trusted; after ``after``, its carry. An outcome stored before confidences existed
+    hands on 1; one stored before trusted shapes, its state's shapes (what a marker trusted
+    at its end would hand on)."""
     if after is None:
         return IdentityCarry.start(first)
     confidence = after.carry if after.carry is not None else np.ones(first.position.shape[0])
