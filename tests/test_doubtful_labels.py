@@ -39,9 +39,19 @@ def test_doubtful_labels_are_seen_samples_below_the_threshold() -> None:
 def test_confidence_is_carried_from_the_last_label_before_the_window() -> None:
     window = np.array([[0.9, 1.0], [0.5, 1.0], [0.8, 0.7]])
     template = np.array([0.5, 1.0])
-    assert np.allclose(carried(window, template), [[0.45, 1.0], [0.25, 1.0], [0.4, 0.7]])
+    # Within the window a label is no surer than the track's least sure label before it.
+    assert np.allclose(carried(window, template), [[0.45, 1.0], [0.25, 1.0], [0.25, 0.7]])
     occluded = np.array([[False, True], [True, True], [True, True]])
     assert np.allclose(last_labeled(window, occluded, np.array([0.3, 0.6])), [0.9, 0.6])
+
+
+def test_a_doubtful_jump_keeps_the_labels_after_it_doubtful_but_not_an_unseen_frame() -> None:
+    # Marker 0 jumps at frame 1 (margin 0.6), then the window is sure of following that point.
+    # Marker 1 is unseen at frame 1: the confidence of "unseen" says nothing of its identity.
+    window = np.array([[0.99, 0.99], [0.6, 0.2], [0.999, 0.98]])
+    occluded = np.array([[False, False], [False, True], [False, False]])
+    assert np.allclose(carried(window, np.ones(2), occluded), [[0.99, 0.99], [0.6, 0.2], [0.6, 0.98]])
+    assert (carried(window, np.ones(2), occluded)[2] < DOUBTFUL_BELOW).tolist() == [True, False]
 
 
 def _capture(point_marker: list[np.ndarray]) -> SimulatedCapture:
