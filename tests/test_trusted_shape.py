@@ -75,3 +75,16 @@ def test_only_the_labels_since_the_sighting_began_are_lifted() -> None:
     confidence, _ = _lift(end)
     assert (confidence[-2:, 0] >= DOUBTFUL_BELOW).all()
     assert (confidence[:-2, 0] < DOUBTFUL_BELOW).all()
+
+
+def test_what_a_doubtful_label_taught_the_shape_is_forgotten() -> None:
+    # Markers 0 and 1 exchanged long enough for the statistics to learn it; 0 and 1 are doubtful.
+    adapted = _state(_exchanged())
+    trusted = TrustedShape.of(_state(BODY))
+    carry = IdentityCarry(np.array([0.05, 0.05, 1, 1, 1, 1]), trusted)
+    state = carry.forget_doubtful(adapted)
+    assert np.array_equal(state.distance_mean[:2], trusted.distance_mean[:2])
+    assert np.array_equal(state.distance_mean[2:], adapted.distance_mean[2:])
+    # Judged by what it has learned now, the exchange no longer fits: the repair can see it.
+    assert (shape_identity(state, adapted, np.array([0, 1])) < 0.01).all()
+    assert (shape_identity(adapted, adapted, np.array([0, 1])) > 0.99).all()

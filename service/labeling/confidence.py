@@ -12,7 +12,7 @@ runs the three; ``IdentityCarry`` is what a window hands the next.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -41,6 +41,22 @@ class IdentityCarry:
     def start(cls, state: MarkerState) -> IdentityCarry:
         """From the first frame: every label given, so trusted."""
         return cls(np.ones(len(state.position)), TrustedShape.of(state))
+
+    def forget_doubtful(self, state: MarkerState) -> MarkerState:
+        """``state`` with each doubtful marker's distance statistics back at its trusted shape.
+
+        The statistics learn whatever a marker is labeled with, a wrong label's shape within
+        about 1 / rate frames (``MarkerState.advance``); the exchange repair and the shape
+        re-acquisition judge by them, and then keep the wrong label. What they learned from
+        labels now doubtful is forgotten, and learned again once the label is trusted
+        (``lifted``). Measured on the accuracy matrix's validation half (600 frames, seed 0):
+        mean 95.5 -> 96.5 %, swaps 990 -> 877 (README, Confidence).
+        """
+        doubtful = (self.confidence < DOUBTFUL_BELOW)[:, None]
+        return replace(
+            state, distance_mean=np.where(doubtful, self.shape.distance_mean, state.distance_mean),
+            distance_var=np.where(doubtful, self.shape.distance_var, state.distance_var),
+        )
 
 
 def window_confidence(

@@ -96,7 +96,7 @@ def label_windows(
             observer(template, problem, solution)
         if progress:
             progress(k + 1, len(spans))
-        state = labels.state
+        state = carry.forget_doubtful(labels.state)
         yield WindowOutcome(
             index=k, point_index=labels.point_index, filled=labels.filled, stats=stats, state=state,
             views=labels.views, positions=labels.positions, confidence=confidence, carry=carry.confidence,
