@@ -83,3 +83,50 @@ def test_labeling_from_the_model_names_the_learned_segment_from_the_start() -> N
     took = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
     right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in markers if took[f, m] >= 0)
     assert right >= 0.99 * len(frames) * len(markers)
+
+
+def _widened_take(seed: int = 0, wider: float = 70.0):
+    """The chain of ``_moved_marker_take`` with, in the model, two markers of the segment holding
+    ``S2M0`` ``wider`` mm closer together than in the take (as the acromia of gait2354's static
+    trial, 76 mm narrower than in its walk), the joint centres left where they were fitted; the
+    held-out frames as shuffled clouds, and each point's marker."""
+    names, positions, _ = chain(seed, markers=3, frames=400)
+    model = fit_subject(names, positions[:FIT]).model
+    s = next(k for k, segment in enumerate(model.segments) if "S2M0" in segment.markers)
+    segment = model.segments[s]
+    coordinates = np.array(segment.coordinates)
+    along = (coordinates[1] - coordinates[0]) / np.linalg.norm(coordinates[1] - coordinates[0])
+    coordinates[0] += wider / 2 * along
+    coordinates[1] -= wider / 2 * along
+    segments = list(model.segments)
+    segments[s] = replace(segment, coordinates=coordinates.tolist())
+    narrow = replace(model, segments=segments)
+    order = [names.index(n) for n in model_names(narrow)]
+    frames, owner = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
+    return narrow, s, frames, owner
+
+
+def test_a_segment_whose_markers_are_farther_apart_in_the_take_is_learned_and_then_named() -> None:
+    model, s, frames, owner = _widened_take()
+    geometry = ModelGeometry.of(model)
+    markers = geometry.segments[s].markers
+    assert not identify(geometry, frames[0]).named[markers].any()  # the model names none of it at the start
+    held, own = frames[LOOK_AHEAD:], owner[LOOK_AHEAD:]
+    assert _right(model, markers, held, own) == 0  # nor in any held-out frame
+    learned = learn_from_take(model, frames[:LOOK_AHEAD])
+    assert identify(ModelGeometry.of(learned), frames[0]).named[markers].all()
+    # frame by frame, with no tracking, over frames the learning never saw: the joint centres,
+    # carried by the affine map of a template's, still refuse some frames (measured 87 of 140)
+    assert 2 * _right(learned, markers, held, own) > len(held)
+
+
+def test_labeling_from_a_model_with_a_widened_segment_names_it_from_the_start() -> None:
+    model, s, frames, owner = _widened_take()
+    names = model_names(model)
+    capture = Capture(names, np.full((len(names), 3), np.nan), 100.0, points=frames, model=model)
+    took = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
+    markers = ModelGeometry.of(model).segments[s].markers
+    assert all(took[0, m] >= 0 and owner[0][took[0, m]] == m for m in markers)  # named in frame 0
+    right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in range(len(names)) if took[f, m] >= 0)
+    # every marker, the learned segment's included (measured all; 76 % without learning: the segment 19 %)
+    assert right >= 0.99 * len(frames) * len(names)

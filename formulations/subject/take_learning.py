@@ -9,18 +9,21 @@ distances frame after frame. Over the look-ahead frames (the first window: what 
 looks ahead anyway):
 
 1. A segment identification names no marker of in more than half of them is unfound.
-2. In a look-ahead frame f where an unfound segment is jointed to a posed one, it is read
-   from the free points with no distance tolerance (``loose_read``) and relearned from that
-   reading (``segment_relearn``).
-3. The relearned model is kept when it poses the segment in more of the other look-ahead
-   frames than the model did in all of them: a rigid constellation of the take, that
-   explains points the model left unexplained. A reading of ghosts, or of markers of
-   different segments, does not keep its distances and is not found again. Otherwise the
-   next frame is tried.
+2. In a look-ahead frame f where an unfound segment is jointed to a posed one (a segment of
+   three or more markers identification placed), it is read from the free points with no
+   distance tolerance (``loose_read``) and relearned from that reading (``segment_relearn``).
+3. The relearned model is kept when identification names a marker of the segment in more
+   of the other look-ahead frames than the model did in all of them: a rigid constellation
+   of the take, that explains points the model left unexplained. A reading of ghosts, or of
+   markers of different segments, does not keep its distances and is not found again.
+   Otherwise the next frame is tried.
 
-A relearned segment can pose its neighbours (an arm hung from a relearned torso), so the
-steps repeat until no segment is learned; a segment is learned once. Segments that
-identification finds in most look-ahead frames are left as they are.
+Once found, a relearned segment can be the posed neighbour another unfound one is read
+against (an arm hung from a relearned torso), so the steps repeat until no segment is
+learned; a segment is learned once. Segments of which identification names a marker in
+most look-ahead frames are left as they are, and when it names a marker of every segment in
+the first frame nothing is learned at all (so one marker named alone, on a joint's sphere,
+keeps its segment as the model has it).
 """
 
 from __future__ import annotations
@@ -42,12 +45,12 @@ Array = NDArray[np.float64]
 def learn_from_take(model: SubjectModel, frames: list[Array]) -> SubjectModel:
     """``model`` with the segments it does not find in ``frames`` (each ``(P, 3)``, mm) learned from them."""
     geometry = ModelGeometry.of(model)
-    if not frames or _segments_posed(geometry, identify(geometry, frames[0])).all():
+    if not frames or _segments_named(geometry, identify(geometry, frames[0])).all():
         return model  # everything found at the start: nothing to learn (and no look-ahead cost)
     learned: set[int] = set()
     while True:
         found = [identify(geometry, points) for points in frames]
-        count = np.sum([_segments_posed(geometry, f) for f in found], axis=0)
+        count = np.sum([_segments_named(geometry, f) for f in found], axis=0)
         unfound = [s for s in np.argsort([-len(g.markers) for g in geometry.segments], kind="stable")
                    if 2 * count[s] <= len(frames) and s not in learned]
         step = _learn_one(model, geometry, frames, found, unfound, count)
@@ -71,23 +74,23 @@ def _learn_one(model: SubjectModel, geometry: ModelGeometry, frames: list[Array]
                 continue
             trial = relearned(model, s, reading, poses)
             others = [p for g, p in enumerate(frames) if g != f]
-            if _posed_in(ModelGeometry.of(trial), s, others, int(count[s])) > count[s]:
+            if _named_in(ModelGeometry.of(trial), s, others, int(count[s])) > count[s]:
                 return trial, s
     return None
 
 
-def _posed_in(geometry: ModelGeometry, s: int, frames: list[Array], beat: int) -> int:
-    """In how many of ``frames`` segment ``s`` is posed (counting stops once ``beat`` is beaten
-    or can no longer be)."""
+def _named_in(geometry: ModelGeometry, s: int, frames: list[Array], beat: int) -> int:
+    """In how many of ``frames`` identification names a marker of segment ``s`` (counting stops
+    once ``beat`` is beaten or can no longer be)."""
     hits = 0
     for k, points in enumerate(frames):
-        hits += int(_segments_posed(geometry, identify(geometry, points))[s])
+        hits += int(_segments_named(geometry, identify(geometry, points))[s])
         if hits > beat or hits + len(frames) - 1 - k <= beat:
             break
     return hits
 
 
-def _segments_posed(geometry: ModelGeometry, found: Identification) -> NDArray[np.bool_]:
+def _segments_named(geometry: ModelGeometry, found: Identification) -> NDArray[np.bool_]:
     """``(S,)`` segments with a marker named (a pose alone is too strict a test: with it 135_02
     and 03_rolling relearned segments that tracking labels well and lost 4-9 points)."""
     return np.array([found.named[segment.markers].any() for segment in geometry.segments])
