@@ -8,8 +8,9 @@ static frames give each segment's marker coordinates by generalised Procrustes
 (``fit_segment``). A static take's spread is its noise only; skin moves markers more in
 motion, so each spread is taken as sqrt(s_static^2 + skin^2), ``skin`` a property of the
 marker set (``skin_mm``: markers on skin, ~5 mm; rigid clusters, less), and a joint's
-rms as ``skin`` too. A segment with two markers in the take and a joint to a segment with a
-pose is kept (two markers and the centre make a pose); with fewer its markers are singles.
+rms as ``skin`` too. A segment with two markers in the take and a joint to a kept segment is
+kept (two markers and the centre make a pose), so a chain of them hangs from a segment of
+three; with fewer its markers are singles.
 """
 
 from __future__ import annotations
@@ -93,13 +94,16 @@ def fit_template(template: Template, names: list[str], positions: Array) -> Subj
             pairs[segment] = present
         else:
             singles.extend(present)
-    for segment, present in pairs.items():
-        centre = _pair_centre(template, segment, fits, index, positions)
-        if centre is None:
-            singles.extend(present)
-            continue
-        fit = fit_segment(np.concatenate([positions, centre[:, None]], axis=1), present + [len(names)])
-        fits[segment] = SegmentFit(present, fit.coordinates[:2], fit.rotation, fit.origin, fit.spread[:2])
+    while pairs:  # a pair hung from a kept pair is kept too (a forearm from an upper arm)
+        hung = {seg: _pair_centre(template, seg, fits, index, positions) for seg in pairs}
+        kept = {seg: centre for seg, centre in hung.items() if centre is not None}
+        if not kept:
+            break
+        for segment, centre in kept.items():
+            present = pairs.pop(segment)
+            fit = fit_segment(np.concatenate([positions, centre[:, None]], axis=1), present + [len(names)])
+            fits[segment] = SegmentFit(present, fit.coordinates[:2], fit.rotation, fit.origin, fit.spread[:2])
+    singles.extend(m for present in pairs.values() for m in present)
     if len(fits) < 2:
         raise FormulationError(
             f"template {template.name!r}: the take shows three markers of fewer than two segments "
@@ -128,14 +132,15 @@ def fit_template(template: Template, names: list[str], positions: Array) -> Subj
 def _pair_centre(
     template: Template, segment: str, fits: dict[str, SegmentFit], index: dict[str, int], positions: Array,
 ) -> Array | None:
-    """``(K, 3)`` the centre of a joint from a two-marker segment to a segment with a pose, if the template has one.
+    """``(K, 3)`` the centre of a joint from a two-marker segment to a kept segment, if the template has one.
 
     Two markers and the joint centre are three points: enough for a pose about the joint
-    (``joint_place``), so such a segment is kept, not split into singles.
+    (``joint_place``) once the other segment is posed, so such a segment is kept, not split
+    into singles.
     """
     for (a, b), markers in template.joints:
         other = b if a == segment else a if b == segment else None
-        if other in fits and len(fits[other].markers) >= 3 and all(m in index for m in markers):
+        if other in fits and all(m in index for m in markers):
             centre: Array = np.nanmean(positions[:, [index[m] for m in markers]], axis=1)
             return centre
     return None

@@ -26,6 +26,7 @@ import numpy as np
 
 from formulations.cameras.rig import Rig
 from formulations.markers.gap_ends import tie_gap_ends
+from formulations.subject.take_learning import learn_from_take
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.formulation_spec import resolve_formulation
@@ -68,9 +69,12 @@ class CaptureLabeling:
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
         if capture.model is not None and capture.points is not None:
-            self._first, first_frame = model_first_frame(capture.model, capture.points[0], capture.first_frame)
+            model = capture.model
+            if not np.isfinite(capture.first_frame).all():  # identified, not labeled: the take may correct the model
+                model = learn_from_take(model, capture.points[: options.window])
+            self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
             inner = _association(replace(capture, first_frame=first_frame), options)
-            self._association: Association = ModelChain(inner, capture.model, capture.points)
+            self._association: Association = ModelChain(inner, model, capture.points)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
             self._association = _association(capture, options)

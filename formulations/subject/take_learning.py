@@ -1,0 +1,109 @@
+"""Segments the model never finds at the start of a take, learned from the take (Ringer & Lasenby 2004).
+
+A model from a static trial can miss a segment of the dynamic take altogether: a marker
+placed or held otherwise (acromia 342 mm apart standing, 419 mm walking) moves its
+constellation beyond any tolerance noise and skin allow, so the segment has no hypothesis,
+and segments hung from it by joints are never placed either. The take has the segment's
+true constellation: its markers are points no named marker explains, that keep their
+distances frame after frame. Over the look-ahead frames (the first window: what the labeler
+looks ahead anyway):
+
+1. A segment identification names no marker of in more than half of them is unfound.
+2. In a look-ahead frame f where an unfound segment is jointed to a posed one (a segment of
+   three or more markers identification placed), it is read from the free points with no
+   distance tolerance (``loose_read``) and relearned from that reading (``segment_relearn``).
+3. The relearned model is kept when identification names a marker of the segment in more
+   of the other look-ahead frames than the model did in all of them: a rigid constellation
+   of the take, that explains points the model left unexplained. A reading of ghosts, or of
+   markers of different segments, does not keep its distances and is not found again.
+   Otherwise the next frame is tried.
+
+Once found, a relearned segment can be the posed neighbour another unfound one is read
+against (an arm hung from a relearned torso), so the steps repeat until no segment is
+learned; a segment is learned once. Segments of which identification names a marker in
+most look-ahead frames are left as they are, and when it names a marker of every segment in
+the first frame nothing is learned at all (so one marker named alone, on a joint's sphere,
+keeps its segment as the model has it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.rigid import rigid_transform
+from formulations.subject.constellation import Pose
+from formulations.subject.geometry import ModelGeometry
+from formulations.subject.identify import Identification, identify
+from formulations.subject.loose_read import loose_read
+from formulations.subject.model import SubjectModel
+from formulations.subject.segment_relearn import relearned
+
+Array = NDArray[np.float64]
+
+
+def learn_from_take(model: SubjectModel, frames: list[Array]) -> SubjectModel:
+    """``model`` with the segments it does not find in ``frames`` (each ``(P, 3)``, mm) learned from them."""
+    geometry = ModelGeometry.of(model)
+    if not frames or _segments_named(geometry, identify(geometry, frames[0])).all():
+        return model  # everything found at the start: nothing to learn (and no look-ahead cost)
+    learned: set[int] = set()
+    while True:
+        found = [identify(geometry, points) for points in frames]
+        count = np.sum([_segments_named(geometry, f) for f in found], axis=0)
+        unfound = [s for s in np.argsort([-len(g.markers) for g in geometry.segments], kind="stable")
+                   if 2 * count[s] <= len(frames) and s not in learned]
+        step = _learn_one(model, geometry, frames, found, unfound, count)
+        if step is None:
+            return model
+        model, s = step
+        learned.add(s)
+        geometry = ModelGeometry.of(model)
+
+
+def _learn_one(model: SubjectModel, geometry: ModelGeometry, frames: list[Array], found: list[Identification],
+               unfound: list[int], count: NDArray[np.int64]) -> tuple[SubjectModel, int] | None:
+    """The model with the first unfound segment whose loose reading is confirmed, and that segment."""
+    for f, (points, identified) in enumerate(zip(frames, found)):
+        free = np.ones(len(points), bool)
+        free[identified.point[identified.named]] = False
+        poses = _poses(geometry, identified)
+        for s in unfound:
+            reading = loose_read(geometry, s, points, free, poses)
+            if reading is None:
+                continue
+            trial = relearned(model, s, reading, poses)
+            others = [p for g, p in enumerate(frames) if g != f]
+            if _named_in(ModelGeometry.of(trial), s, others, int(count[s])) > count[s]:
+                return trial, s
+    return None
+
+
+def _named_in(geometry: ModelGeometry, s: int, frames: list[Array], beat: int) -> int:
+    """In how many of ``frames`` identification names a marker of segment ``s`` (counting stops
+    once ``beat`` is beaten or can no longer be)."""
+    hits = 0
+    for k, points in enumerate(frames):
+        hits += int(_segments_named(geometry, identify(geometry, points))[s])
+        if hits > beat or hits + len(frames) - 1 - k <= beat:
+            break
+    return hits
+
+
+def _segments_named(geometry: ModelGeometry, found: Identification) -> NDArray[np.bool_]:
+    """``(S,)`` segments with a marker named (a pose alone is too strict a test: with it 135_02
+    and 03_rolling relearned segments that tracking labels well and lost 4-9 points)."""
+    return np.array([found.named[segment.markers].any() for segment in geometry.segments])
+
+
+def _poses(geometry: ModelGeometry, found: Identification) -> dict[int, Pose]:
+    """The pose of each segment of three or more markers identification placed (its placed markers
+    are R u + d exactly; two markers would leave the turn about their line free)."""
+    poses = {}
+    for s, segment in enumerate(geometry.segments):
+        placed = found.placed[segment.markers]
+        if len(placed) >= 3 and np.isfinite(placed).all():
+            u = segment.coordinates
+            rotation, c_s, c_t = rigid_transform(u[None], placed[None], np.ones((1, len(u))))
+            poses[s] = Pose(rotation[0], c_t[0] - rotation[0] @ c_s[0])
+    return poses

@@ -1,0 +1,132 @@
+"""A segment the model cannot find in the take (its markers 40 mm from where the model has them) is learned from the take."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from test_model_start import _cloud
+from test_subject_model import chain
+
+from formulations.subject.fit import fit_subject
+from formulations.subject.geometry import ModelGeometry
+from formulations.subject.identify import identify
+from formulations.subject.model import SubjectModel
+from formulations.subject.take_learning import learn_from_take
+from service.capture.capture import Capture, LabelingOptions
+from service.capture.model_input import model_names
+from service.labeling.capture_labeling import CaptureLabeling
+
+FIT = 250
+LOOK_AHEAD = 10
+
+
+def _moved_marker_take(seed: int = 0):
+    """A 4-segment chain of 3-marker segments, its model with the markers of the segment holding
+    ``S1M0`` each 40 mm closer to their centroid than in the take (as acromia in a static trial),
+    the held-out frames as shuffled clouds, and each point's marker."""
+    names, positions, _ = chain(seed, markers=3, frames=400)
+    model = fit_subject(names, positions[:FIT]).model
+    s = next(k for k, segment in enumerate(model.segments) if "S1M0" in segment.markers)
+    segment = model.segments[s]
+    coordinates = np.array(segment.coordinates)
+    outward = coordinates - coordinates.mean(axis=0)
+    coordinates -= 40.0 * outward / np.linalg.norm(outward, axis=1, keepdims=True)
+    segments = list(model.segments)
+    segments[s] = replace(segment, coordinates=coordinates.tolist())
+    moved = SubjectModel(segments, model.joints, model.limbs, model.singles, model.marker_radius)
+    order = [names.index(n) for n in model_names(moved)]
+    frames, owner = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
+    return moved, s, frames, owner
+
+
+def _right(model: SubjectModel, markers: np.ndarray, frames: list[np.ndarray], owner: list[np.ndarray]) -> int:
+    """Frames in which identification names every one of ``markers`` at its own point."""
+    geometry = ModelGeometry.of(model)
+    hits = 0
+    for points, own in zip(frames, owner):
+        point = identify(geometry, points).point[markers]
+        hits += int((point >= 0).all() and (own[point] == markers).all())
+    return hits
+
+
+@pytest.mark.xfail(strict=True, reason="a marker of the segment is named alone on a joint's sphere in frame 0, so "
+                   "take_learning's named-in-frame-0 gate skips learning; gating on a pose instead fixes this case but "
+                   "cost 135_02 9 points and 03_rolling 4 (bench/model_start.py)")
+def test_the_segment_the_model_misses_is_learned_and_then_named() -> None:
+    model, s, frames, owner = _moved_marker_take()
+    markers = ModelGeometry.of(model).segments[s].markers
+    held = frames[LOOK_AHEAD:]
+    assert _right(model, markers, held, owner[LOOK_AHEAD:]) == 0  # the model alone never names it
+    learned = learn_from_take(model, frames[:LOOK_AHEAD])
+    # frame by frame, with no tracking: the moved joint centres still refuse some frames (measured 90 of 140)
+    assert 2 * _right(learned, markers, held, owner[LOOK_AHEAD:]) > len(held)
+
+
+def test_a_model_that_finds_every_segment_is_not_changed() -> None:
+    names, positions, _ = chain(1, markers=3, frames=400)
+    model = fit_subject(names, positions[:FIT]).model
+    order = [names.index(n) for n in model_names(model)]
+    frames, _ = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
+    assert learn_from_take(model, frames[:LOOK_AHEAD]) == model
+
+
+@pytest.mark.xfail(strict=True, reason="a marker of the segment is named alone on a joint's sphere in frame 0, so "
+                   "take_learning's named-in-frame-0 gate skips learning; gating on a pose instead fixes this case but "
+                   "cost 135_02 9 points and 03_rolling 4 (bench/model_start.py)")
+def test_labeling_from_the_model_names_the_learned_segment_from_the_start() -> None:
+    model, s, frames, owner = _moved_marker_take()
+    markers = ModelGeometry.of(model).segments[s].markers
+    names = model_names(model)
+    capture = Capture(names, np.full((len(names), 3), np.nan), 100.0, points=frames, model=model)
+    took = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
+    right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in markers if took[f, m] >= 0)
+    assert right >= 0.99 * len(frames) * len(markers)
+
+
+def _widened_take(seed: int = 0, wider: float = 70.0):
+    """The chain of ``_moved_marker_take`` with, in the model, two markers of the segment holding
+    ``S2M0`` ``wider`` mm closer together than in the take (as the acromia of gait2354's static
+    trial, 76 mm narrower than in its walk), the joint centres left where they were fitted; the
+    held-out frames as shuffled clouds, and each point's marker."""
+    names, positions, _ = chain(seed, markers=3, frames=400)
+    model = fit_subject(names, positions[:FIT]).model
+    s = next(k for k, segment in enumerate(model.segments) if "S2M0" in segment.markers)
+    segment = model.segments[s]
+    coordinates = np.array(segment.coordinates)
+    along = (coordinates[1] - coordinates[0]) / np.linalg.norm(coordinates[1] - coordinates[0])
+    coordinates[0] += wider / 2 * along
+    coordinates[1] -= wider / 2 * along
+    segments = list(model.segments)
+    segments[s] = replace(segment, coordinates=coordinates.tolist())
+    narrow = replace(model, segments=segments)
+    order = [names.index(n) for n in model_names(narrow)]
+    frames, owner = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
+    return narrow, s, frames, owner
+
+
+def test_a_segment_whose_markers_are_farther_apart_in_the_take_is_learned_and_then_named() -> None:
+    model, s, frames, owner = _widened_take()
+    geometry = ModelGeometry.of(model)
+    markers = geometry.segments[s].markers
+    assert not identify(geometry, frames[0]).named[markers].any()  # the model names none of it at the start
+    held, own = frames[LOOK_AHEAD:], owner[LOOK_AHEAD:]
+    assert _right(model, markers, held, own) == 0  # nor in any held-out frame
+    learned = learn_from_take(model, frames[:LOOK_AHEAD])
+    assert identify(ModelGeometry.of(learned), frames[0]).named[markers].all()
+    # frame by frame, with no tracking, over frames the learning never saw: the joint centres,
+    # carried by the affine map of a template's, still refuse some frames (measured 87 of 140)
+    assert 2 * _right(learned, markers, held, own) > len(held)
+
+
+def test_labeling_from_a_model_with_a_widened_segment_names_it_from_the_start() -> None:
+    model, s, frames, owner = _widened_take()
+    names = model_names(model)
+    capture = Capture(names, np.full((len(names), 3), np.nan), 100.0, points=frames, model=model)
+    took = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
+    markers = ModelGeometry.of(model).segments[s].markers
+    assert all(took[0, m] >= 0 and owner[0][took[0, m]] == m for m in markers)  # named in frame 0
+    right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in range(len(names)) if took[f, m] >= 0)
+    # every marker, the learned segment's included (measured all; 76 % without learning: the segment 19 %)
+    assert right >= 0.99 * len(frames) * len(names)
