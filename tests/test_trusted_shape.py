@@ -88,3 +88,16 @@ def test_what_a_doubtful_label_taught_the_shape_is_forgotten() -> None:
     # Judged by what it has learned now, the exchange no longer fits: the repair can see it.
     assert (shape_identity(state, adapted, np.array([0, 1])) < 0.01).all()
     assert (shape_identity(adapted, adapted, np.array([0, 1])) > 0.99).all()
+
+
+def test_a_marker_never_seen_has_no_trusted_shape_to_go_back_to() -> None:
+    # A subject model's start: marker 0 unnamed (its statistics a guess), later acquired doubtful.
+    start = replace(_state(BODY), unseen=np.array([5, 0, 0, 0, 0, 0]))
+    shape = TrustedShape.of(start)
+    assert shape.known.tolist() == [False, True, True, True, True, True]
+    learned = _state(BODY + 1.0)
+    kept = IdentityCarry(np.array([0.05, 1, 1, 1, 1, 1]), shape).forget_doubtful(learned)
+    assert np.array_equal(kept.distance_mean[0], learned.distance_mean[0])  # nothing to forget back to
+    assert not shape.updated(start, np.ones(6, bool)).known[0]  # trusted but unseen: still no shape
+    assert shape.updated(_state(BODY), np.ones(6, bool)).known.all()  # seen and trusted: it has one
+    assert np.isnan(confirmed(shape, _state(BODY), np.array([0]), np.ones(6, bool))[0])

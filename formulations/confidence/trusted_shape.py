@@ -38,20 +38,36 @@ Mask = NDArray[np.bool_]
 @dataclass(frozen=True)
 class TrustedShape:
     """``(N, K)`` each marker's neighbour distance means and variances (mm, mm^2), as learned
-    at the end of the last window in which its label was trusted (neighbours: ``MarkerState``'s)."""
+    at the end of the last window in which its label was trusted (neighbours: ``MarkerState``'s).
+
+    A marker not yet seen has no trusted shape (NaN rows): what its statistics hold then
+    is a guess (a subject model's start puts unnamed markers at the body's centroid), not
+    a shape learned from its own point. It gets one at the first window that ends with it
+    seen and trusted.
+    """
 
     distance_mean: Array
     distance_var: Array
 
     @classmethod
     def of(cls, state: MarkerState) -> TrustedShape:
-        return cls(state.distance_mean.copy(), state.distance_var.copy())
+        """The shapes of the markers seen at ``state``; none for the others."""
+        seen = state.visible[:, None]
+        return cls(np.where(seen, state.distance_mean, np.nan), np.where(seen, state.distance_var, np.nan))
+
+    @property
+    def known(self) -> Mask:
+        """``(N,)`` markers that have a trusted shape."""
+        known: Mask = np.asarray(np.isfinite(self.distance_mean).all(axis=1))
+        return known
 
     def updated(self, end: MarkerState, trusted: Mask) -> TrustedShape:
-        """The shapes of ``trusted`` markers taken from ``end``; the others' kept as they were."""
+        """The shapes of ``trusted`` markers taken from ``end`` (a first one only where seen
+        there); the others' kept as they were."""
+        take = (trusted & (self.known | end.visible))[:, None]
         return TrustedShape(
-            np.where(trusted[:, None], end.distance_mean, self.distance_mean),
-            np.where(trusted[:, None], end.distance_var, self.distance_var),
+            np.where(take, end.distance_mean, self.distance_mean),
+            np.where(take, end.distance_var, self.distance_var),
         )
 
 
@@ -69,8 +85,13 @@ def confirmed(
         trusted: ``(N,)`` markers whose labels are trusted now.
     """
     neighbours = end.neighbours[doubtful]
-    rigid = shape.distance_var[doubtful] <= settings.max_sd_mm**2
+    rigid = shape.distance_var[doubtful] <= settings.max_sd_mm**2  # False on a NaN row: no shape, no judgement
     firm = (rigid & end.visible[neighbours] & trusted[neighbours]).sum(axis=1) >= settings.min_rigid
-    reference = replace(end, distance_mean=shape.distance_mean, distance_var=shape.distance_var)
+    # Partners without a trusted shape are judged by what they have learned.
+    known = shape.known[:, None]
+    reference = replace(
+        end, distance_mean=np.where(known, shape.distance_mean, end.distance_mean),
+        distance_var=np.where(known, shape.distance_var, end.distance_var),
+    )
     probability = shape_identity(reference, end, doubtful)
     return np.where(firm, probability, np.nan)
