@@ -145,9 +145,10 @@ def shape_checked(
     of both is at most the smaller of the two. The carry then takes the doubt along.
 
     Markers seen through the window are not re-judged, and a doubtful identity is not
-    lifted by a shape that fits later: the distance statistics learn a wrong label's shape
-    within about 1 / rate = 33 frames (``MarkerState.advance``), after which it fits
-    (on the demo scene such a lift cleared 98 % of the flagged wrong labels).
+    lifted here by the shape as learned now: the distance statistics learn a wrong label's
+    shape within about 1 / rate = 33 frames (``MarkerState.advance``), after which it fits
+    (on the demo scene such a lift cleared 98 % of the flagged wrong labels). Only the
+    shape from before the doubt lifts it (``lifted``).
 
     Args:
         confidence: ``(M, N)`` the window's confidences, carried (``carried``).
