@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -20,25 +21,53 @@ from service.labeling.capture_labeling import CaptureLabeling
 
 FIT = 250
 LOOK_AHEAD = 10
+NAMED_ALONE = pytest.mark.xfail(
+    strict=True, reason="a marker of the segment is named alone on a joint's sphere in frame 0, so take_learning's "
+    "named-in-frame-0 gate skips learning; gating on a pose instead fixes this case but cost 135_02 9 points and "
+    "03_rolling 4 (bench/model_start.py)")
 
 
-def _moved_marker_take(seed: int = 0):
-    """A 4-segment chain of 3-marker segments, its model with the markers of the segment holding
-    ``S1M0`` each 40 mm closer to their centroid than in the take (as acromia in a static trial),
-    the held-out frames as shuffled clouds, and each point's marker."""
+def _take_with(marker: str, edit: Callable[[np.ndarray], np.ndarray], seed: int = 0):
+    """A 4-segment chain of 3-marker segments, its model with the coordinates of the segment
+    holding ``marker`` changed by ``edit`` (joint centres left where they were fitted), the
+    held-out frames as shuffled clouds, each point's marker, and the segment's index."""
     names, positions, _ = chain(seed, markers=3, frames=400)
     model = fit_subject(names, positions[:FIT]).model
-    s = next(k for k, segment in enumerate(model.segments) if "S1M0" in segment.markers)
-    segment = model.segments[s]
-    coordinates = np.array(segment.coordinates)
-    outward = coordinates - coordinates.mean(axis=0)
-    coordinates -= 40.0 * outward / np.linalg.norm(outward, axis=1, keepdims=True)
+    s = next(k for k, segment in enumerate(model.segments) if marker in segment.markers)
     segments = list(model.segments)
-    segments[s] = replace(segment, coordinates=coordinates.tolist())
-    moved = SubjectModel(segments, model.joints, model.limbs, model.singles, model.marker_radius)
-    order = [names.index(n) for n in model_names(moved)]
+    segments[s] = replace(segments[s], coordinates=edit(np.array(segments[s].coordinates)).tolist())
+    changed = replace(model, segments=segments)
+    order = [names.index(n) for n in model_names(changed)]
     frames, owner = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
-    return moved, s, frames, owner
+    return changed, s, frames, owner
+
+
+def _moved_marker_take():
+    """``S1M0``'s segment with each marker 40 mm closer to their centroid in the model than in
+    the take (as acromia in a static trial)."""
+    def closer(coordinates: np.ndarray) -> np.ndarray:
+        outward = coordinates - coordinates.mean(axis=0)
+        return coordinates - 40.0 * outward / np.linalg.norm(outward, axis=1, keepdims=True)
+    return _take_with("S1M0", closer)
+
+
+def _widened_take(wider: float = 70.0):
+    """``S2M0``'s segment with two markers ``wider`` mm closer together in the model than in the
+    take (as the acromia of gait2354's static trial, 76 mm narrower than in its walk)."""
+    def narrower(coordinates: np.ndarray) -> np.ndarray:
+        along = (coordinates[1] - coordinates[0]) / np.linalg.norm(coordinates[1] - coordinates[0])
+        coordinates[0] += wider / 2 * along
+        coordinates[1] -= wider / 2 * along
+        return coordinates
+    return _take_with("S2M0", narrower)
+
+
+def _labels(model: SubjectModel, frames: list[np.ndarray]) -> np.ndarray:
+    """``(F, N)`` the points each marker takes, labeling from ``model`` with no labeled frame."""
+    names = model_names(model)
+    capture = Capture(names, np.full((len(names), 3), np.nan), 100.0, points=frames, model=model)
+    point_index: np.ndarray = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
+    return point_index
 
 
 def _right(model: SubjectModel, markers: np.ndarray, frames: list[np.ndarray], owner: list[np.ndarray]) -> int:
@@ -51,9 +80,7 @@ def _right(model: SubjectModel, markers: np.ndarray, frames: list[np.ndarray], o
     return hits
 
 
-@pytest.mark.xfail(strict=True, reason="a marker of the segment is named alone on a joint's sphere in frame 0, so "
-                   "take_learning's named-in-frame-0 gate skips learning; gating on a pose instead fixes this case but "
-                   "cost 135_02 9 points and 03_rolling 4 (bench/model_start.py)")
+@NAMED_ALONE
 def test_the_segment_the_model_misses_is_learned_and_then_named() -> None:
     model, s, frames, owner = _moved_marker_take()
     markers = ModelGeometry.of(model).segments[s].markers
@@ -72,15 +99,11 @@ def test_a_model_that_finds_every_segment_is_not_changed() -> None:
     assert learn_from_take(model, frames[:LOOK_AHEAD]) == model
 
 
-@pytest.mark.xfail(strict=True, reason="a marker of the segment is named alone on a joint's sphere in frame 0, so "
-                   "take_learning's named-in-frame-0 gate skips learning; gating on a pose instead fixes this case but "
-                   "cost 135_02 9 points and 03_rolling 4 (bench/model_start.py)")
+@NAMED_ALONE
 def test_labeling_from_the_model_names_the_learned_segment_from_the_start() -> None:
     model, s, frames, owner = _moved_marker_take()
     markers = ModelGeometry.of(model).segments[s].markers
-    names = model_names(model)
-    capture = Capture(names, np.full((len(names), 3), np.nan), 100.0, points=frames, model=model)
-    took = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
+    took = _labels(model, frames)
     right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in markers if took[f, m] >= 0)
     assert right >= 0.99 * len(frames) * len(markers)
 
@@ -123,8 +146,7 @@ def test_a_segment_whose_markers_are_farther_apart_in_the_take_is_learned_and_th
 def test_labeling_from_a_model_with_a_widened_segment_names_it_from_the_start() -> None:
     model, s, frames, owner = _widened_take()
     names = model_names(model)
-    capture = Capture(names, np.full((len(names), 3), np.nan), 100.0, points=frames, model=model)
-    took = CaptureLabeling(capture, LabelingOptions(window=LOOK_AHEAD)).label()[0].point_index
+    took = _labels(model, frames)
     markers = ModelGeometry.of(model).segments[s].markers
     assert all(took[0, m] >= 0 and owner[0][took[0, m]] == m for m in markers)  # named in frame 0
     right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in range(len(names)) if took[f, m] >= 0)
