@@ -76,7 +76,7 @@ def loose_read(geometry: ModelGeometry, s: int, points: Array, free: NDArray[np.
         index = np.concatenate([index, candidates[rest]], axis=1)
         target, source = points[index], u
     residual = np.linalg.norm(np.einsum("hij,pj->hpi", rotation, source) + origin[:, None] - target, axis=2)
-    ok = np.array([len(set(row)) == len(row) for row in index])
+    ok = (np.diff(np.sort(index, axis=1), axis=1) != 0).all(axis=1)  # each point used once
     for own, _, centre, tolerance in joints[1:] if len(u) == 2 else joints:
         ok &= np.linalg.norm(np.einsum("hij,j->hi", rotation, own) + origin - centre, axis=1) <= tolerance
     if not ok.any():
