@@ -92,3 +92,27 @@ def test_an_exchange_with_the_most_rigid_neighbour_is_undone():
     repaired, moved = repair_exchanges(_with_tracks(stiff, order), np.zeros((0, 3)))
     assert moved == 2
     assert np.allclose(repaired.position, state.position)
+
+
+def test_an_exchange_of_close_markers_is_undone_as_far_as_their_labels_are_doubted():
+    """Markers 2 and 3 15 mm apart (as RTOE/RMT5 on a forefoot, closer): their exchange
+    gains less than the 20 mm per marker two sure labels need; doubt lowers the bar."""
+    body = BODY.copy()
+    body[3] = body[2] + [9.0, 8.0, 9.0]
+    state = MarkerState.from_first_frame(body, n_neighbours=7)
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        state = state.advance(body + rng.normal(0, 0.5, body.shape), np.ones(len(body), bool))
+    order = np.arange(len(body))
+    order[[2, 3]] = [3, 2]
+    exchanged, none = _with_tracks(state, order), np.zeros((0, 3))
+
+    def sure(c2: float, c3: float) -> np.ndarray:
+        return np.array([1, 1, c2, c3, 1, 1, 1, 1], float)
+
+    assert repair_exchanges(exchanged, none)[1] == 0  # sure labels: the gain guards them
+    assert repair_exchanges(exchanged, none, sure(0.05, 1.0))[1] == 0  # 3 is sure: nearly the full gain
+    repaired, moved = repair_exchanges(exchanged, none, sure(0.05, 0.05))
+    assert moved == 2 and np.allclose(repaired.position, state.position)
+    noisy = replace(state, position=state.position + rng.normal(0, 2.0, body.shape))
+    assert repair_exchanges(noisy, none, sure(0.05, 0.05))[1] == 0  # right labels, doubted: the ratio keeps them

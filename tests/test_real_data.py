@@ -2,7 +2,6 @@
 
 import dataclasses
 
-import pytest
 from conftest import DATA
 
 from service.evaluation.cloud import evaluate
@@ -12,12 +11,6 @@ from service.io.formats import read_labeled
 CMU_85_02 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 11: with the learned likelihood costs RTOE and RMT5 (5 cm apart on the forefoot) come back exchanged at "
-    "frame 585 after "
-    "being hidden together (seed 0), and by the next template the distance statistics have adapted, so the shape test "
-    "of markers/exchange.py does not see it (98.7 %); seeds 1 and 2 are 99.8-99.9 %"
-))
 def test_cmu_85_02_noisy_cloud_is_labeled_above_99_5_percent():
     truth = read_labeled(CMU_85_02)
     scenario = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0, seed=0)

@@ -70,8 +70,10 @@ class CloudChain:
     layout_weight: float = 0.0
     layout_neighbours: int = 2
 
-    def pose(self, state: MarkerState, template: int, last: int) -> tuple[WindowProblem, CloudInverse]:
-        state, _ = repair_exchanges(state, _unclaimed(self.cloud.points[template], state))
+    def pose(
+        self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
+    ) -> tuple[WindowProblem, CloudInverse]:
+        state, _ = repair_exchanges(state, _unclaimed(self.cloud.points[template], state), confidence)
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
         gated = cloud_candidates(state, frames, self.gating, resources)

@@ -52,8 +52,11 @@ class WindowLabels:
 class WindowChain(Protocol[Inverse]):
     """One association's per-window chain."""
 
-    def pose(self, state: MarkerState, template: int, last: int) -> tuple[WindowProblem, Inverse]:
-        """The window problem of frames ``template+1 .. last`` from ``state`` at ``template``."""
+    def pose(
+        self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
+    ) -> tuple[WindowProblem, Inverse]:
+        """The window problem of frames ``template+1 .. last`` from ``state`` at ``template``;
+        ``confidence`` ``(N,)``: the probability that each marker's label there is right."""
         ...
 
     def invert(self, solution: WindowSolution, inverse: Inverse) -> WindowLabels:
@@ -83,7 +86,7 @@ def label_windows(
     for k in range(0 if after is None else after.index + 1, len(spans)):
         template, last = spans[k]
         began = time.perf_counter()
-        problem, inverse = chain.pose(state, template, last)
+        problem, inverse = chain.pose(state, template, last, carry.confidence)
         prepared = time.perf_counter() - began
         solution = _solve(formulation, problem, template)
         labels = chain.invert(solution, inverse)

@@ -74,7 +74,10 @@ class PerCameraChain:
     gating: PerCameraGating = field(default_factory=PerCameraGating)
     weights: ArcCostWeights = MARKER_COSTS
 
-    def pose(self, state: MarkerState, template: int, last: int) -> tuple[WindowProblem, PerCameraInverse]:
+    def pose(
+        self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
+    ) -> tuple[WindowProblem, PerCameraInverse]:
+        """As ``WindowChain.pose``; ``confidence`` is not used: a camera's views carry no exchange repair."""
         frames = _undistorted(self.rig, self.detections[template + 1 : last + 1])
         guide = per_camera_guide(state, self.rig, frames, self.gating)
         gated = per_camera_candidates(state, self.rig, guide, frames, self.gating)
