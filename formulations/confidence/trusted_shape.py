@@ -61,6 +61,14 @@ class TrustedShape:
         known: Mask = np.asarray(np.isfinite(self.distance_mean).all(axis=1))
         return known
 
+    def put_in(self, state: MarkerState, rows: Mask) -> MarkerState:
+        """``state`` with the trusted shapes of the ``rows`` markers that have one."""
+        take = (rows & self.known)[:, None]
+        return replace(
+            state, distance_mean=np.where(take, self.distance_mean, state.distance_mean),
+            distance_var=np.where(take, self.distance_var, state.distance_var),
+        )
+
     def updated(self, end: MarkerState, trusted: Mask) -> TrustedShape:
         """The shapes of ``trusted`` markers taken from ``end`` (a first one only where seen
         there); the others' kept as they were."""
@@ -88,10 +96,6 @@ def confirmed(
     rigid = shape.distance_var[doubtful] <= settings.max_sd_mm**2  # False on a NaN row: no shape, no judgement
     firm = (rigid & end.visible[neighbours] & trusted[neighbours]).sum(axis=1) >= settings.min_rigid
     # Partners without a trusted shape are judged by what they have learned.
-    known = shape.known[:, None]
-    reference = replace(
-        end, distance_mean=np.where(known, shape.distance_mean, end.distance_mean),
-        distance_var=np.where(known, shape.distance_var, end.distance_var),
-    )
+    reference = shape.put_in(end, np.ones(len(end.position), bool))
     probability = shape_identity(reference, end, doubtful)
     return np.where(firm, probability, np.nan)

@@ -107,8 +107,9 @@ class ModelChain:
         """As ``WindowChain.pose``, the model steering first (module doc). The inner chain's
         exchange repair keeps its full bar, ``confidence`` left out: the model's recovery
         re-reads contradicted segments, and lowering the bar for doubtful labels as well cost
-        the basket sprint's model start 83.4 -> 62.0 % (``bench/model_start.py``: its arm,
-        forearm and wheel carry identical marker plates, which fit each other's places)."""
+        the refused real takes' model starts (``bench/model_start.py``): basket sprint 83.4 ->
+        62.0 % (its arm, forearm and wheel carry identical marker plates, which fit each
+        other's places), 03_rolling 40.3 -> 37.8 %, racing 80.3 -> 80.1 %."""
         points = self.points[template]
         found = cache(partial(identify, self._geometry, points))  # one identification serves both
         state = self._acquired(state, points, found)
