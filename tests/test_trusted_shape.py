@@ -38,17 +38,31 @@ def test_the_trusted_shape_tells_an_exchange_the_learned_shape_has_adapted_to() 
     trusted = TrustedShape.of(_state(BODY))
     judged = np.array([0, 1])
     assert (shape_identity(adapted, adapted, judged) > 0.99).all()  # what the learned shape says: fine
-    assert (confirmed(trusted, adapted, judged, np.ones(6, bool)) < 0.01).all()
+    assert (confirmed(trusted, adapted, judged, np.ones(6, bool), DOUBTFUL_BELOW) < 0.01).all()
 
 
 def test_a_right_label_is_confirmed_and_thin_evidence_says_nothing() -> None:
     end = _state(BODY + np.array([3.0, -2.0, 1.0]))
     trusted = TrustedShape.of(_state(BODY))
-    assert confirmed(trusted, end, np.array([0]), np.ones(6, bool))[0] > DOUBTFUL_BELOW
+    assert confirmed(trusted, end, np.array([0]), np.ones(6, bool), DOUBTFUL_BELOW)[0] > DOUBTFUL_BELOW
     only_one = np.array([True, True, False, False, False, False])  # one trusted neighbour of 0
-    assert np.isnan(confirmed(trusted, end, np.array([0]), only_one)[0])
+    assert np.isnan(confirmed(trusted, end, np.array([0]), only_one, DOUBTFUL_BELOW)[0])
     loose = replace(trusted, distance_var=np.full(trusted.distance_var.shape, 400.0))  # nothing rigid
-    assert np.isnan(confirmed(loose, end, np.array([0]), np.ones(6, bool))[0])
+    assert np.isnan(confirmed(loose, end, np.array([0]), np.ones(6, bool), DOUBTFUL_BELOW)[0])
+
+
+def test_a_limb_doubted_as_a_whole_vouches_for_itself_unless_exchanged_inside() -> None:
+    """No marker of the body is trusted, so none has a trusted neighbour to be judged by:
+    only the doubtful markers the trusted shape confirms can vouch for each other."""
+    trusted = TrustedShape.of(_state(BODY))
+    nobody = np.zeros(6, bool)
+    everyone = np.arange(6)
+    right = confirmed(trusted, _state(BODY + np.array([3.0, -2.0, 1.0])), everyone, nobody, DOUBTFUL_BELOW)
+    assert (right > DOUBTFUL_BELOW).all()
+    exchanged = confirmed(trusted, _state(_exchanged()), everyone, nobody, DOUBTFUL_BELOW)
+    assert not (np.nan_to_num(exchanged[:2], nan=0.0) > DOUBTFUL_BELOW).any()  # the pair stays doubtful
+    alone = np.array([0, 1])  # the rest neither trusted nor doubtful here: nothing vouches
+    assert np.isnan(confirmed(trusted, _state(BODY), alone, nobody, DOUBTFUL_BELOW)).all()
 
 
 def _lift(end: MarkerState) -> tuple[np.ndarray, IdentityCarry]:
@@ -100,4 +114,4 @@ def test_a_marker_never_seen_has_no_trusted_shape_to_go_back_to() -> None:
     assert np.array_equal(kept.distance_mean[0], learned.distance_mean[0])  # nothing to forget back to
     assert not shape.updated(start, np.ones(6, bool)).known[0]  # trusted but unseen: still no shape
     assert shape.updated(_state(BODY), np.ones(6, bool)).known.all()  # seen and trusted: it has one
-    assert np.isnan(confirmed(shape, _state(BODY), np.array([0]), np.ones(6, bool))[0])
+    assert np.isnan(confirmed(shape, _state(BODY), np.array([0]), np.ones(6, bool), DOUBTFUL_BELOW)[0])

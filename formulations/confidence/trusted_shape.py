@@ -15,9 +15,10 @@ p(m) of ``shape.shape_identity`` (its own point against an exchange with any see
 or a lost marker's point), with the learned statistics replaced by the trusted ones.
 
 Only firm evidence judges: at least ``min_rigid`` of the marker's neighbours that are rigid
-with it (trusted distance s.d. at most ``max_sd_mm``) must be seen and trusted themselves
+with it (trusted distance s.d. at most ``max_sd_mm``) must be seen and vouch for it
 (``ShapeReacquisition``'s rule for judging a point by its shape); otherwise nothing is said
-and the doubt stays.
+and the doubt stays. A neighbour vouches when it is trusted, or doubtful and confirmed
+itself on firm evidence (``confirmed``).
 """
 
 from __future__ import annotations
@@ -80,22 +81,36 @@ class TrustedShape:
 
 
 def confirmed(
-    shape: TrustedShape, end: MarkerState, doubtful: NDArray[np.intp], trusted: Mask,
+    shape: TrustedShape, end: MarkerState, doubtful: NDArray[np.intp], trusted: Mask, sure: float,
     settings: ShapeReacquisition = SHAPE_REACQUISITION,
 ) -> Array:
     """``(D,)`` p(m) for the seen markers ``doubtful`` judged by their trusted shape; NaN where
     the evidence is not firm (module doc).
+
+    A doubtful marker whose own p(m) is at least ``sure`` vouches for its neighbours like a
+    trusted one, as long as it is firm itself: a limb doubted as a whole (every marker of the
+    tennis serve's forearm after one bad strike) has no trusted neighbour, yet an exchange
+    inside it breaks its distances to the rest. The vouchers are the largest such set (a
+    fixed point: drop every voucher not firm under the others until none is).
 
     Args:
         shape: The trusted shapes.
         end: The state at the window's last frame (positions, who is seen).
         doubtful: Markers seen at ``end`` whose labels are doubtful.
         trusted: ``(N,)`` markers whose labels are trusted now.
+        sure: The p(m) at which a doubtful marker vouches for others.
     """
     neighbours = end.neighbours[doubtful]
     rigid = shape.distance_var[doubtful] <= settings.max_sd_mm**2  # False on a NaN row: no shape, no judgement
-    firm = (rigid & end.visible[neighbours] & trusted[neighbours]).sum(axis=1) >= settings.min_rigid
     # Partners without a trusted shape are judged by what they have learned.
     reference = shape.put_in(end, np.ones(len(end.position), bool))
     probability = shape_identity(reference, end, doubtful)
-    return np.where(firm, probability, np.nan)
+    seen = rigid & end.visible[neighbours]
+    vouching = trusted.copy()
+    vouching[doubtful] = probability >= sure
+    while True:
+        firm = (seen & vouching[neighbours]).sum(axis=1) >= settings.min_rigid
+        lapsed = vouching[doubtful] & ~firm
+        if not lapsed.any():
+            return np.where(firm, probability, np.nan)
+        vouching[doubtful[lapsed]] = False

@@ -190,7 +190,7 @@ def lifted(
     doubtful = np.flatnonzero(~trusted & end.visible)
     after = carry.confidence
     if len(doubtful):
-        judged = np.nan_to_num(confirmed(carry.shape, end, doubtful, trusted), nan=0.0)
+        judged = np.nan_to_num(confirmed(carry.shape, end, doubtful, trusted, DOUBTFUL_BELOW), nan=0.0)
         frames = confidence.shape[0]
         since = np.arange(frames)[:, None] >= (frames - end.streak[doubtful])[None, :]
         confidence = confidence.copy()
