@@ -105,11 +105,11 @@ def confirmed(
     # Partners without a trusted shape are judged by what they have learned.
     reference = shape.put_in(end, np.ones(len(end.position), bool))
     probability = shape_identity(reference, end, doubtful)
-    seen = rigid & end.visible[neighbours]
+    rigid_seen = rigid & end.visible[neighbours]
     vouching = trusted.copy()
     vouching[doubtful] = probability >= sure
     while True:
-        firm = (seen & vouching[neighbours]).sum(axis=1) >= settings.min_rigid
+        firm = (rigid_seen & vouching[neighbours]).sum(axis=1) >= settings.min_rigid
         lapsed = vouching[doubtful] & ~firm
         if not lapsed.any():
             return np.where(firm, probability, np.nan)
