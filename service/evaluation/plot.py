@@ -15,6 +15,7 @@ from matplotlib.lines import Line2D
 from matplotlib.typing import ColorType
 
 from service.io.recording import LabeledTrajectories, Recording
+from service.io.runs import runs
 
 _AXIS_LABELS = ("x (mm)", "y (mm)", "z (mm)")
 _COLOURS = matplotlib.color_sequences["tab10"]
@@ -101,9 +102,8 @@ def _draw_occlusions(ax: Axes, traj: LabeledTrajectories, columns: list[int]) ->
     """One row per marker, a bar wherever it is occluded, its share in the row label."""
     frame = 1.0 / traj.rate
     for row, k in enumerate(columns):
-        runs = _runs(traj.occluded[:, k])
         # Bars are centred on samples; the edge line keeps one-frame gaps visible.
-        spans = [(start * frame - frame / 2, length * frame) for start, length in runs]
+        spans = [(start * frame - frame / 2, length * frame) for start, length in runs(traj.occluded[:, k])]
         colour = _colour(row)
         ax.broken_barh(spans, (row - 0.35, 0.7), facecolor=colour, edgecolor=colour)
     ax.set_yticks(
@@ -115,13 +115,6 @@ def _draw_occlusions(ax: Axes, traj: LabeledTrajectories, columns: list[int]) ->
     ax.set_xlim(-frame / 2, (traj.n_frames - 0.5) * frame)
     ax.set_ylabel("occluded")
     ax.set_xlabel("time (s)")
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """``(start, length)`` of every run of True in a 1-D bool array."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    return [(int(s), int(e - s)) for s, e in zip(starts, ends)]
 
 
 def _add_legend(fig: Figure, names: list[str], with_truth: bool) -> None:

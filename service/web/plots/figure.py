@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 
-import numpy as np
 from matplotlib.backends.backend_svg import FigureCanvasSVG
 from matplotlib.figure import Figure
 
@@ -24,8 +23,3 @@ def svg_bytes(figure: Figure, title: str) -> bytes:
     return buffer.getvalue()
 
 
-def runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """``(start, length)`` of every run of True in a 1-D bool array."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    return [(int(s), int(e - s)) for s, e in zip(starts, ends)]
