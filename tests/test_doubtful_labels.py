@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from service.cli.report import warn_doubtful
-from service.evaluation.doubt_scores import doubt_scores
+from service.evaluation.doubt_scores import doubt_counts, doubt_scores
 from service.evaluation.scenario import Scenario
 from service.evaluation.simulated import SimulatedCapture
 from service.io.formats import read_labeled
@@ -74,6 +74,18 @@ def test_doubt_scores_count_wrong_labels_flagged_doubtful() -> None:
     right = LabeledTrajectories(["a", "b"], np.zeros((4, 2, 3)), taken < 0, 100.0,
                                 point_index=np.array([[0, 1], [1, 0], [0, 1], [0, -1]]), confidence=confidence)
     assert doubt_scores(capture, right)["doubtful_recall"] is None  # nothing wrong to find
+
+
+def test_labels_on_jumped_marker_frames_are_left_out_of_the_doubt_counts() -> None:
+    capture = _capture([np.array([0, 1]), np.array([1, 0]), np.array([0, 1])])
+    taken = np.array([[0, 1], [0, 1], [0, 1]])  # frame 1: both on the other's point
+    result = LabeledTrajectories(["a", "b"], np.zeros((3, 2, 3)), taken < 0, 100.0, point_index=taken,
+                                 confidence=np.array([[1.0, 1.0], [0.3, 0.95], [0.99, 0.2]]))
+    assert doubt_counts(capture, result).scores() == {"doubtful_share": 2 / 4, "doubtful_recall": 1 / 2}
+    unknown = np.zeros((3, 2), bool)
+    unknown[1, 1] = True  # the file's b is not known to be b there
+    counts = doubt_counts(capture, result, unknown)
+    assert (counts.labels, counts.doubtful, counts.wrong, counts.flagged) == (3, 2, 1, 1)
 
 
 def test_the_warning_is_one_stderr_line_above_the_share(capsys: pytest.CaptureFixture[str]) -> None:

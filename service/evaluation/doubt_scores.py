@@ -30,9 +30,14 @@ class DoubtCounts:
         }
 
 
-def doubt_counts(capture: SimulatedCapture, result: LabeledTrajectories) -> DoubtCounts:
+def doubt_counts(
+    capture: SimulatedCapture, result: LabeledTrajectories, unknown: np.ndarray | None = None,
+) -> DoubtCounts:
     """Count a labeling's labels against the truth; doubtful = confidence below
     ``DOUBTFUL_BELOW`` (``service.labeling.stats.doubtful_labels``).
+
+    ``unknown``: ``(frames, markers)`` marker-frames whose truth is not known (a recording's
+    own label jumps there, ``label_jumps``): their labels are left out of every count.
 
     Raises:
         ValueError: ``result`` has no confidences, or names a point a frame does not have.
@@ -41,6 +46,8 @@ def doubt_counts(capture: SimulatedCapture, result: LabeledTrajectories) -> Doub
         raise ValueError("the labeling has no confidence for every label")
     labeled = result.point_index >= 0
     labeled[0] = False
+    if unknown is not None:
+        labeled &= ~unknown
     owner = np.full(result.point_index.shape, -2)  # the true marker of each point taken, -1 a ghost
     for f in np.flatnonzero(labeled.any(axis=1)):
         taken = result.point_index[f, labeled[f]]
