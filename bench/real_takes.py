@@ -15,7 +15,9 @@ with the file's own labels:
 - extra: it took a point in a frame where it has none of its own.
 
 Accuracy = correct / (marker-frames present in the file), over the labeled frames, frame
-`start` included. The recordings are those of ``service.evaluation.matrix.RECORDINGS`` (the
+`start` included; "off jumps" the same without the marker-frames where the file's own labels
+jump to another marker after a gap (``service/evaluation/label_jumps.py``), where the file is
+no truth. The recordings are those of ``service.evaluation.matrix.RECORDINGS`` (the
 Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); their
 ``exclude`` columns (copies, a trigger) are kept, as `track` gets the file as it is.
 Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
@@ -42,6 +44,7 @@ sys.path.insert(0, str(ROOT))
 
 from formulations.errors import FormulationError  # noqa: E402
 from formulations.subject.fit import fit_subject  # noqa: E402
+from service.evaluation.label_jumps import label_jumps  # noqa: E402
 from service.evaluation.matrix import DATA, RECORDINGS  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
 from service.io.recording import Recording  # noqa: E402
@@ -60,6 +63,8 @@ class Row:
     wrong: int = 0
     missing: int = 0
     extra: int = 0
+    on_jumps: int = 0  # present marker-frames where the file's label jumped
+    correct_on_jumps: int = 0
     wall: float = float("nan")
     seconds: float = float("nan")
     failure: str = ""
@@ -67,8 +72,10 @@ class Row:
     def cells(self) -> str:
         present = self.correct + self.wrong + self.missing
         if self.failure:
-            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | |"
+            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | | |"
+        off_jumps = (self.correct - self.correct_on_jumps) / (present - self.on_jumps)
         return (f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.correct / present:.2%} | "
+                f"{off_jumps:.2%} | "
                 f"{self.wrong} | {self.missing} | {self.extra} | {present} | {self.wall:.1f} | "
                 f"{self.frames / self.seconds:.0f} |")
 
@@ -80,6 +87,7 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row) -> None:
         theirs = np.full(truth.positions.shape[:1] + (output.n_markers, 3), np.nan)
         theirs[rows][: output.n_frames] = output.positions[: rows.stop - rows.start]
     missing_out = output.missing() if output.n_frames == truth.n_frames else np.isnan(theirs).any(axis=2)
+    jumped = label_jumps(truth)[rows]
     for j, name in enumerate(output.names):
         i = truth.names.index(name)
         own, took = ~truth.missing()[rows, i], ~missing_out[rows, j]
@@ -88,6 +96,8 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row) -> None:
         row.wrong += int((own & took & ~same).sum())
         row.missing += int((own & ~took).sum())
         row.extra += int((~own & took).sum())
+        row.on_jumps += int((own & jumped[:, i]).sum())
+        row.correct_on_jumps += int((own & took & same & jumped[:, i]).sum())
 
 
 def run(command: list[str], row: Row) -> dict | None:
@@ -138,8 +148,8 @@ def main() -> None:
     parser.add_argument("--cap", type=int, default=0, help="label at most this many frames of each take")
     parser.add_argument("--model", action="store_true", help="label a take without a full frame 0 from a model of its first half")
     args = parser.parse_args()
-    print("| take | start | frames | markers | correct | wrong | missing | extra | present | wall s | frames/s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | wall s | frames/s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:
         for recording in RECORDINGS:
             if args.only and recording.name not in args.only:
