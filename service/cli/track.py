@@ -22,6 +22,7 @@ from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion_warning
 
@@ -80,6 +81,8 @@ def run_track(
         )
     warn_doubtful(summary["doubtful_fraction"])
     warn(fast_motion_warning([FastMarker(**fast) for fast in summary["fast_markers"]]))
+    span = summary["unnamed_span"]
+    warn(unnamed_warning(None if span is None else UnnamedSpan(**span), capture.rate, start or 0))
     warn(not_kept)
     warn(_absent_warning(absent, start or 0))
 
@@ -97,6 +100,8 @@ def track_summary(
     residual, mean over the axes); None when too little was seen to say. ``fast_markers``
     lists the markers that move more per frame than half their neighbour distance
     (``service.labeling.take_warnings``: marker, step_mm, neighbour_mm, neighbour).
+    ``unnamed_span`` is the longest stretch where no marker is labeled though points are
+    there (``service.labeling.lost_subject``: start, frames, points), or None.
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {
@@ -110,10 +115,18 @@ def track_summary(
         "doubtful_fraction": doubtful_fraction(result.confidence, result.occluded),
         "reacquired": reacquisitions(result.names, result.occluded),
         "fast_markers": [vars(fast) for fast in fast_markers(result.names, result.positions)],
+        "unnamed_span": _unnamed(capture, result),
         "seconds": seconds,
         "formulation": formulation,
         "output": str(output),
     }
+
+
+def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | None:
+    if capture.points is None:  # camera mode: no count of points per frame to hold the labels against
+        return None
+    span = unnamed_span(result.occluded, np.array([len(p) for p in capture.points]), capture.rate)
+    return None if span is None else vars(span)
 
 
 def _absent_warning(absent: list[str], start: int) -> str | None:
