@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from conftest import DATA
 
 from service.io.formats import read_labeled
 from service.io.formats.c3d import write_c3d
@@ -16,7 +17,7 @@ from service.io.recording import LabeledTrajectories
 from service.labeling.lost_subject import MIN_POINTS, unnamed_span
 
 REPO = Path(__file__).resolve().parents[1]
-CMU = REPO.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
+CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 
 
 def test_the_span_is_the_unlabeled_run_with_the_most_frames_that_hold_a_constellation() -> None:
