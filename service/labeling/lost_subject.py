@@ -43,7 +43,7 @@ def unnamed_span(occluded: np.ndarray, points_per_frame: np.ndarray, rate: float
     """The longest such span of a labeling (``occluded`` ``(F, N)``), or None (module doc)."""
     points = np.asarray(points_per_frame)
     readable = points >= MIN_POINTS
-    spans = runs(np.all(occluded, axis=1).astype(bool))
+    spans = runs(np.all(occluded, axis=1))
     if not spans:
         return None
     start, length = max(spans, key=lambda span: int(readable[span[0] : span[0] + span[1]].sum()))

@@ -21,5 +21,3 @@ def svg_bytes(figure: Figure, title: str) -> bytes:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="svg", metadata={"Title": title, "Date": None})
     return buffer.getvalue()
-
-
