@@ -33,12 +33,12 @@ def tie_gap_ends(positions: Array, filled: Array) -> Array:
     tied = filled.copy()
     seen: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)
     for marker in range(positions.shape[1]):
-        for start, end in _closed_gaps(seen[:, marker]):
+        for start, end in closed_gaps(seen[:, marker]):
             _tie(tied[start : end + 1, marker], positions[:, marker], start, end)
     return tied
 
 
-def _closed_gaps(seen: NDArray[np.bool_]) -> list[tuple[int, int]]:
+def closed_gaps(seen: NDArray[np.bool_]) -> list[tuple[int, int]]:
     """``(s, e)`` of each run of unseen frames with a sighting before and after it."""
     change = np.flatnonzero(seen[:-1] != seen[1:])
     starts, ends = change[seen[change]] + 1, change[~seen[change]]

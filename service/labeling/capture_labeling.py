@@ -26,6 +26,7 @@ import numpy as np
 
 from formulations.cameras.rig import Rig
 from formulations.markers.gap_ends import tie_gap_ends
+from formulations.markers.rigid_fill import rigid_fill
 from formulations.subject.take_learning import learn_from_take
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
@@ -96,7 +97,7 @@ class CaptureLabeling:
         marker's best view per frame (``service.best_view.markers``); with every label's confidence."""
         labels = self._association.assemble(outcomes)
         if labels.filled.size:
-            labels.filled = tie_gap_ends(labels.positions, labels.filled)
+            labels.filled = rigid_fill(labels.positions, tie_gap_ends(labels.positions, labels.filled))
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._view_choice is None:
             return labels

@@ -1,0 +1,74 @@
+"""A closed gap refilled by its donors' rigid motion from both sides (``formulations.markers.rigid_fill``)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from formulations.markers.gap_ends import tie_gap_ends
+from formulations.markers.rigid_fill import rigid_fill
+
+FRAMES = 80
+GAP = slice(30, 55)
+BODY = np.array([[0, 0, 0], [80, 0, 0], [0, 90, 0], [0, 0, 100], [70, 60, 40]], float)
+
+
+def _spinning_body(loose: bool = False) -> np.ndarray:
+    """``(FRAMES, 5 or 6, 3)``: a rigid body tumbling and translating; with ``loose``, a sixth
+    marker swinging on its own 150 mm about the body's first marker."""
+    angle = np.linspace(0.0, 10.0, FRAMES)
+    spin = Rotation.from_rotvec(np.outer(angle, [0.3, 0.2, 0.93])).as_matrix()
+    body = np.einsum("fij,kj->fki", spin, BODY) + np.outer(np.arange(FRAMES) * 9.0, [1.0, 0.4, 0.0])[:, None]
+    if not loose:
+        return body
+    swing = 150.0 * np.stack([np.sin(np.arange(FRAMES) / 4.0), np.cos(np.arange(FRAMES) / 3.0), np.zeros(FRAMES)], axis=1)
+    return np.concatenate([body, (body[:, 0] + swing)[:, None]], axis=1)
+
+
+def _hidden(truth: np.ndarray, marker: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Positions with ``marker`` unseen over ``GAP``, and the fill a blind carry gives there
+    (its last sighting held), tied to both sightings as the labeler ties it."""
+    positions = truth.copy()
+    positions[GAP, marker] = np.nan
+    filled = np.full_like(truth, np.nan)
+    filled[GAP, marker] = truth[GAP.start - 1, marker]
+    return positions, tie_gap_ends(positions, filled)
+
+
+def test_a_tumbling_body_gives_the_hidden_marker_back_exactly():
+    truth = _spinning_body()
+    positions, tied = _hidden(truth)
+    # What the tie to both sightings alone leaves: the body turned under the marker.
+    assert np.linalg.norm(tied[GAP, 4] - truth[GAP, 4], axis=1).max() > 40.0
+    refilled = rigid_fill(positions, tied)
+    assert np.allclose(refilled[GAP, 4], truth[GAP, 4], atol=1e-6)
+    assert np.isnan(refilled[~np.isnan(positions).any(axis=2)]).all()  # seen frames stay unfilled
+
+
+def test_a_loose_donor_is_outweighed_by_the_rigid_ones():
+    truth = _spinning_body(loose=True)
+    positions, tied = _hidden(truth)
+    positions[GAP, 1] = np.nan  # a rigid donor lost too: the swinging marker is among the four
+    refilled = rigid_fill(positions, tied)
+    # Its spread (about 100 mm) gives it a ten-thousandth of a rigid donor's weight.
+    assert np.linalg.norm(refilled[GAP, 4] - truth[GAP, 4], axis=1).max() < 1.0
+
+
+def test_frames_without_three_donors_on_both_sides_keep_their_fill():
+    truth = _spinning_body()
+    positions, tied = _hidden(truth)
+    positions[GAP.stop : GAP.stop + 1, [1, 2]] = np.nan  # two donors lost where the gap closes
+    positions[40:45, 3] = np.nan  # and a third inside the gap
+    tied = tie_gap_ends(positions, np.where(np.isnan(positions), tied, np.nan))
+    refilled = rigid_fill(positions, tied)
+    # The closing side has two donors (0 and 3) wherever 3 is seen: nothing is carried from it.
+    assert np.array_equal(refilled[GAP, 4], tied[GAP, 4], equal_nan=True)
+
+
+def test_a_gap_open_at_either_end_is_left_as_it_was():
+    truth = _spinning_body()
+    positions = truth.copy()
+    positions[:10, 4] = np.nan
+    positions[70:, 2] = np.nan
+    filled = np.where(np.isnan(positions), 7.0, np.nan)
+    assert np.array_equal(rigid_fill(positions, filled), filled, equal_nan=True)
