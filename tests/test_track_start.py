@@ -109,6 +109,18 @@ def test_a_span_outside_the_take_is_one_line(span: tuple[str, ...], tmp_path: Pa
     assert code == 2 and stderr.startswith("error: --start ") and len(stderr.strip().splitlines()) == 1
 
 
+def test_a_one_frame_take_is_one_line_that_says_so(tmp_path: Path) -> None:
+    source = tmp_path / "one.c3d"
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = np.array([100.0])
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = ["A", "B", "C"]
+    c3d["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    c3d["data"]["points"] = np.concatenate([np.arange(9.0).reshape(3, 3, 1), np.ones((1, 3, 1))])
+    c3d.write(str(source))
+    code, _, stderr = _track(source, "--out", tmp_path / "out.c3d")
+    assert code == 2 and stderr.strip() == "error: the take has 1 frame; labeling needs at least 2"
+
+
 def test_a_capture_json_takes_no_start_without_a_model(tmp_path: Path) -> None:
     document = tmp_path / "capture.json"
     document.write_text('{"markers": ["A"], "first_frame": [[0, 0, 0]], "rate": 100, "frames": [[[0, 0, 0]], [[0, 0, 1]]]}')

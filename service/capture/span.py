@@ -11,8 +11,11 @@ def frame_span(start: int, end: int | None, n_frames: int) -> int:
     A window needs the start frame and at least one frame after it.
 
     Raises:
-        InputError: ``start`` outside the take, or ``end`` not after ``start + 1`` or past its last frame.
+        InputError: A take of fewer than two frames, ``start`` outside the take, or ``end``
+            not after ``start + 1`` or past its last frame.
     """
+    if n_frames < 2:
+        raise InputError(f"the take has {n_frames} frame{'s' * (n_frames != 1)}; labeling needs at least 2")
     stop = n_frames if end is None else end
     if not 0 <= start < n_frames or not start + 2 <= stop <= n_frames:
         raise InputError(
