@@ -145,7 +145,8 @@ def test_eval_runs_a_camera_scenario_through_a_real_calibration(tmp_path: Path) 
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)
     assert summary["frames"] == 120 and summary["label_accuracy"] >= 0.98
-    assert 0 < summary["rmse_mm"] <= 3.0 < summary["filled_rmse_mm"]
+    # Triangulated within a few mm; the fill (gaps refilled from rigid donors) within the 15 mm goal.
+    assert 0 < summary["rmse_mm"] <= 3.0 and 0 < summary["filled_rmse_mm"] <= 15.0
     assert_figures_agree(summary, 120)
 
 
