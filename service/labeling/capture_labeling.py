@@ -93,8 +93,10 @@ class CaptureLabeling:
         )
 
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
-        """The labeled trajectories from all windows' outcomes; in camera mode with each
-        marker's best view per frame (``service.best_view.markers``); with every label's confidence."""
+        """The labeled trajectories from all windows' outcomes; each closed gap's fill tied to
+        both sightings (``gap_ends``) and refilled from rigid donors where both sides have
+        three (``rigid_fill``); in camera mode with each marker's best view per frame
+        (``service.best_view.markers``); with every label's confidence."""
         labels = self._association.assemble(outcomes)
         if labels.filled.size:
             labels.filled = rigid_fill(labels.positions, tie_gap_ends(labels.positions, labels.filled))
