@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
+import formulations.markers.rigid_fill as rigid_fill_module
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill
 
@@ -72,3 +74,23 @@ def test_a_gap_open_at_either_end_is_left_as_it_was():
     positions[70:, 2] = np.nan
     filled = np.where(np.isnan(positions), 7.0, np.nan)
     assert np.array_equal(rigid_fill(positions, filled), filled, equal_nan=True)
+
+
+def _bar_and_a_far_marker() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Four markers on a bar (0.3 mm noise) and one 360 mm off it, all turning together; the
+    far one hidden over ``GAP``: truth, positions, and the tied blind fill."""
+    bar = np.array([[0, 0, 0], [70, 0, 0], [140, 0, 0], [210, 0, 0], [105, 360, 0]], float)
+    angle = np.linspace(0.0, 1.0, FRAMES)
+    turn = Rotation.from_rotvec(np.outer(angle, [0.2, 0.3, 1.0])).as_matrix()
+    truth = np.einsum("fij,kj->fki", turn, bar)
+    truth[:, :4] += np.random.default_rng(0).normal(0.0, 0.3, truth[:, :4].shape)
+    positions, tied = _hidden(truth)
+    return truth, positions, tied
+
+
+def test_donors_on_one_line_carry_nothing(monkeypatch: pytest.MonkeyPatch):
+    truth, positions, tied = _bar_and_a_far_marker()
+    assert np.array_equal(rigid_fill(positions, tied)[GAP, 4], tied[GAP, 4])
+    # Without the check the turn about the bar is the noise's: the far marker goes astray.
+    monkeypatch.setattr(rigid_fill_module, "MIN_SPAN_MM", 0.0)
+    assert np.linalg.norm(rigid_fill(positions, tied)[GAP, 4] - truth[GAP, 4], axis=1).max() > 50.0

@@ -31,6 +31,20 @@ def rigid_transform(source: np.ndarray, target: np.ndarray, weight: np.ndarray) 
     return rotation, c_s, c_t
 
 
+MIN_SPAN_MM = 10.0  # RMS spread across the best-fit line below which a rotation is left free
+
+
+def span_across_line(points: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """``(S,)`` weighted RMS distance (mm) of each set's ``(S, K, 3)`` points from their best-fit
+    line: near 0, the points fix no rotation about that line, and a fit turns a point far from
+    it at random."""
+    w = weight / np.maximum(weight.sum(axis=1, keepdims=True), 1e-12)
+    centred = points - np.einsum("sk,skd->sd", w, points)[:, None]
+    scatter = np.einsum("sk,ski,skj->sij", w, centred, centred)
+    span: np.ndarray = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter)[:, 1], 0.0))
+    return span
+
+
 FOLLOW_ITERATIONS = 3
 
 

@@ -22,16 +22,18 @@ def distance_spread(positions: Array, min_frames: int) -> tuple[Array, NDArray[n
     Returns:
         ``(N, N)`` sd of the distance (0 on the diagonal) and ``(N, N)`` frames seen together.
     """
-    diff = positions[:, :, None, :] - positions[:, None, :, :]
-    dist = np.sqrt(np.einsum("knmd,knmd->knm", diff, diff))
-    seen = np.isfinite(dist)
-    count = seen.sum(axis=0)
-    filled = np.where(seen, dist, 0.0)
-    mean = filled.sum(axis=0) / np.maximum(count, 1)
-    var = np.where(seen, (dist - mean) ** 2, 0.0).sum(axis=0) / np.maximum(count, 1)
-    sd = np.where(count >= min_frames, np.sqrt(var), np.inf)
+    n = positions.shape[1]
+    sd, count = np.empty((n, n)), np.empty((n, n), dtype=np.int64)
+    for marker in range(n):  # a row at a time: (K, N) distances, not (K, N, N, 3) differences
+        dist = np.linalg.norm(positions - positions[:, marker : marker + 1], axis=2)
+        seen = np.isfinite(dist)
+        count[marker] = seen.sum(axis=0)
+        filled = np.where(seen, dist, 0.0)
+        mean = filled.sum(axis=0) / np.maximum(count[marker], 1)
+        var = np.where(seen, (dist - mean) ** 2, 0.0).sum(axis=0) / np.maximum(count[marker], 1)
+        sd[marker] = np.where(count[marker] >= min_frames, np.sqrt(var), np.inf)
     np.fill_diagonal(sd, 0.0)
-    return sd, count.astype(np.int64)
+    return sd, count
 
 
 def mean_distance(a: Array, b: Array) -> float:

@@ -23,13 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from formulations.markers.rigid import rigid_transform
+from formulations.markers.rigid import MIN_SPAN_MM, rigid_transform, span_across_line
 from formulations.subject.geometry import ModelGeometry
 
 Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
 RIGID_WITHIN = 2.0  # a fit within twice every tolerance is a segment moving as the model says
-MIN_SPAN_MM = 10.0  # RMS spread across the best-fit line below which a rotation is left free
 
 
 @dataclass(frozen=True)
@@ -91,10 +90,7 @@ def _pose(poses: SegmentPoses, s: int, source: Array, target: Array, weight: Mas
         return False
     w = weight[frames].astype(float)
     a, b = source[frames], np.where(weight[frames, :, None], target[frames], 0.0)
-    centred = a - (np.einsum("fk,fkd->fd", w, a) / w.sum(axis=1, keepdims=True))[:, None]
-    scatter = np.einsum("fk,fki,fkj->fij", w, centred, centred) / w.sum(axis=1)[:, None, None]
-    spread = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter)[:, 1], 0.0))  # across the best line
-    keep = spread >= MIN_SPAN_MM
+    keep = span_across_line(a, w) >= MIN_SPAN_MM
     if not keep.any():
         return False
     frames, a, b, w = frames[keep], a[keep], b[keep], w[keep]
