@@ -86,4 +86,3 @@ def _moved(reference: tuple[Array, Array], shape: tuple[Array, Array], rule: Lab
     if rigid.sum() < rule.min_partners:
         return False
     return bool(np.median(np.abs(shape[0][rigid] - reference[0][rigid])) > rule.jump_mm)
-
