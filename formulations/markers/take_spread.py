@@ -1,0 +1,58 @@
+"""How much each marker-neighbour distance varies over a whole labeled take.
+
+The labeler learns the spread of each distance online (``MarkerState.distance_var``), from a
+prior of 100 mm^2 at the rate of 0.03 a frame. Early in a take that prior is all it has:
+a forearm marker and a trunk marker are judged as if 10 mm apart at most, so at a serve's
+first swing the shape term holds arm markers to where the trunk says they belong and the
+arm's markers exchange. Ringer & Lasenby (2004, Sec. 3) compute the same spreads, their
+matrix D, over the whole sequence. A first labeling of the take gives them: its labels are
+mostly right, and a spread only needs the distance over the frames where both markers were
+labeled.
+
+Per marker m and neighbour j, over the frames where both were labeled,
+
+    var_mj = ((P90(d_mj) - P10(d_mj)) / 2.563)^2,   floored at ``SPREAD_FLOOR_MM2``,
+
+the variance of a normal distribution with those deciles: a first pass that gave m a wrong
+point in up to a tenth of those frames leaves it unchanged. Pairs labeled together in fewer
+than ``MIN_FRAMES`` frames keep the state's prior.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.state import MarkerState
+
+Array = NDArray[np.float64]
+
+DECILE_SPAN_SD = 2.563  # P90 - P10 of a normal distribution, in standard deviations
+SPREAD_FLOOR_MM2 = 1.0  # below the noise of a distance between two centroids
+MIN_FRAMES = 20  # fewer frames labeled together say too little of a spread
+
+
+def take_spread(positions: Array, neighbours: NDArray[np.int64]) -> Array:
+    """``(N, K)`` variance of each marker-neighbour distance (module doc), NaN where the pair
+    was labeled together in fewer than ``MIN_FRAMES`` frames.
+
+    Args:
+        positions: ``(F, N, 3)`` labeled positions, NaN where a marker has no label.
+        neighbours: ``(N, K)`` each marker's neighbours.
+    """
+    distance = np.linalg.norm(positions[:, :, None] - positions[:, neighbours], axis=3)  # (F, N, K)
+    enough = np.isfinite(distance).sum(axis=0) >= MIN_FRAMES
+    if not enough.any():
+        return np.full(neighbours.shape, np.nan)
+    low, high = np.nanpercentile(distance[:, enough], [10, 90], axis=0)
+    spread = np.full(neighbours.shape, np.nan)
+    spread[enough] = np.maximum(((high - low) / DECILE_SPAN_SD) ** 2, SPREAD_FLOOR_MM2)
+    return spread
+
+
+def with_take_spread(state: MarkerState, positions: Array) -> MarkerState:
+    """``state`` with each distance variance the take's spread where it is known."""
+    spread = take_spread(positions, state.neighbours)
+    return replace(state, distance_var=np.where(np.isfinite(spread), spread, state.distance_var))
