@@ -59,7 +59,8 @@ def _solved_directly(capture: Capture, formulation: str) -> WindowSolution:
 
 
 def _solve(client, capture: Capture, formulation: str) -> dict:
-    options = LabelingOptions(formulation=formulation, window=capture.n_frames)
+    """The window solved once, from the labeled first frame: no second pass (``_solved_directly``)."""
+    options = LabelingOptions(formulation=formulation, window=capture.n_frames, second_pass=False)
     answer = client.post("/v1/solve", content=document_json(capture, options), headers=JSON)
     assert answer.status_code == 200, answer.text
     return answer.json()
@@ -233,7 +234,7 @@ def test_solve_proves_nothing_for_a_heuristic(client, cluttered):
 
 @pytest.mark.parametrize("formulation", ["lp-l1", "nn-hungarian"])
 def test_job_status_certifies_a_window_as_solve_does(client, cluttered, formulation):
-    options = LabelingOptions(formulation=formulation, window=cluttered.n_frames)
+    options = LabelingOptions(formulation=formulation, window=cluttered.n_frames, second_pass=False)
     job = wait_for(client, _submit(client, document_json(cluttered, options))["id"])
     assert job["state"] == "done", job
     (window,) = job["windows"]

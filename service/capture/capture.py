@@ -36,6 +36,9 @@ class LabelingOptions:
             III, ``service.best_view.markers``), the price of a camera switch in frames of
             the best view; default 1.
         best_view_window: Camera mode: N, frames per best-view window; default 30.
+        second_pass: 3D points without a subject model: label the take again from the
+            distance spreads the first labeling measured, and keep the labeling with fewer
+            doubtful labels (``service.labeling.second_pass``); up to twice the time.
     """
 
     formulation: str | dict | Formulation = "lp-l1"
@@ -44,6 +47,7 @@ class LabelingOptions:
     layout_weight: float = 0.0
     best_view_switch_cost: float = 1.0
     best_view_window: int = 30
+    second_pass: bool = True
 
 
 @dataclass

@@ -13,7 +13,8 @@
       "detections": {"cam1": [[[u, v], ...], ...], ...},   # camera mode: per camera, per frame
       "formulation": "lp-l1" or {"name": "ilp", "time_limit": 10},
       "window": 20,
-      "association": "joint-3d"
+      "association": "joint-3d",
+      "second_pass": true                  # 3D points: label again from the take's spreads if less doubtful
     }
 
 Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only)
@@ -88,6 +89,7 @@ class CaptureDocument(BaseModel):
     formulation: str | dict = "lp-l1"
     window: int = Field(default=20, ge=2)
     association: Literal[ASSOCIATIONS] = "joint-3d"  # type: ignore[valid-type]
+    second_pass: bool = True
 
     @field_validator("markers")
     @classmethod
@@ -170,7 +172,8 @@ class CaptureDocument(BaseModel):
     def of(cls, capture: Capture, options: LabelingOptions = LabelingOptions()) -> CaptureDocument:
         """The document of a capture (mm), e.g. to write an example or submit a job."""
         fields = {"rate": capture.rate, "markers": capture.names, "first_frame": capture.first_frame.tolist(),
-                  "formulation": options.formulation, "window": options.window, "association": options.association}
+                  "formulation": options.formulation, "window": options.window, "association": options.association,
+                  "second_pass": options.second_pass}
         if capture.points is not None:
             return cls(points=[frame.tolist() for frame in capture.points], **fields)
         cameras, found = capture.camera_frames()
@@ -183,7 +186,9 @@ class CaptureDocument(BaseModel):
         return cls.model_validate({"cameras": documents, "detections": detections, **fields})
 
     def options(self) -> LabelingOptions:
-        return LabelingOptions(formulation=self.formulation, window=self.window, association=self.association)
+        return LabelingOptions(
+            formulation=self.formulation, window=self.window, association=self.association, second_pass=self.second_pass,
+        )
 
 
 def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[int, int]) -> None:

@@ -66,6 +66,10 @@ def track(
         "stay unlabeled); with --model, from the model's identification. Frames outside --start/--end are kept, unlabeled.",
     )] = None,
     end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
+    second_pass: Annotated[bool, typer.Option(
+        "--second-pass/--one-pass", help="3D points, no --model: label again from the distance spreads the first "
+        "labeling measured, keep the labeling with fewer doubtful labels (up to twice the time).",
+    )] = True,
 ) -> None:
     """Label INPUT and write the named trajectories.
 
@@ -73,7 +77,9 @@ def track(
     """
     from service.cli.track import run_track
 
-    _guard(lambda: run_track(input, out, formulation, _window(window), shuffle, as_json, subject, start, end))
+    _guard(lambda: run_track(
+        input, out, formulation, _window(window), shuffle, as_json, subject, start, end, second_pass,
+    ))
 
 
 @app.command("eval")

@@ -29,7 +29,7 @@ from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion
 
 def run_track(
     input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool, as_json: bool = False,
-    model: Path | None = None, start: int | None = None, end: int | None = None,
+    model: Path | None = None, start: int | None = None, end: int | None = None, second_pass: bool = True,
 ) -> None:
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
 
@@ -43,7 +43,8 @@ def run_track(
     carries the model's marker names, in the input's unit and frame numbering; a .c3d of a
     .c3d that has every model marker is the input with those points replaced.
 
-    ``formulation`` and ``window`` override a JSON document's own options when given.
+    ``formulation`` and ``window`` override a JSON document's own options when given;
+    ``second_pass`` False labels once (``LabelingOptions.second_pass``).
     A .c3d/.trc output of a .c3d/.trc input keeps the input's unit and frame numbering;
     a .c3d of a .c3d keeps everything but the points (``write_labeled``).
     Prints one line, or with ``as_json`` one JSON object (``track_summary``), on stdout,
@@ -63,12 +64,13 @@ def run_track(
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:
         options = replace(options, window=window)
-    labeling = CaptureLabeling(capture, options)
+    labeling = CaptureLabeling(capture, replace(options, second_pass=second_pass))
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
     write_labeled(output, with_unlabeled(result, absent), source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
+    summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     if as_json:
         print(json.dumps(summary, allow_nan=False))
     else:
@@ -102,6 +104,8 @@ def track_summary(
     (``service.labeling.take_warnings``: marker, step_mm, neighbour_mm, neighbour).
     ``unnamed_span`` is the longest stretch where no marker is labeled though points are
     there (``service.labeling.lost_subject``: start, frames, points), or None.
+    ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share and the
+    one kept), None when no second pass applied.
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {

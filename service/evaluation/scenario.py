@@ -13,7 +13,9 @@ from service.io.toml_file import read_toml
 MODES = ("cloud", "cameras")
 FIRST_FRAMES = ("labeled", "model")
 ASSOCIATIONS = ("joint-3d", "per-camera")
-_EXPECTED: dict[object, str] = {float: "a number", int: "an integer", str: "a string", dict: "a table"}
+_EXPECTED: dict[object, str] = {
+    float: "a number", int: "an integer", str: "a string", dict: "a table", bool: "true or false",
+}
 _NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames")
 
 
@@ -52,6 +54,8 @@ class Scenario:
         first_frame: ``"labeled"`` (the labeler gets the first frame's names and positions) or
             ``"model"`` (cloud mode: it gets a subject model, ``markerflow eval --model``, and
             no labeled frame; the truth only scores).
+        second_pass: Cloud mode without a model: label again from the take's distance
+            spreads and keep the less doubtful labeling (``LabelingOptions.second_pass``).
     """
 
     mode: str = "cloud"
@@ -75,6 +79,7 @@ class Scenario:
     association: str = "joint-3d"
     up_axis: int = 2
     first_frame: str = "labeled"
+    second_pass: bool = True
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -123,7 +128,7 @@ class Scenario:
         """How to label this scenario's capture; ``formulation`` replaces the scenario's own."""
         return LabelingOptions(
             formulation=self.formulation_table if formulation is None else formulation, window=self.window,
-            association=self.association,
+            association=self.association, second_pass=self.second_pass,
         )
 
     @property
@@ -190,6 +195,8 @@ def _typed(key: str, value: Any, kind: object) -> Any:
     if kind is str and isinstance(value, str):
         return value
     if kind is dict and isinstance(value, dict):
+        return value
+    if kind is bool and isinstance(value, bool):
         return value
     expected = _EXPECTED[kind]
     raise InputError(f"scenario key '{key}' must be {expected}, got {value!r}")

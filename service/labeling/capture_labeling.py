@@ -39,6 +39,7 @@ from service.labeling.loop import Observer, Progress, WindowChain, first_marker_
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
 from service.labeling.per_camera import PerCameraChain
+from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 
@@ -67,6 +68,8 @@ class CaptureLabeling:
         self.formulation = resolve_formulation(options.formulation)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
         self._frames, self._window = capture.n_frames, options.window
+        self._second_pass = options.second_pass and capture.model is None and capture.points is not None
+        self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
         if capture.model is not None and capture.points is not None:
@@ -92,6 +95,24 @@ class CaptureLabeling:
             self._association, self.formulation, self._first, self._frames, self._window, after, progress, observer
         )
 
+    def refine(
+        self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
+    ) -> list[WindowOutcome] | None:
+        """The windows to keep once every window is labeled: ``outcomes``, or those of a
+        second pass (``second_pass``) when it is on and has fewer doubtful labels; None when
+        ``stop`` abandoned the second pass. Sets ``choice``."""
+        if not self._second_pass:
+            return outcomes
+        positions = self._association.assemble(outcomes).positions
+        kept = second_pass(
+            self._association, self.formulation, self._first, self._frames, self._window, outcomes, positions,
+            progress, stop,
+        )
+        if kept is None:
+            return None
+        outcomes, self.choice = kept
+        return outcomes
+
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes; each closed gap's fill tied to
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
@@ -116,9 +137,21 @@ class CaptureLabeling:
     def label(
         self, progress: Progress | None = None, observer: Observer | None = None,
     ) -> tuple[LabeledTrajectories, list[WindowStats]]:
-        """Label every window in one go."""
-        outcomes = list(self.windows(progress=progress, observer=observer))
+        """Label every window in one go, and again if ``refine`` says so; ``progress``
+        counts the first pass's windows, then both passes' once a second pass runs (43/43,
+        then 44/86 ...); ``observer`` sees the first pass."""
+        first = list(self.windows(progress=progress, observer=observer))
+        outcomes = self.refine(first, _after(progress, self.n_windows))
+        assert outcomes is not None  # only a stop abandons the second pass
         return self.result(outcomes), [o.stats for o in outcomes]
+
+
+def _after(progress: Progress | None, done: int) -> Progress | None:
+    """``progress`` of a pass that follows ``done`` windows, counted with them."""
+    if progress is None:
+        return None
+    report = progress  # bound here: mypy keeps the narrowing inside the closure
+    return lambda k, n: report(done + k, done + n)
 
 
 def _confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.ndarray:

@@ -6,6 +6,11 @@ guarantees ``windows(after=last)`` gives what an uninterrupted run would. Window
 a markerflow with another marker state (upgraded while the job was queued or running) are
 dropped and the job relabels from its start: the result is this version's, never a mix.
 
+Once every window is stored, a second pass may label the take again
+(``service.labeling.second_pass``); if it is kept, its windows replace the stored ones in the
+transaction that stores the result, and a restart before that refines the stored first pass
+again.
+
 A window that raises fails the job with the window's index and message; the windows
 stored before it stay, and ``GET /v1/jobs/{id}/result?partial=true`` assembles them.
 """
@@ -52,7 +57,12 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
             # Between windows: a cancel (from any process) or a shutdown stops the job here.
             if stop() or store.known(job_id).state != "running":
                 return store.known(job_id).state
-        store.finish(job_id, trajectories_to_bytes(labeling.result(outcomes)))
+        kept = labeling.refine(outcomes, stop=lambda: stop() or store.known(job_id).state != "running")
+        if kept is None:
+            return store.known(job_id).state
+        # The kept windows replace the stored ones with the result, in one transaction: a
+        # restart then finds either the first pass (and refines it again) or a finished job.
+        store.finish(job_id, trajectories_to_bytes(labeling.result(kept)), None if kept is outcomes else (kept, worker))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except InputError as error:  # e.g. a formulation that cannot take one of the windows

@@ -178,12 +178,9 @@ class JobStore:
         Raises:
             WindowTaken: The window is already stored.
         """
-        row = WindowRow(job_id=job_id, index=outcome.index, outcome=outcome.to_bytes(),
-                        stats=json.dumps(outcome.stats.to_dict()), solve_seconds=outcome.stats.solve_seconds,
-                        worker=worker, finished_at=_now())
         try:
             with self.session.begin() as session:
-                session.add(row)
+                session.add(_window_row(job_id, outcome, worker))
                 session.flush()
                 session.execute(update(JobRow).where(JobRow.id == job_id)
                                 .values(windows_done=outcome.index + 1, updated_at=_now()))
@@ -196,8 +193,18 @@ class JobStore:
             session.execute(delete(WindowRow).where(WindowRow.job_id == job_id))
             session.execute(update(JobRow).where(JobRow.id == job_id).values(windows_done=0, updated_at=_now()))
 
-    def finish(self, job_id: str, result: bytes) -> bool:
-        return self._move(job_id, ("running",), state="done", result=result)
+    def finish(self, job_id: str, result: bytes, windows: tuple[list[WindowOutcome], str] | None = None) -> bool:
+        """Store the result of a running job; ``windows`` (outcomes, worker) replace its stored
+        windows in the same transaction (a second pass kept), so a restart never sees a mix."""
+        with self.session.begin() as session:
+            moved = session.execute(update(JobRow).where(JobRow.id == job_id, JobRow.state == "running")
+                                    .values(updated_at=_now(), state="done", result=result))
+            if cast(CursorResult[Any], moved).rowcount != 1:
+                return False
+            if windows is not None:
+                session.execute(delete(WindowRow).where(WindowRow.job_id == job_id))
+                session.add_all([_window_row(job_id, outcome, windows[1]) for outcome in windows[0]])
+            return True
 
     def fail(self, job_id: str, error: str) -> bool:
         """A queued job fails too: its executor may give up before it starts (a lost Dask worker)."""
@@ -228,3 +235,9 @@ class JobStore:
                 select(*columns, func.count(), func.coalesce(func.sum(WindowRow.solve_seconds), 0.0))
             ).one()
         return [int(n) for n in below], int(count), float(total)
+
+
+def _window_row(job_id: str, outcome: WindowOutcome, worker: str) -> WindowRow:
+    return WindowRow(job_id=job_id, index=outcome.index, outcome=outcome.to_bytes(),
+                     stats=json.dumps(outcome.stats.to_dict()), solve_seconds=outcome.stats.solve_seconds,
+                     worker=worker, finished_at=_now())
