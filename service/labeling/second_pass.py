@@ -6,8 +6,9 @@ The first pass starts every marker-neighbour distance from the same prior spread
 whole take (``formulations.markers.take_spread``). That is right where the first pass was
 mostly right, and wrong where it was not: the spreads of mislabeled markers are those of
 the points they took. Which pass to keep is decided by the labels' own confidence: the
-second is kept when a smaller share of its labels is doubtful (``DOUBTFUL_BELOW``). No
-doubtful label in the first pass, and the second is not run.
+second is kept when a smaller share of its labels is doubtful (``DOUBTFUL_BELOW``).
+When the first pass is no more doubtful than a take ``track`` does not warn about
+(``DOUBTFUL_WARNING``, 2 %), the second is not run: a clean take costs one pass.
 
 Measured (README, "Second pass"): the tennis serve goes from 96.2 % to 99.9 % correct
 (doubtful 8.9 % -> 3.3 %); on the wheelchair racing and floor-rolling takes the second
@@ -26,6 +27,7 @@ from formulations.markers.take_spread import with_take_spread
 from formulations.methods.formulation import Formulation
 from service.labeling.loop import Progress, WindowChain, label_windows
 from service.labeling.outcome import WindowOutcome
+from service.labeling.stats import DOUBTFUL_WARNING
 
 Stop = Callable[[], bool]  # asked between windows: True abandons the pass
 
@@ -68,7 +70,7 @@ def second_pass(
         positions: ``(F, N, 3)`` its labeled positions, NaN where a marker has none.
     """
     before = doubtful_share(outcomes)
-    if before == 0.0:
+    if before <= DOUBTFUL_WARNING:
         return outcomes, PassChoice(before, None, 1)
     second: list[WindowOutcome] = []
     for outcome in label_windows(chain, formulation, with_take_spread(first, positions), frames, window, None, progress):
