@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from dataclasses import replace
@@ -55,6 +56,11 @@ def test_the_tennis_serve_is_right_only_with_the_second_pass(tmp_path: Path) -> 
     choice = twice["second_pass"]
     assert choice["kept"] == 2 and choice["second_doubtful"] < choice["first_doubtful"]
     assert twice["doubtful_fraction"] < once["doubtful_fraction"]
+    line = subprocess.run(
+        [sys.executable, "-m", "service.cli", "-q", "track", str(TENNIS), "--out", str(tmp_path / "line.c3d")],
+        capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "400"},
+    ).stdout
+    assert f"second pass kept ({choice['first_doubtful']:.1%} -> {choice['second_doubtful']:.1%} doubtful)" in line
 
 
 def _stats_doubt(outcomes: list[WindowOutcome], doubtful: int) -> list[WindowOutcome]:

@@ -23,6 +23,7 @@ from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
+from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion_warning
 
@@ -78,7 +79,8 @@ def run_track(
             f"{input.name}: {summary['markers']} markers x {summary['frames']} frames ({capture.mode}) -> {output} "
             f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
-            f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})",
+            f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
+            f"{_second_pass_note(labeling.choice)}",
             highlight=False,
         )
     warn_doubtful(summary["doubtful_fraction"])
@@ -124,6 +126,14 @@ def track_summary(
         "formulation": formulation,
         "output": str(output),
     }
+
+
+def _second_pass_note(choice: PassChoice | None) -> str:
+    """What the summary line says of a second pass that ran: which labeling was kept."""
+    if choice is None or choice.second_doubtful is None:
+        return ""
+    kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
+    return f"; {kept} ({choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful)"
 
 
 def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | None:
