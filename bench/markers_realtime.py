@@ -61,9 +61,8 @@ def _run(capture: Capture, n: int) -> dict[str, float]:
     start = time.perf_counter()
     _, windows = CaptureLabeling(capture, LabelingOptions(second_pass=False)).label()
     total = time.perf_counter() - start
-    labeling = CaptureLabeling(capture)
     start = time.perf_counter()
-    labeling.label()
+    CaptureLabeling(capture).label()
     twice = time.perf_counter() - start
     prepare = sum(w.prepare_seconds for w in windows)
     formulation = sum(w.build_seconds + w.solve_seconds + w.round_seconds for w in windows)
@@ -71,8 +70,7 @@ def _run(capture: Capture, n: int) -> dict[str, float]:
     lp_windows = sum(w.components.get("coupled", 0) > 0 for w in windows)
     return {"total": total / n, "prepare": prepare / n, "formulation": formulation / n,
             "confidence": confidence / n, "other": (total - prepare - formulation - confidence) / n,
-            "lp_window_share": lp_windows / len(windows), "twice": twice / n,
-            "second_kept": float(labeling.choice is not None and labeling.choice.kept == 2)}
+            "lp_window_share": lp_windows / len(windows), "twice": twice / n}
 
 
 def main() -> None:

@@ -82,7 +82,7 @@ def test_the_pass_kept_is_the_one_with_fewer_doubtful_labels(monkeypatch, first,
     monkeypatch.setattr(second_pass_module, "label_windows", counted)
     positions = labeling.result(outcomes).positions
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001  (the pass as refine runs it)
-    kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, positions)  # noqa: SLF001
+    kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, lambda: positions)  # noqa: SLF001
     assert choice.kept == kept and (kept_outcomes is outcomes) == (kept == 1)
     assert bool(ran) == (first > 2)  # no more doubt than track warns about (2 %): no second pass
     assert choice == PassChoice(first / 100, second / 100 if first > 2 else None, kept)

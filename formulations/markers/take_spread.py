@@ -14,8 +14,9 @@ Per marker m and neighbour j, over the frames where both were labeled,
     var_mj = ((P90(d_mj) - P10(d_mj)) / 2.563)^2,   floored at ``SPREAD_FLOOR_MM2``,
 
 the variance of a normal distribution with those deciles: a first pass that gave m a wrong
-point in up to a tenth of those frames leaves it unchanged. Pairs labeled together in fewer
-than ``MIN_FRAMES`` frames keep the state's prior.
+point in up to a tenth of those frames leaves it unchanged, where the plain variance of
+``subject.distances.distance_spread`` (the model fit's D, over every pair) would call the
+pair loose. Pairs labeled together in fewer than ``MIN_FRAMES`` frames keep the state's prior.
 """
 
 from __future__ import annotations

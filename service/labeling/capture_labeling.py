@@ -103,10 +103,9 @@ class CaptureLabeling:
         ``stop`` abandoned the second pass. Sets ``choice``."""
         if not self._second_pass:
             return outcomes
-        positions = self._association.assemble(outcomes).positions
         kept = second_pass(
-            self._association, self.formulation, self._first, self._frames, self._window, outcomes, positions,
-            progress, stop,
+            self._association, self.formulation, self._first, self._frames, self._window, outcomes,
+            lambda: self._association.assemble(outcomes).positions, progress, stop,
         )
         if kept is None:
             return None
