@@ -15,12 +15,13 @@ GAP = slice(30, 55)
 BODY = np.array([[0, 0, 0], [80, 0, 0], [0, 90, 0], [0, 0, 100], [70, 60, 40]], float)
 
 
-def _spinning_body(loose: bool = False) -> np.ndarray:
-    """``(FRAMES, 5 or 6, 3)``: a rigid body tumbling and translating; with ``loose``, a sixth
-    marker swinging on its own 150 mm about the body's first marker."""
+def _spinning_body(loose: bool = False, extra: np.ndarray | None = None) -> np.ndarray:
+    """``(FRAMES, 5 or more, 3)``: a rigid body tumbling and translating, with ``extra`` markers
+    on it; with ``loose``, one more marker swinging on its own 150 mm about its first marker."""
     angle = np.linspace(0.0, 10.0, FRAMES)
     spin = Rotation.from_rotvec(np.outer(angle, [0.3, 0.2, 0.93])).as_matrix()
-    body = np.einsum("fij,kj->fki", spin, BODY) + np.outer(np.arange(FRAMES) * 9.0, [1.0, 0.4, 0.0])[:, None]
+    markers = BODY if extra is None else np.concatenate([BODY, extra])
+    body = np.einsum("fij,kj->fki", spin, markers) + np.outer(np.arange(FRAMES) * 9.0, [1.0, 0.4, 0.0])[:, None]
     if not loose:
         return body
     swing = 150.0 * np.stack([np.sin(np.arange(FRAMES) / 4.0), np.cos(np.arange(FRAMES) / 3.0), np.zeros(FRAMES)], axis=1)
@@ -56,14 +57,14 @@ def test_a_loose_donor_is_outweighed_by_the_rigid_ones():
     assert np.linalg.norm(refilled[GAP, 4] - truth[GAP, 4], axis=1).max() < 1.0
 
 
-def test_frames_without_three_donors_on_both_sides_keep_their_fill():
+def test_frames_without_two_donors_on_both_sides_keep_their_fill():
     truth = _spinning_body()
     positions, tied = _hidden(truth)
-    positions[GAP.stop : GAP.stop + 1, [1, 2]] = np.nan  # two donors lost where the gap closes
-    positions[40:45, 3] = np.nan  # and a third inside the gap
+    positions[GAP.stop : GAP.stop + 1, [1, 2, 3]] = np.nan  # three donors lost where the gap closes
     tied = tie_gap_ends(positions, np.where(np.isnan(positions), tied, np.nan))
     refilled = rigid_fill(positions, tied)
-    # The closing side has two donors (0 and 3) wherever 3 is seen: nothing is carried from it.
+    # The closing side has one donor (0), and the others' one-frame gaps have one on either
+    # side too: nothing is carried from it.
     assert np.array_equal(refilled[GAP, 4], tied[GAP, 4], equal_nan=True)
 
 
@@ -77,20 +78,38 @@ def test_a_gap_open_at_either_end_is_left_as_it_was():
 
 
 def _bar_and_a_far_marker() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Four markers on a bar (0.3 mm noise) and one 360 mm off it, all turning together; the
-    far one hidden over ``GAP``: truth, positions, and the tied blind fill."""
+    """Four markers on a bar (0.3 mm noise) and one 360 mm off it, all turning together and
+    swaying sideways; the far one hidden over ``GAP``: truth, positions, and the tied blind fill."""
     bar = np.array([[0, 0, 0], [70, 0, 0], [140, 0, 0], [210, 0, 0], [105, 360, 0]], float)
     angle = np.linspace(0.0, 1.0, FRAMES)
     turn = Rotation.from_rotvec(np.outer(angle, [0.2, 0.3, 1.0])).as_matrix()
-    truth = np.einsum("fij,kj->fki", turn, bar)
+    truth = np.einsum("fij,kj->fki", turn, bar) + np.outer(100.0 * np.sin(np.arange(FRAMES) / 5.0), [0.0, 0.0, 1.0])[:, None]
     truth[:, :4] += np.random.default_rng(0).normal(0.0, 0.3, truth[:, :4].shape)
     positions, tied = _hidden(truth)
     return truth, positions, tied
 
 
-def test_donors_on_one_line_carry_nothing(monkeypatch: pytest.MonkeyPatch):
+def test_donors_on_one_line_carry_by_the_least_turn(monkeypatch: pytest.MonkeyPatch):
     truth, positions, tied = _bar_and_a_far_marker()
-    assert np.array_equal(rigid_fill(positions, tied)[GAP, 4], tied[GAP, 4])
-    # Without the check the turn about the bar is the noise's: the far marker goes astray.
+    # The tie to both sightings alone misses the sway.
+    assert np.linalg.norm(tied[GAP, 4] - truth[GAP, 4], axis=1).max() > 50.0
+    # The bar carries it along, its turn about the bar blended between the two sightings.
+    assert np.linalg.norm(rigid_fill(positions, tied)[GAP, 4] - truth[GAP, 4], axis=1).max() < 5.0
+    # A free fit would take the turn about the bar from the noise: the far marker goes astray.
     monkeypatch.setattr(rigid_fill_module, "MIN_SPAN_MM", 0.0)
     assert np.linalg.norm(rigid_fill(positions, tied)[GAP, 4] - truth[GAP, 4], axis=1).max() > 50.0
+
+
+def test_a_lost_donor_refilled_counts_in_the_second_round(monkeypatch: pytest.MonkeyPatch):
+    """Where marker 4's gap closes, three of its four donors are lost for a frame. Two more
+    markers of the body, seen too briefly with marker 4 to be its donors (``MIN_SHARED_FRAMES``),
+    are the lost ones' donors: round one refills those three, and round two carries 4 by them."""
+    extra = np.array([[-60, 20, 30], [30, -70, 50]], float)
+    truth = _spinning_body(extra=extra)
+    positions, tied = _hidden(truth)
+    positions[GAP.stop, [1, 2, 3]] = np.nan
+    positions[: GAP.stop - 7, 5:] = positions[GAP.stop + 8 :, 5:] = np.nan
+    tied = tie_gap_ends(positions, np.where(np.isnan(positions), truth[GAP.start - 1, 4], np.nan))
+    assert np.allclose(rigid_fill(positions, tied)[GAP, 4], truth[GAP, 4], atol=1e-6)
+    monkeypatch.setattr(rigid_fill_module, "ROUNDS", 1)
+    assert np.linalg.norm(rigid_fill(positions, tied)[GAP, 4] - truth[GAP, 4], axis=1).max() > 20.0

@@ -45,6 +45,35 @@ def span_across_line(points: np.ndarray, weight: np.ndarray) -> np.ndarray:
     return span
 
 
+def line_motion(source: np.ndarray, target: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The least turn R taking each ``(S, K, 3)`` source set's weighted best-fit line onto its
+    target's, with the weighted centroids, as ``rigid_transform`` returns them: points on a
+    line fix its direction but no turn about it, and this turns about no axis it need not.
+
+    With unit line directions a (source) and b (target, signed so the points keep their
+    order along it), v = a x b and c = a . b: R = I + [v]x + [v]x^2 / (1 + c) (Rodrigues).
+    """
+    w = weight / np.maximum(weight.sum(axis=1, keepdims=True), 1e-12)
+    c_s = np.einsum("sk,skd->sd", w, source)
+    c_t = np.einsum("sk,skd->sd", w, target)
+    a, along_a = _direction(source - c_s[:, None], w)
+    b, along_b = _direction(target - c_t[:, None], w)
+    b *= np.where(np.einsum("sk,sk->s", w, along_a * along_b) < 0, -1.0, 1.0)[:, None]
+    v, c = np.cross(a, b), np.einsum("sd,sd->s", a, b)
+    cross = np.zeros((len(a), 3, 3))
+    cross[:, 0, 1], cross[:, 0, 2], cross[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    cross -= cross.transpose(0, 2, 1)
+    rotation = np.eye(3) + cross + cross @ cross / np.maximum(1.0 + c, 1e-9)[:, None, None]
+    return rotation, c_s, c_t
+
+
+def _direction(centred: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each set's principal direction ``(S, 3)`` and its points' positions along it ``(S, K)``."""
+    scatter = np.einsum("sk,ski,skj->sij", w, centred, centred)
+    direction = np.linalg.eigh(scatter)[1][:, :, 2]
+    return direction, np.einsum("skd,sd->sk", centred, direction)
+
+
 FOLLOW_ITERATIONS = 3
 
 
