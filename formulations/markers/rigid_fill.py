@@ -32,8 +32,12 @@ alone drifts with nothing to tie it. Gaps open at either end of the take are lef
 
 Measured over the accuracy matrix's 17 takes (``bench/fill_matrix.py``: lp-l1, 600 frames,
 default and 30 % deletions in 60-frame bursts, against the clean truth), against the tied
-fill: seed 0, RMSE 103.7 -> 88.6 mm pooled, median 10.0 -> 6.6 mm; FILL12. The RMSE is
-dominated by gaps whose sightings are themselves mislabeled, which no fill can mend.
+fill: RMSE 103.7 -> 88.6 mm pooled and median 10.0 -> 6.6 mm, lower on 29 of 34 rows (seed
+0); 98.9 -> 95.6 and 9.2 -> 6.0 mm, lower on 54 of 68 (seeds 1-2). Against the refill before
+the line carry and the second round, the same labels: 89.5 -> 88.6 mm, lower on 24 rows and
+higher on 10 (seed 0); 97.1 -> 95.6 mm, lower on 52 and higher on 16 (seeds 1-2; the tennis
+serve at the strike +11 mm). The RMSE is dominated by gaps whose sightings are themselves
+mislabeled, which no fill can mend.
 """
 
 from __future__ import annotations
