@@ -108,27 +108,6 @@ def test_labeling_from_the_model_names_the_learned_segment_from_the_start() -> N
     assert right >= 0.99 * len(frames) * len(markers)
 
 
-def _widened_take(seed: int = 0, wider: float = 70.0):
-    """The chain of ``_moved_marker_take`` with, in the model, two markers of the segment holding
-    ``S2M0`` ``wider`` mm closer together than in the take (as the acromia of gait2354's static
-    trial, 76 mm narrower than in its walk), the joint centres left where they were fitted; the
-    held-out frames as shuffled clouds, and each point's marker."""
-    names, positions, _ = chain(seed, markers=3, frames=400)
-    model = fit_subject(names, positions[:FIT]).model
-    s = next(k for k, segment in enumerate(model.segments) if "S2M0" in segment.markers)
-    segment = model.segments[s]
-    coordinates = np.array(segment.coordinates)
-    along = (coordinates[1] - coordinates[0]) / np.linalg.norm(coordinates[1] - coordinates[0])
-    coordinates[0] += wider / 2 * along
-    coordinates[1] -= wider / 2 * along
-    segments = list(model.segments)
-    segments[s] = replace(segment, coordinates=coordinates.tolist())
-    narrow = replace(model, segments=segments)
-    order = [names.index(n) for n in model_names(narrow)]
-    frames, owner = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
-    return narrow, s, frames, owner
-
-
 def test_a_segment_whose_markers_are_farther_apart_in_the_take_is_learned_and_then_named() -> None:
     model, s, frames, owner = _widened_take()
     geometry = ModelGeometry.of(model)
