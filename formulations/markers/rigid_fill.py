@@ -58,7 +58,7 @@ MIN_SHARED_FRAMES = 10  # a spread from fewer frames together says nothing of ri
 
 def rigid_fill(positions: Array, filled: Array) -> Array:
     """``filled`` ``(F, N, 3)`` with every closed gap of ``positions`` ``(F, N, 3)`` (NaN where
-    not labeled) refilled by its donors' rigid motion where both sides have three donors;
+    not labeled) refilled by its donors' rigid motion where both sides have two donors;
     from the second round on (``ROUNDS``) a donor's own refill counts as a sighting, with
     the variance its two sides' disagreement gives it."""
     seen: Mask = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)
