@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 from windows import brute_force, random_window
 
+import formulations.relaxation.solve_lp as solve_lp_module
 from formulations.relaxation.lp_model import window_lp
-from formulations.relaxation.path_lp import solve_path_lp
+from formulations.relaxation.path_lp import STALLED, solve_path_lp
 from formulations.relaxation.viterbi import ArcLayers, shortest_path_arcs, shortest_paths
 from formulations.solvers import create_backend
 from formulations.window.objective import path_arcs
@@ -60,3 +61,27 @@ def test_viterbi_arcs_are_the_paths_and_their_costs(seed):
     assert np.array_equal(arcs, path_arcs(problem, path))
     assert np.allclose(cost[arcs].sum(axis=1), distance)
     assert np.array_equal(distance, same)
+
+
+def _needs_rounds(seeds=range(30)):
+    """A random window whose path pricing takes more than one round."""
+    for seed in seeds:
+        problem = random_window(seed, n_objects=6, n_frames=4, n_points=4, per_object=3)
+        if not solve_path_lp(problem, max_rounds=1)[0].optimal:
+            return problem
+    raise AssertionError("no random window needed a second pricing round")
+
+
+def test_pricing_cut_short_says_so_and_is_not_optimal():
+    result, _ = solve_path_lp(_needs_rounds(), max_rounds=1)
+    assert result.status == STALLED and not result.optimal
+
+
+def test_a_stalled_path_lp_hands_the_window_to_the_arc_lp(monkeypatch: pytest.MonkeyPatch):
+    problem = _needs_rounds()
+    monkeypatch.setattr(solve_lp_module, "MIN_ROUNDS", 1)
+    monkeypatch.setattr(solve_lp_module, "ARCS_PER_ROUND", 10**9)
+    relaxed = solve_lp_module.solve_window_lp(problem, pricing_min_arcs=0)
+    assert relaxed.optimal and relaxed.status != STALLED
+    assert relaxed.bound == pytest.approx(arc_lp_value(problem), abs=1e-7)
+    assert relaxed.n_variables == problem.n_arcs  # the arc LP's columns, not paths

@@ -44,16 +44,20 @@ from formulations.solvers import LinearModel, SolveResult, create_backend
 from formulations.window.objective import arc_index
 from formulations.window.problem import WindowProblem
 
-MAX_ROUNDS = 1000  # a stall guard: pricing ends long before on every window seen
+MAX_ROUNDS = 1000  # a stall guard for a caller that sets none
+STALLED = "path pricing stopped at its round limit"
 PROVEN = 1e-9  # relative gap between the restricted optimum and L(pi) that proves it optimal
 
 
-def solve_path_lp(problem: WindowProblem, time_limit: float | None = None) -> tuple[SolveResult, int]:
+def solve_path_lp(
+    problem: WindowProblem, time_limit: float | None = None, max_rounds: int = MAX_ROUNDS,
+) -> tuple[SolveResult, int]:
     """The LP optimum as arc values, by path column generation (see the module docstring).
 
     Args:
         problem: A (sub-)window without layout pairs of positive weight.
         time_limit: Seconds per restricted solve (None: no limit).
+        max_rounds: Pricing rounds after which it stops, not optimal, with status ``STALLED``.
 
     Returns:
         The result (``x`` over the arcs, ``bound`` = the best L(pi), -inf if no restricted
@@ -80,7 +84,7 @@ def solve_path_lp(problem: WindowProblem, time_limit: float | None = None) -> tu
     seen = {(o, p.tobytes()) for o, p in zip(objects, paths)}
     result = backend.solve()
     bound, central = -np.inf, True
-    for _ in range(MAX_ROUNDS):
+    for _ in range(max_rounds):
         entering: list[int] = []
         if result.optimal:
             sigma, pi = result.row_dual[:n], np.minimum(result.row_dual[n:], 0.0)
@@ -106,7 +110,9 @@ def solve_path_lp(problem: WindowProblem, time_limit: float | None = None) -> tu
     if len(result.x):
         np.add.at(xi, paths.ravel(), np.repeat(result.x, paths.shape[1]))
     result.x, result.bound = np.minimum(xi, 1.0), bound
-    if result.optimal and not _proven(result.objective, bound):
+    if result.optimal and entering:  # the last round still priced columns in
+        result.optimal, result.status = False, STALLED
+    elif result.optimal and not _proven(result.objective, bound):
         result.optimal, result.status = False, "path pricing stopped short of the LP optimum"
     return result, len(paths)
 
