@@ -122,3 +122,22 @@ def test_a_job_stores_the_kept_pass_windows_with_its_result(monkeypatch, tmp_pat
     assert [w.stats["status"] for w in store.windows(job.id)] == ["second pass"] * labeling.n_windows
     assert [w.status for w in windows] == ["second pass"] * labeling.n_windows
     assert store.known(job.id).windows_done == labeling.n_windows
+
+
+@pytest.mark.parametrize(("flag", "expected"), [(None, False), (True, True), (False, False)])
+def test_track_keeps_a_documents_second_pass_unless_a_flag_is_given(monkeypatch, tmp_path: Path, flag, expected) -> None:
+    """``track`` overrides a capture document's ``second_pass`` only with --second-pass/--one-pass."""
+    import service.cli.track as track_module
+
+    document = tmp_path / "capture.json"
+    document.write_text(document_json(generated_capture(frames=20, seed=1), LabelingOptions(second_pass=False)))
+    given: list[LabelingOptions] = []
+
+    class Recorded(CaptureLabeling):
+        def __init__(self, capture, options):
+            given.append(options)
+            super().__init__(capture, options)
+
+    monkeypatch.setattr(track_module, "CaptureLabeling", Recorded)
+    track_module.run_track(document, tmp_path / "out.csv", None, None, False, as_json=True, second_pass=flag)
+    assert [options.second_pass for options in given] == [expected]

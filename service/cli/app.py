@@ -66,10 +66,11 @@ def track(
         "stay unlabeled); with --model, from the model's identification. Frames outside --start/--end are kept, unlabeled.",
     )] = None,
     end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
-    second_pass: Annotated[bool, typer.Option(
+    second_pass: Annotated[bool | None, typer.Option(
         "--second-pass/--one-pass", help="3D points, no --model: label again from the distance spreads the first "
-        "labeling measured, keep the labeling with fewer doubtful labels (up to twice the time).",
-    )] = True,
+        "labeling measured, keep the labeling with fewer doubtful labels (up to twice the time). Default: on, "
+        "or a capture document's own second_pass.", show_default=False,
+    )] = None,
 ) -> None:
     """Label INPUT and write the named trajectories.
 

@@ -30,7 +30,7 @@ from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion
 
 def run_track(
     input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool, as_json: bool = False,
-    model: Path | None = None, start: int | None = None, end: int | None = None, second_pass: bool = True,
+    model: Path | None = None, start: int | None = None, end: int | None = None, second_pass: bool | None = None,
 ) -> None:
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
 
@@ -44,8 +44,8 @@ def run_track(
     carries the model's marker names, in the input's unit and frame numbering; a .c3d of a
     .c3d that has every model marker is the input with those points replaced.
 
-    ``formulation`` and ``window`` override a JSON document's own options when given;
-    ``second_pass`` False labels once (``LabelingOptions.second_pass``).
+    ``formulation``, ``window`` and ``second_pass`` (``LabelingOptions.second_pass``)
+    override a JSON document's own options when given.
     A .c3d/.trc output of a .c3d/.trc input keeps the input's unit and frame numbering;
     a .c3d of a .c3d keeps everything but the points (``write_labeled``).
     Prints one line, or with ``as_json`` one JSON object (``track_summary``), on stdout,
@@ -65,7 +65,9 @@ def run_track(
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:
         options = replace(options, window=window)
-    labeling = CaptureLabeling(capture, replace(options, second_pass=second_pass))
+    if second_pass is not None:
+        options = replace(options, second_pass=second_pass)
+    labeling = CaptureLabeling(capture, options)
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
