@@ -19,7 +19,7 @@ from service.capture.capture import LabelingOptions
 from service.io.formats import read_labeled
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
-from service.labeling.second_pass import PassChoice, second_pass
+from service.labeling.second_pass import second_pass
 from service.server.results import trajectories_from_bytes
 from service.server.runner import run_job
 from service.server.store import store_for
@@ -88,7 +88,47 @@ def test_the_pass_kept_is_the_one_with_fewer_doubtful_labels(monkeypatch, first,
     assert choice.kept == kept and (kept_outcomes is outcomes) == (kept == 1)
     # no more doubt than track warns about (2 %), or mostly doubtful: no second pass
     assert bool(ran) == (2 < first <= 75)
-    assert choice == PassChoice(first / 100, second / 100 if 2 < first <= 75 else None, kept)
+    assert (choice.first_doubtful, choice.second_doubtful, choice.kept) == (
+        first / 100, second / 100 if 2 < first <= 75 else None, kept)
+
+
+def _share_doubt(outcomes, markers: int, share: float):
+    """Windows whose every marker holds a point, ``share`` of them doubtful."""
+    for o in outcomes:
+        labels = markers * (o.stats.last - o.stats.template)
+        yield replace(o, stats=replace(o.stats, labels=labels, doubtful=round(share * labels)))
+
+
+@pytest.mark.parametrize("second", [0.05, 0.11, 0.5])
+def test_a_second_pass_that_cannot_be_kept_stops_early_with_the_same_choice(monkeypatch, second) -> None:
+    """Doubtful labels only accumulate: once those so far, over the labels the take can still
+    hold, reach the first pass's share, the rest of the second pass cannot change the choice."""
+    labeling = CaptureLabeling(generated_capture(frames=80, seed=3), LabelingOptions(window=10))
+    markers = len(labeling._first.position)  # noqa: SLF001
+    outcomes = list(_share_doubt(labeling.windows(), markers, 0.1))
+    labeled: list[int] = []
+    real = second_pass_module.label_windows
+
+    def counted(*args, **kwargs):
+        for outcome in _share_doubt(real(*args, **kwargs), markers, second):
+            labeled.append(outcome.index)
+            yield outcome
+
+    monkeypatch.setattr(second_pass_module, "label_windows", counted)
+    run = (labeling._association, labeling.formulation, labeling._first, 80, 10, outcomes)  # noqa: SLF001
+    positions = labeling.result(outcomes).positions
+    kept, choice = second_pass(*run, lambda: positions)
+    early_windows = len(labeled)
+    monkeypatch.setattr(second_pass_module, "_cannot_be_kept", lambda *args: False)
+    labeled.clear()
+    kept_full, full = second_pass(*run, lambda: positions)
+    assert len(labeled) == labeling.n_windows and full.second_complete
+    assert choice.kept == full.kept == (2 if second < 0.1 else 1)
+    assert (kept is outcomes) == (kept_full is outcomes)
+    assert choice.second_complete == (early_windows == labeling.n_windows)
+    assert choice.second_complete == (second < 0.1)  # 0.11 and 0.5 stop before the last window
+    if second == 0.5:
+        assert early_windows <= labeling.n_windows // 2 + 1
 
 
 def test_a_stop_abandons_the_second_pass(monkeypatch) -> None:

@@ -135,7 +135,8 @@ def _second_pass_note(choice: PassChoice | None) -> str:
     if choice is None or choice.second_doubtful is None:
         return ""
     kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
-    return f"; {kept} ({choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful)"
+    so_far = "" if choice.second_complete else " so far, stopped as it could not win"
+    return f"; {kept} ({choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{so_far})"
 
 
 def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | None:
