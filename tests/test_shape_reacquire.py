@@ -145,3 +145,33 @@ def test_a_firmly_carried_marker_still_learns_from_its_seen_neighbours():
     after = state.advance(frame, seen)
     trunk = state.neighbours[2] >= 4
     assert not np.array_equal(after.distance_mean[2, trunk], state.distance_mean[2, trunk])
+
+
+def _neighbour_reappearing() -> tuple[MarkerState, np.ndarray, np.ndarray]:
+    """Marker 2 lost far off, its hand neighbour 1 unseen a frame and predicted 15 mm from
+    where it reappears; 2's learned distances fit 1's point (a wrist pair whose judges are
+    too far to tell radius from ulna). The state, the points, and 1's point."""
+    state = _learned_state()
+    lost = _lost(state, 2, state.position[2] + np.array([900.0, 300.0, 0.0]))
+    reappearing = state.position[1].copy()
+    mean = lost.distance_mean.copy()
+    mean[2] = np.linalg.norm(reappearing - lost.position[lost.neighbours[2]], axis=1)
+    position = lost.position.copy()
+    position[1] = reappearing + np.array([15.0, 0.0, 0.0])
+    lost = replace(lost, distance_mean=mean, position=position, unseen=np.where(np.arange(len(BODY)) == 1, 1, lost.unseen))
+    points = np.vstack([lost.position[np.arange(len(BODY)) > 2], lost.position[0], reappearing])
+    return lost, points, reappearing
+
+
+def test_a_point_another_unseen_marker_is_predicted_at_and_fits_is_not_taken():
+    lost, points, reappearing = _neighbour_reappearing()
+    moved = reacquire_by_shape(lost.position, lost, points)
+    assert np.allclose(moved, lost.position)
+    with pytest.MonkeyPatch.context() as patch:  # the setup fails without the claim: 2 takes 1's point
+        patch.setattr("formulations.markers.shape_reacquire._claimed_by_another",
+                      lambda guess, state, looked_for, free, settings: np.zeros((len(looked_for), len(free)), bool))
+        unclaimed = reacquire_by_shape(lost.position, lost, points)
+    assert np.allclose(unclaimed[2], reappearing)
+    # a prediction near the point is not enough: when 1's own neighbours reject it, 2 takes it
+    rejected = replace(lost, distance_mean=lost.distance_mean + np.where(np.arange(len(BODY))[:, None] == 1, 60.0, 0.0))
+    assert np.allclose(reacquire_by_shape(lost.position, rejected, points)[2], reappearing)
