@@ -89,7 +89,7 @@ def repair_exchanges(
     accept = _accepted(shape, before, after, moved, len(tracks), sure)
     if not accept.any():
         return state, 0
-    return _reassigned(state, visible, tracks, np.where(accept, after, before)), int(accept.sum())
+    return reassigned(state, visible, tracks, np.where(accept, after, before)), int(accept.sum())
 
 
 def _accepted(
@@ -115,7 +115,7 @@ def _accepted(
     return accept
 
 
-def _reassigned(state: MarkerState, visible: np.ndarray, tracks: np.ndarray, track: np.ndarray) -> MarkerState:
+def reassigned(state: MarkerState, visible: np.ndarray, tracks: np.ndarray, track: np.ndarray) -> MarkerState:
     """Each marker given track ``track[m]`` (index into visible markers then unclaimed points, -1: none)."""
     fields = {name: getattr(state, name).copy() for name in _TRACK_FIELDS}
     for m in np.flatnonzero(track >= 0):

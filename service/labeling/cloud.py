@@ -16,6 +16,7 @@ import numpy as np
 from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
 from formulations.markers.exchange import repair_exchanges
 from formulations.markers.guide import assign_nearest
+from formulations.markers.mirror import repair_mirrors
 from formulations.markers.state import MarkerState
 from formulations.relaxation.components import coupled_components
 from formulations.window.build import build_window, taken_candidates
@@ -74,6 +75,7 @@ class CloudChain:
         self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
     ) -> tuple[WindowProblem, CloudInverse]:
         state, _ = repair_exchanges(state, _unclaimed(self.cloud.points[template], state), confidence)
+        state, _ = repair_mirrors(state, np.asarray(self.first_frame, dtype=float))
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
         gated = cloud_candidates(state, frames, self.gating, resources)
