@@ -49,3 +49,17 @@ def test_the_line_names_the_markers_and_the_figures_serialise():
     assert line is not None and line.startswith("warning: 3 markers") and "28 mm/frame, 30 mm from" in line
     assert fast_motion_warning([]) is None
     json.dumps([vars(f) for f in fast], allow_nan=False)
+
+
+def test_a_copied_column_is_reported_and_not_read_as_fast_motion():
+    """HDM05 repeats three markers in columns of their own: two points on one position."""
+    from service.labeling.coincident import coincident_pairs, coincident_warning
+
+    positions = cluster(5.0, 30.0)
+    copied = np.concatenate([positions, positions[:, :1] + 1e-4], axis=1)  # A again, to the 0.1 micrometre
+    names = [*NAMES, "A copy"]
+    assert coincident_pairs(names, copied) == [("A", "A copy")]
+    assert fast_markers(names, copied) == []  # 5 mm a frame against the 30 mm to B and C, not 0 mm to the copy
+    assert coincident_pairs(NAMES, cluster(28.0, 30.0)) == []
+    line = coincident_warning([("A", "A copy")])
+    assert line is not None and "A and A copy" in line and coincident_warning([]) is None

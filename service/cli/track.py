@@ -22,6 +22,7 @@ from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
@@ -87,6 +88,7 @@ def run_track(
         )
     warn_doubtful(summary["doubtful_fraction"])
     warn(fast_motion_warning([FastMarker(**fast) for fast in summary["fast_markers"]]))
+    warn(coincident_warning([(a, b) for a, b in summary["coincident_markers"]]))
     span = summary["unnamed_span"]
     warn(unnamed_warning(None if span is None else UnnamedSpan(**span), capture.rate, start or 0))
     warn(not_kept)
@@ -105,7 +107,9 @@ def track_summary(
     from the labeled positions (``TakeNoise``: the robust scale of the constant-acceleration
     residual, mean over the axes); None when too little was seen to say. ``fast_markers``
     lists the markers that move more per frame than half their neighbour distance
-    (``service.labeling.take_warnings``: marker, step_mm, neighbour_mm, neighbour).
+    (``service.labeling.take_warnings``: marker, step_mm, neighbour_mm, neighbour);
+    ``coincident_markers`` the pairs of markers on one position, copied columns
+    (``service.labeling.coincident``).
     ``unnamed_span`` is the longest stretch where no marker is labeled though points are
     there (``service.labeling.lost_subject``: start, frames, points), or None.
     ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share and the
@@ -123,6 +127,7 @@ def track_summary(
         "doubtful_fraction": doubtful_fraction(result.confidence, result.occluded),
         "reacquired": reacquisitions(result.names, result.occluded),
         "fast_markers": [vars(fast) for fast in fast_markers(result.names, result.positions)],
+        "coincident_markers": [list(pair) for pair in coincident_pairs(result.names, result.positions)],
         "unnamed_span": _unnamed(capture, result),
         "seconds": seconds,
         "formulation": formulation,

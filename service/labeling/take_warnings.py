@@ -10,7 +10,8 @@ matter how the window is solved. The take is read from its labeled result:
     s_n = median over frames of ||x_n(f+1) - x_n(f)||   (both frames labeled)
     d_n = median over frames of min_{j != n} ||x_n(f) - x_j(f)||   (both labeled)
 
-and a marker is flagged when s_n > FAST_RATIO * d_n.
+and a marker is flagged when s_n > FAST_RATIO * d_n. A marker on the same position as
+another (a copied column, ``coincident``) is not its neighbour.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from service.labeling.coincident import COINCIDENT_MM
 
 FAST_RATIO = 0.5  # s > d / 2: the last position is nearer the neighbour's than the marker's own
 SAMPLED_FRAMES = 400  # neighbour distances read on this many evenly spaced frames (O(F N^2) otherwise)
@@ -43,6 +46,7 @@ def fast_markers(names: list[str], positions: np.ndarray) -> list[FastMarker]:
     sampled = positions[np.unique(np.linspace(0, len(positions) - 1, SAMPLED_FRAMES).astype(int))]
     apart = np.linalg.norm(sampled[:, :, None] - sampled[:, None, :], axis=3)  # (S, N, N)
     apart[:, np.arange(len(names)), np.arange(len(names))] = np.nan
+    apart[apart < COINCIDENT_MM] = np.nan  # a copied column is no neighbour (``coincident``)
     nearest = np.where(np.isfinite(apart), apart, np.inf)
     closest = np.argmin(nearest, axis=2)  # (S, N)
     distance = np.min(nearest, axis=2)

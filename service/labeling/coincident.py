@@ -1,0 +1,40 @@
+"""Markers that sit on one position: copied columns, whose labels cannot be told apart.
+
+Some files carry a marker twice (HDM05's ``*0``, ``*1`` and ``*2`` repeat LFHD, CLAV and
+LFWT to the micrometre). Two points at one position are two equally good readings of each
+of the two markers: their labels come out doubtful though right, the windows that hold them
+are fractional, and the fast-motion check would read their zero spacing as aliasing. A pair
+is reported when its median distance, over sampled frames where both are labeled, is below
+``COINCIDENT_MM``; ``take_warnings`` leaves such partners out of a marker's spacing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+COINCIDENT_MM = 0.5  # under any marker's radius; two real markers are never this close
+SAMPLED_FRAMES = 400  # as take_warnings: distances read on this many evenly spaced frames
+LISTED = 4  # pairs named in the warning line
+
+
+def coincident_pairs(names: list[str], positions: np.ndarray) -> list[tuple[str, str]]:
+    """Pairs of markers of ``positions`` ``(F, N, 3)`` (mm, NaN unlabeled) on one position."""
+    if len(positions) == 0 or len(names) < 2:
+        return []
+    sampled = positions[np.unique(np.linspace(0, len(positions) - 1, SAMPLED_FRAMES).astype(int))]
+    apart = np.linalg.norm(sampled[:, :, None] - sampled[:, None, :], axis=3)  # (S, N, N)
+    both = np.isfinite(apart).any(axis=0)
+    median = np.full(apart.shape[1:], np.inf)
+    median[both] = np.nanmedian(apart[:, both], axis=0)
+    first, second = np.nonzero(np.triu(median < COINCIDENT_MM, k=1))
+    return [(names[a], names[b]) for a, b in zip(first.tolist(), second.tolist())]
+
+
+def coincident_warning(pairs: list[tuple[str, str]]) -> str | None:
+    """One line naming the pairs (the first ``LISTED``), or None."""
+    if not pairs:
+        return None
+    named = ", ".join(f"{a} and {b}" for a, b in pairs[:LISTED])
+    more = f" and {len(pairs) - LISTED} more" if len(pairs) > LISTED else ""
+    return (f"warning: {len(pairs)} pairs of markers sit on one position ({named}{more}): copied columns? "
+            "each pair's labels cannot be told apart and count as doubtful")
