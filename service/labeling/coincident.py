@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 COINCIDENT_MM = 0.5  # under any marker's radius; two real markers are never this close
-SAMPLED_FRAMES = 400  # as take_warnings: distances read on this many evenly spaced frames
+SAMPLED_FRAMES = 400  # distances read on this many evenly spaced frames (O(F N^2) otherwise)
 LISTED = 4  # pairs named in the warning line
 
 
@@ -21,13 +21,20 @@ def coincident_pairs(names: list[str], positions: np.ndarray) -> list[tuple[str,
     """Pairs of markers of ``positions`` ``(F, N, 3)`` (mm, NaN unlabeled) on one position."""
     if len(positions) == 0 or len(names) < 2:
         return []
-    sampled = positions[np.unique(np.linspace(0, len(positions) - 1, SAMPLED_FRAMES).astype(int))]
-    apart = np.linalg.norm(sampled[:, :, None] - sampled[:, None, :], axis=3)  # (S, N, N)
+    apart = sampled_distances(positions)
     both = np.isfinite(apart).any(axis=0)
     median = np.full(apart.shape[1:], np.inf)
     median[both] = np.nanmedian(apart[:, both], axis=0)
     first, second = np.nonzero(np.triu(median < COINCIDENT_MM, k=1))
     return [(names[a], names[b]) for a, b in zip(first.tolist(), second.tolist())]
+
+
+def sampled_distances(positions: np.ndarray) -> np.ndarray:
+    """``(S, N, N)`` every pair's distance on ``SAMPLED_FRAMES`` evenly spaced frames (NaN
+    where either is unlabeled)."""
+    sampled = positions[np.unique(np.linspace(0, len(positions) - 1, SAMPLED_FRAMES).astype(int))]
+    apart: np.ndarray = np.linalg.norm(sampled[:, :, None] - sampled[:, None, :], axis=3)
+    return apart
 
 
 def coincident_warning(pairs: list[tuple[str, str]]) -> str | None:

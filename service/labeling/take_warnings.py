@@ -20,10 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from service.labeling.coincident import COINCIDENT_MM
+from service.labeling.coincident import COINCIDENT_MM, sampled_distances
 
 FAST_RATIO = 0.5  # s > d / 2: the last position is nearer the neighbour's than the marker's own
-SAMPLED_FRAMES = 400  # neighbour distances read on this many evenly spaced frames (O(F N^2) otherwise)
 LISTED = 4  # markers named in the warning line
 
 
@@ -43,8 +42,7 @@ def fast_markers(names: list[str], positions: np.ndarray) -> list[FastMarker]:
         return []
     steps = np.linalg.norm(np.diff(positions, axis=0), axis=2)  # (F-1, N), NaN unless both labeled
     step = _median_or_nan(steps)
-    sampled = positions[np.unique(np.linspace(0, len(positions) - 1, SAMPLED_FRAMES).astype(int))]
-    apart = np.linalg.norm(sampled[:, :, None] - sampled[:, None, :], axis=3)  # (S, N, N)
+    apart = sampled_distances(positions)  # (S, N, N)
     apart[:, np.arange(len(names)), np.arange(len(names))] = np.nan
     apart[apart < COINCIDENT_MM] = np.nan  # a copied column is no neighbour (``coincident``)
     nearest = np.where(np.isfinite(apart), apart, np.inf)
