@@ -56,7 +56,7 @@ def repair_mirrors(state: MarkerState, reference: np.ndarray) -> tuple[MarkerSta
         state: The markers at the template frame.
         reference: ``(N, 3)`` the labeled first frame (NaN where a marker had no position).
     """
-    pairs, learned = 0, _Pairs.of(state)
+    pairs, learned = 0, LearnedPairs.of(state)
     noise_var = float(state.motion_var.min()) / 6.0  # at most: 6 sigma^2 + q^2, the calmest marker's q least
     quads, has = _quadruples(state.visible, learned, RIGID_SD_MM**2 + 2.0 * noise_var)
     has &= np.isfinite(reference[quads]).all(axis=(1, 2))
@@ -78,7 +78,7 @@ def repair_mirrors(state: MarkerState, reference: np.ndarray) -> tuple[MarkerSta
 
 
 @dataclass(frozen=True)
-class _Pairs:
+class LearnedPairs:
     """``(N, N)`` learned mean and variance of each pair's distance, from either marker's
     statistics (``MarkerState.distance_mean``/``distance_var``); inf where neither keeps it."""
 
@@ -86,7 +86,7 @@ class _Pairs:
     var: np.ndarray
 
     @classmethod
-    def of(cls, state: MarkerState) -> _Pairs:
+    def of(cls, state: MarkerState) -> LearnedPairs:
         n, k = state.neighbours.shape
         rows, cols = np.repeat(np.arange(n), k), state.neighbours.ravel()
         mean, var = np.full((n, n), np.inf), np.full((n, n), np.inf)
@@ -94,7 +94,7 @@ class _Pairs:
         return cls(np.where(np.isfinite(mean), mean, mean.T), np.where(np.isfinite(var), var, var.T))
 
 
-def _quadruples(visible: np.ndarray, learned: _Pairs, bound: float) -> tuple[np.ndarray, np.ndarray]:
+def _quadruples(visible: np.ndarray, learned: LearnedPairs, bound: float) -> tuple[np.ndarray, np.ndarray]:
     """``(N, 4)`` each marker and its three nearest visible markers rigid with it, and ``(N,)``
     whether the marker is visible with three such, rigid with one another too."""
     n = len(visible)
@@ -134,7 +134,7 @@ def _sine_sd(points: np.ndarray, sigma: float, step: float = 1e-3) -> float:
     return max(sigma * float(np.linalg.norm(grad)), 1e-12)
 
 
-def _mirror_partner(learned: _Pairs, quad: np.ndarray) -> int | None:
+def _mirror_partner(learned: LearnedPairs, quad: np.ndarray) -> int | None:
     """The one marker of the quadruple whose learned distances to the other two agree with
     a's within ``TOLERANCE_MM``: exchanged with a, every distance still fits."""
     a, others = int(quad[0]), quad[1:].tolist()

@@ -18,6 +18,7 @@ from formulations.markers.exchange import repair_exchanges
 from formulations.markers.guide import assign_nearest
 from formulations.markers.mirror import repair_mirrors
 from formulations.markers.state import MarkerState
+from formulations.markers.turns import repair_turns, rigid_triples
 from formulations.relaxation.components import coupled_components
 from formulations.window.build import build_window, taken_candidates
 from formulations.window.costs import ArcCostWeights
@@ -86,6 +87,7 @@ class CloudChain:
 
     def invert(self, solution: WindowSolution, inverse: CloudInverse) -> WindowLabels:
         taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N, M), -1 occluded
+        taken, _ = repair_turns(inverse.state, inverse.frames, taken, rigid_triples(inverse.state))
         state, filled = _advance(inverse.state, inverse.frames, taken)
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
