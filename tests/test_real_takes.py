@@ -41,3 +41,19 @@ def test_basket_sprint_from_1632_leaving_and_re_entering():
     occluded, own = relabel(recording)
     assert occluded[missing.all(axis=1)].all()
     assert own[:500][~missing[:500]].mean() >= 0.9  # the stretch does not reach back
+
+
+RACING = DATA / "c3d_kineticstoolkit" / "kinematics_racing_full.c3d"
+
+
+def test_racing_glove_plate_keeps_its_labels_as_it_sweeps():
+    """The right glove's three markers are an equilateral 43 mm plate moving 75-90 mm a frame:
+    at frames 23, 25 and 27 its labels turned round it, which no distance shows; the turn repair
+    (``formulations.markers.turns``) gives them back."""
+    take = read_labeled(RACING)
+    present = [i for i in range(take.n_markers) if not take.missing()[17, i]]  # Probe1-6 are never seen
+    recording = Recording([take.names[i] for i in present], take.positions[17:80, present], take.rate)
+    _, own = relabel(recording)
+    glove = [recording.names.index(f"GloveR{k}") for k in (1, 2, 3)]
+    seen = ~recording.missing()[:, glove]
+    assert own[:, glove][seen].mean() >= 0.95
