@@ -14,18 +14,18 @@ from formulations.markers.turns import PERMUTATIONS, _turns, repair_turns, rigid
 PLATE = 43.0 / np.sqrt(3.0) * np.array([[1.0, 0, 0], [-0.5, np.sqrt(3) / 2, 0], [-0.5, -np.sqrt(3) / 2, 0]])
 
 
-def _frame(t: int) -> np.ndarray:
+def _frame(t: int, plate: np.ndarray = PLATE) -> np.ndarray:
     turn = Rotation.from_rotvec(np.radians(25.0) * t * np.array([0.2, 0.3, 0.93]) / np.linalg.norm([0.2, 0.3, 0.93]))
     centre = np.array([60.0 * t, 30.0 * np.sin(t / 5), 900.0])
     forearm = centre + [-120.0 + 8 * np.sin(t / 3), 20.0, 0.0]
-    return np.vstack([turn.apply(PLATE) + centre, forearm, [2000.0, 0.0, 1000.0]])
+    return np.vstack([turn.apply(plate) + centre, forearm, [2000.0, 0.0, 1000.0]])
 
 
-def _state(frames: int, noise: float) -> MarkerState:
+def _state(frames: int, noise: float, plate: np.ndarray = PLATE) -> MarkerState:
     rng = np.random.default_rng(3)
-    state = MarkerState.from_first_frame(_frame(0), n_neighbours=4)
+    state = MarkerState.from_first_frame(_frame(0, plate), n_neighbours=4)
     for t in range(1, frames):
-        state = state.advance(_frame(t) + rng.normal(0, noise, (5, 3)), np.ones(5, bool))
+        state = state.advance(_frame(t, plate) + rng.normal(0, noise, (5, 3)), np.ones(5, bool))
     return state
 
 
@@ -60,12 +60,13 @@ def test_the_turn_of_each_reading_is_its_rotation_off_the_expected_one():
 @pytest.mark.parametrize("order", [p for p in permutations(range(3)) if p != (0, 1, 2)])
 def test_a_plate_whose_labels_turned_round_it_is_given_back(order):
     state = _state(frames=30, noise=0.5)
-    triples = rigid_triples(state)
+    triples, symmetric = rigid_triples(state)
     assert triples.tolist() == [[0, 1, 2]]  # the forearm slides and the far marker is far: no plate of theirs
+    assert symmetric.all()  # an equilateral plate: every permutation keeps its sides
     frames, truth = _window(29, 10, noise=0.5)
     wrong = truth.copy()
     wrong[:3, 4:] = truth[list(order), 4:]  # from the window's fifth frame the plate's labels turn round
-    repaired, repairs = repair_turns(state, frames, wrong, triples)
+    repaired, repairs = repair_turns(state, frames, wrong, triples, symmetric)
     assert repairs == 1
     assert (repaired == truth).all()
 
@@ -73,23 +74,34 @@ def test_a_plate_whose_labels_turned_round_it_is_given_back(order):
 def test_labels_that_turn_smoothly_are_left_as_they_are():
     state = _state(frames=30, noise=1.0)
     frames, truth = _window(29, 19, noise=1.0, seed=5)
-    repaired, repairs = repair_turns(state, frames, truth, rigid_triples(state))
+    repaired, repairs = repair_turns(state, frames, truth, *rigid_triples(state))
     assert repairs == 0 and (repaired == truth).all()
 
 
 def test_after_a_gap_the_plate_is_given_back_only_while_it_cannot_have_turned_by_a_symmetry_half():
     state = _state(frames=30, noise=0.5)
-    triples = rigid_triples(state)
+    triples, symmetric = rigid_triples(state)
     frames, truth = _window(29, 12, noise=0.5)
     wrong = truth.copy()
     wrong[:3, 2:7] = -1  # the plate unseen for five frames (six steps of 25 degrees since its last sighting)
     wrong[:3, 7:] = truth[[1, 2, 0], 7:]
-    repaired, repairs = repair_turns(state, frames, wrong, triples)
+    repaired, repairs = repair_turns(state, frames, wrong, triples, symmetric)
     assert repairs == 0 and (repaired == wrong).all()  # it may have turned by a third of a turn: nothing to go on
     short = truth.copy()
     short[:3, 2:3] = -1  # unseen for one frame (two steps of 25 degrees since its last sighting), then turned round
     short[:3, 3:] = truth[[1, 2, 0], 3:]
-    repaired, repairs = repair_turns(state, frames, short, triples)
+    repaired, repairs = repair_turns(state, frames, short, triples, symmetric)
     expected = truth.copy()
     expected[:3, 2:3] = -1
     assert repairs == 1 and (repaired == expected).all()
+
+
+def test_only_the_symmetries_of_a_plate_are_tried():
+    """A scalene plate's permutations change its sides, which the distances read: no cluster of
+    this repair. An isosceles one keeps its sides under the exchange of its base only."""
+    scalene = np.array([[0.0, 0, 0], [50, 0, 0], [10, 35, 0]])  # sides 50, 36.4, 53.2
+    assert len(rigid_triples(_state(frames=30, noise=0.5, plate=scalene))[0]) == 0
+    isosceles = np.array([[0.0, 0, 0], [40, 0, 0], [20, 45, 0]])  # legs 49.2, base 40
+    triples, symmetric = rigid_triples(_state(frames=30, noise=0.5, plate=isosceles))
+    assert triples.tolist() == [[0, 1, 2]]
+    assert [tuple(p) for p in PERMUTATIONS[symmetric[0]]] == [(0, 1, 2), (1, 0, 2)]

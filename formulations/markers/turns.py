@@ -29,7 +29,12 @@ may have turned by a symmetry in five, and then nothing tells.
 A cluster is three markers whose learned distances to one another vary by at most
 ``RIGID_SD_MM`` (as in ``mirror``; skin markers that slide turn no less smoothly, but need
 not keep a permutation's fit), with a least altitude of ``MIN_ALTITUDE_MM`` (a flat triangle
-has no turn to read). The repair runs on each window's solution, before the marker state is
+has no turn to read). Only its symmetries are tried: the permutations that keep its learned
+side lengths within ``SYMMETRY_MM`` (all six for an equilateral plate, one exchange for an
+isosceles one, none for a scalene one, which the distances already read); otherwise a
+reading the window chose by a few mm of shape would be turned back by the turn alone.
+
+The repair runs on each window's solution, before the marker state is
 carried through it, so that the next window's predictions follow the repaired labels.
 """
 
@@ -43,6 +48,9 @@ import numpy as np
 from formulations.markers.mirror import RIGID_SD_MM, LearnedPairs
 from formulations.markers.state import MarkerState
 
+# Learned side lengths that agree within 2 mm the window's distance costs cannot tell apart
+# at a few mm of noise; a plate built symmetric agrees within a few tenths (racing: 43.0-43.2).
+SYMMETRY_MM = 2.0
 FIT_TOLERANCE_MM = 5.0  # a permutation fits "as well" within a few mm of skin motion and noise
 MIN_TURN_GAP_DEG = 60.0  # half the 120 degrees between an equilateral triangle's symmetries
 # A triangle's turn is read from its corners' offsets: at altitude h and per-axis noise sigma
@@ -53,9 +61,11 @@ PERMUTATIONS = np.array(list(permutations(range(3))))  # identity first
 IDENTITY = PERMUTATIONS[:1]
 
 
-def rigid_triples(state: MarkerState) -> np.ndarray:
-    """``(T, 3)`` distinct triples of markers rigid with one another: each marker with its two
-    nearest neighbours whose learned distance spreads, pairwise, are within ``RIGID_SD_MM`` plus noise."""
+def rigid_triples(state: MarkerState) -> tuple[np.ndarray, np.ndarray]:
+    """``(T, 3)`` distinct triples of markers rigid with one another (each marker with its two
+    nearest neighbours whose learned distance spreads, pairwise, are within ``RIGID_SD_MM`` plus
+    noise) that distances cannot read, and ``(T, 6)`` which ``PERMUTATIONS`` keep their learned
+    side lengths within ``SYMMETRY_MM``: the readings only the turn tells apart."""
     learned = LearnedPairs.of(state)
     noise_var = float(state.motion_var.min()) / 6.0  # as mirror: the calmest marker's residual bounds 6 sigma^2
     n = len(state.position)
@@ -66,9 +76,22 @@ def rigid_triples(state: MarkerState) -> np.ndarray:
     found &= rigid[nearest[:, 0], nearest[:, 1]]
     triples = np.sort(np.column_stack([np.arange(n), nearest])[found], axis=1)
     if not len(triples):
-        return np.zeros((0, 3), dtype=int)
+        return np.zeros((0, 3), dtype=int), np.zeros((0, len(PERMUTATIONS)), dtype=bool)
     triples = np.unique(triples, axis=0)
-    return triples[_altitude(learned.mean, triples) >= MIN_ALTITUDE_MM]
+    triples = triples[_altitude(learned.mean, triples) >= MIN_ALTITUDE_MM]
+    symmetric = _symmetries(learned.mean, triples)
+    keep = symmetric[:, 1:].any(axis=1)
+    return triples[keep], symmetric[keep]
+
+
+def _symmetries(mean: np.ndarray, triples: np.ndarray) -> np.ndarray:
+    """``(T, 6)`` the permutations that map each triangle's learned sides onto themselves within ``SYMMETRY_MM``."""
+    pairs = np.array([[0, 1], [1, 2], [0, 2]])
+    sides = mean[triples[:, pairs[:, 0]], triples[:, pairs[:, 1]]]  # (T, 3)
+    moved = triples[:, PERMUTATIONS]  # (T, 6, 3)
+    permuted = mean[moved[:, :, pairs[:, 0]], moved[:, :, pairs[:, 1]]]  # (T, 6, 3)
+    result: np.ndarray = (np.abs(permuted - sides[:, None, :]) <= SYMMETRY_MM).all(axis=2)
+    return result
 
 
 def _altitude(mean: np.ndarray, triples: np.ndarray) -> np.ndarray:
@@ -82,7 +105,7 @@ def _altitude(mean: np.ndarray, triples: np.ndarray) -> np.ndarray:
 
 
 def repair_turns(
-    template: MarkerState, frames: list[np.ndarray], taken: np.ndarray, triples: np.ndarray,
+    template: MarkerState, frames: list[np.ndarray], taken: np.ndarray, triples: np.ndarray, symmetric: np.ndarray,
 ) -> tuple[np.ndarray, int]:
     """``taken`` with the labels of clusters that turned by a symmetry permuted back, and how many repairs.
 
@@ -90,7 +113,7 @@ def repair_turns(
         template: The markers at the template frame.
         frames: The window's points per frame after the template.
         taken: ``(N, M)`` the point each marker took per frame, -1 occluded.
-        triples: ``(T, 3)`` rigid clusters (``rigid_triples``).
+        triples, symmetric: Rigid clusters and their symmetries (``rigid_triples``).
     """
     taken = taken.copy()
     seen = template.visible[triples].all(axis=1)
@@ -104,7 +127,7 @@ def repair_turns(
         full = ~np.isnan(current[triples]).any(axis=(1, 2))
         again = np.flatnonzero(full & (sighting.gap > 0))
         rotation = _turns(sighting.last[again], current[triples[again]], sighting.expected(again), IDENTITY)
-        for k, best in _symmetries_back(sighting, again, current[triples[again]], rotation):
+        for k, best in _symmetries_back(sighting, again, current[triples[again]], rotation, symmetric[again]):
             t = again[k]
             order = triples[t][PERMUTATIONS[best]]
             taken[triples[t], m:] = taken[order, m:]
@@ -140,10 +163,11 @@ class _Sightings:
 
 
 def _symmetries_back(sighting: _Sightings, again: np.ndarray, now: np.ndarray,
-                     identity: tuple[np.ndarray, np.ndarray, np.ndarray]) -> list[tuple[int, int]]:
+                     identity: tuple[np.ndarray, np.ndarray, np.ndarray], symmetric: np.ndarray) -> list[tuple[int, int]]:
     """(row of ``again``, row of ``PERMUTATIONS``) for each triple whose labels turned by a
     symmetry since its last sighting (module doc); ``identity`` is ``_turns`` of the labels as
-    they are. Only labels that turned off the expected by the gap are tried permuted."""
+    they are, ``symmetric`` the permutations each may take. Only labels that turned off the
+    expected by the gap are tried permuted."""
     gap = sighting.gap[again]
     turn, fit = identity[0][:, 0], identity[1][:, 0]
     with np.errstate(invalid="ignore"):
@@ -152,7 +176,7 @@ def _symmetries_back(sighting: _Sightings, again: np.ndarray, now: np.ndarray,
     if not len(tried):
         return []
     turns, fits, _ = _turns(sighting.last[again[tried]], now[tried], sighting.expected(again[tried]), PERMUTATIONS)
-    best = np.argmin(np.where(fits <= FIT_TOLERANCE_MM, turns, np.inf), axis=1)
+    best = np.argmin(np.where((fits <= FIT_TOLERANCE_MM) & symmetric[tried], turns, np.inf), axis=1)
     gained = turns[:, 0] - turns[np.arange(len(tried)), best]
     kept = turns[np.arange(len(tried)), best]
     back = (best > 0) & (kept < np.radians(MIN_TURN_GAP_DEG)) & (gained >= np.radians(MIN_TURN_GAP_DEG))

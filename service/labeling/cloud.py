@@ -87,7 +87,7 @@ class CloudChain:
 
     def invert(self, solution: WindowSolution, inverse: CloudInverse) -> WindowLabels:
         taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N, M), -1 occluded
-        taken, _ = repair_turns(inverse.state, inverse.frames, taken, rigid_triples(inverse.state))
+        taken, _ = repair_turns(inverse.state, inverse.frames, taken, *rigid_triples(inverse.state))
         state, filled = _advance(inverse.state, inverse.frames, taken)
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
