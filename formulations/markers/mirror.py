@@ -57,8 +57,8 @@ def repair_mirrors(state: MarkerState, reference: np.ndarray) -> tuple[MarkerSta
         reference: ``(N, 3)`` the labeled first frame (NaN where a marker had no position).
     """
     pairs, learned = 0, LearnedPairs.of(state)
-    noise_var = float(state.motion_var.min()) / 6.0  # at most: 6 sigma^2 + q^2, the calmest marker's q least
-    quads, has = _quadruples(state.visible, learned, RIGID_SD_MM**2 + 2.0 * noise_var)
+    noise_var = _noise_var(state)
+    quads, has = rigid_groups(state.visible, learned, rigid_bound(state), 4)
     has &= np.isfinite(reference[quads]).all(axis=(1, 2))
     s_now, s_then = _sines(state.position[quads]), _sines(reference[quads])
     # Most quadruples keep their sign: only the others are judged, one at a time.
@@ -94,15 +94,27 @@ class LearnedPairs:
         return cls(np.where(np.isfinite(mean), mean, mean.T), np.where(np.isfinite(var), var, var.T))
 
 
-def _quadruples(visible: np.ndarray, learned: LearnedPairs, bound: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(N, 4)`` each marker and its three nearest visible markers rigid with it, and ``(N,)``
-    whether the marker is visible with three such, rigid with one another too."""
-    n = len(visible)
-    rigid = visible[:, None] & visible[None, :] & (learned.var <= bound) & ~np.eye(n, dtype=bool)
+def _noise_var(state: MarkerState) -> float:
+    """Per-axis noise variance, at most: 6 sigma^2 + q^2 of the calmest marker, q least."""
+    return float(state.motion_var.min()) / 6.0
+
+
+def rigid_bound(state: MarkerState) -> float:
+    """Largest learned distance variance of two markers on one rigid segment: ``RIGID_SD_MM``
+    squared plus the 2 sigma^2 that noise adds to a distance."""
+    return RIGID_SD_MM**2 + 2.0 * _noise_var(state)
+
+
+def rigid_groups(allowed: np.ndarray, learned: LearnedPairs, bound: float, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(N, size)`` each marker and its ``size - 1`` nearest ``allowed`` markers rigid with it
+    (learned distance variance at most ``bound``), and ``(N,)`` whether the marker is allowed
+    with that many such, rigid with one another too."""
+    n = len(allowed)
+    rigid = allowed[:, None] & allowed[None, :] & (learned.var <= bound) & ~np.eye(n, dtype=bool)
     near = np.where(rigid, learned.mean, np.inf)
-    nearest = np.argsort(near, axis=1)[:, :3]
+    nearest = np.argsort(near, axis=1)[:, : size - 1]
     found = np.isfinite(np.take_along_axis(near, nearest, axis=1)).all(axis=1)
-    inner = np.where(np.eye(3, dtype=bool), 0.0, learned.var[nearest[:, :, None], nearest[:, None, :]])
+    inner = np.where(np.eye(size - 1, dtype=bool), 0.0, learned.var[nearest[:, :, None], nearest[:, None, :]])
     return np.column_stack([np.arange(n), nearest]), found & (inner.max(axis=(1, 2)) <= bound)
 
 

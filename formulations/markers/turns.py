@@ -45,7 +45,7 @@ from itertools import permutations
 
 import numpy as np
 
-from formulations.markers.mirror import RIGID_SD_MM, LearnedPairs
+from formulations.markers.mirror import LearnedPairs, rigid_bound, rigid_groups
 from formulations.markers.state import MarkerState
 
 # Learned side lengths that agree within 2 mm the window's distance costs cannot tell apart
@@ -63,41 +63,30 @@ IDENTITY = PERMUTATIONS[:1]
 
 def rigid_triples(state: MarkerState) -> tuple[np.ndarray, np.ndarray]:
     """``(T, 3)`` distinct triples of markers rigid with one another (each marker with its two
-    nearest neighbours whose learned distance spreads, pairwise, are within ``RIGID_SD_MM`` plus
-    noise) that distances cannot read, and ``(T, 6)`` which ``PERMUTATIONS`` keep their learned
-    side lengths within ``SYMMETRY_MM``: the readings only the turn tells apart."""
+    nearest rigid neighbours, as ``mirror.rigid_groups`` makes quadruples) that distances cannot
+    read, and ``(T, 6)`` which ``PERMUTATIONS`` keep their learned side lengths within
+    ``SYMMETRY_MM``: the readings only the turn tells apart."""
     learned = LearnedPairs.of(state)
-    noise_var = float(state.motion_var.min()) / 6.0  # as mirror: the calmest marker's residual bounds 6 sigma^2
-    n = len(state.position)
-    rigid = (learned.var <= RIGID_SD_MM**2 + 2.0 * noise_var) & ~np.eye(n, dtype=bool)
-    near = np.where(rigid, learned.mean, np.inf)
-    nearest = np.argsort(near, axis=1)[:, :2]
-    found = np.isfinite(np.take_along_axis(near, nearest, axis=1)).all(axis=1)
-    found &= rigid[nearest[:, 0], nearest[:, 1]]
-    triples = np.sort(np.column_stack([np.arange(n), nearest])[found], axis=1)
-    if not len(triples):
+    groups, found = rigid_groups(np.ones(len(state.position), dtype=bool), learned, rigid_bound(state), 3)
+    if not found.any():
         return np.zeros((0, 3), dtype=int), np.zeros((0, len(PERMUTATIONS)), dtype=bool)
-    triples = np.unique(triples, axis=0)
-    triples = triples[_altitude(learned.mean, triples) >= MIN_ALTITUDE_MM]
-    symmetric = _symmetries(learned.mean, triples)
+    triples = np.unique(np.sort(groups[found], axis=1), axis=0)
+    sides = _sides(learned.mean, triples[:, None, :])[:, 0]
+    tall = _altitude(sides) >= MIN_ALTITUDE_MM
+    triples, sides = triples[tall], sides[tall]
+    symmetric = (np.abs(_sides(learned.mean, triples[:, PERMUTATIONS]) - sides[:, None, :]) <= SYMMETRY_MM).all(axis=2)
     keep = symmetric[:, 1:].any(axis=1)
     return triples[keep], symmetric[keep]
 
 
-def _symmetries(mean: np.ndarray, triples: np.ndarray) -> np.ndarray:
-    """``(T, 6)`` the permutations that map each triangle's learned sides onto themselves within ``SYMMETRY_MM``."""
-    pairs = np.array([[0, 1], [1, 2], [0, 2]])
-    sides = mean[triples[:, pairs[:, 0]], triples[:, pairs[:, 1]]]  # (T, 3)
-    moved = triples[:, PERMUTATIONS]  # (T, 6, 3)
-    permuted = mean[moved[:, :, pairs[:, 0]], moved[:, :, pairs[:, 1]]]  # (T, 6, 3)
-    result: np.ndarray = (np.abs(permuted - sides[:, None, :]) <= SYMMETRY_MM).all(axis=2)
+def _sides(mean: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """``(T, P, 3)`` learned lengths of sides 01, 12, 02 of ``(T, P, 3)`` triangles of marker indices."""
+    result: np.ndarray = mean[corners[..., [0, 1, 0]], corners[..., [1, 2, 2]]]
     return result
 
 
-def _altitude(mean: np.ndarray, triples: np.ndarray) -> np.ndarray:
-    """``(T,)`` each triangle's least altitude (mm) from its learned side lengths (Heron)."""
-    sides = np.stack([mean[triples[:, 0], triples[:, 1]], mean[triples[:, 1], triples[:, 2]],
-                      mean[triples[:, 0], triples[:, 2]]], axis=1)
+def _altitude(sides: np.ndarray) -> np.ndarray:
+    """``(T,)`` each triangle's least altitude (mm) from its ``(T, 3)`` side lengths (Heron)."""
     half = sides.sum(axis=1) / 2.0
     area = np.sqrt(np.maximum(half * np.prod(half[:, None] - sides, axis=1), 0.0))
     result: np.ndarray = 2.0 * area / np.maximum(sides.max(axis=1), 1e-9)
@@ -127,12 +116,12 @@ def repair_turns(
         full = ~np.isnan(current[triples]).any(axis=(1, 2))
         again = np.flatnonzero(full & (sighting.gap > 0))
         rotation = _turns(sighting.last[again], current[triples[again]], sighting.expected(again), IDENTITY)
-        for k, best in _symmetries_back(sighting, again, current[triples[again]], rotation, symmetric[again]):
+        for k, best, turned in _symmetries_back(sighting, again, current[triples[again]], rotation, symmetric[again]):
             t = again[k]
             order = triples[t][PERMUTATIONS[best]]
             taken[triples[t], m:] = taken[order, m:]
             current[triples[t]] = current[order]
-            rotation[2][k] = _turns(sighting.last[t][None], current[triples[t]][None], np.eye(3)[None], IDENTITY)[2][0]
+            rotation[2][k, 0] = turned
             repairs += 1
         sighting.seen_now(again, rotation[2][:, 0], current[triples], full)
     return taken, repairs
@@ -163,8 +152,9 @@ class _Sightings:
 
 
 def _symmetries_back(sighting: _Sightings, again: np.ndarray, now: np.ndarray,
-                     identity: tuple[np.ndarray, np.ndarray, np.ndarray], symmetric: np.ndarray) -> list[tuple[int, int]]:
-    """(row of ``again``, row of ``PERMUTATIONS``) for each triple whose labels turned by a
+                     identity: tuple[np.ndarray, np.ndarray, np.ndarray],
+                     symmetric: np.ndarray) -> list[tuple[int, int, np.ndarray]]:
+    """(row of ``again``, row of ``PERMUTATIONS``, its rotation) for each triple whose labels turned by a
     symmetry since its last sighting (module doc); ``identity`` is ``_turns`` of the labels as
     they are, ``symmetric`` the permutations each may take. Only labels that turned off the
     expected by the gap are tried permuted."""
@@ -175,12 +165,12 @@ def _symmetries_back(sighting: _Sightings, again: np.ndarray, now: np.ndarray,
     tried = np.flatnonzero(readable & (fit <= FIT_TOLERANCE_MM) & (turn >= np.radians(MIN_TURN_GAP_DEG)))
     if not len(tried):
         return []
-    turns, fits, _ = _turns(sighting.last[again[tried]], now[tried], sighting.expected(again[tried]), PERMUTATIONS)
+    turns, fits, rotations = _turns(sighting.last[again[tried]], now[tried], sighting.expected(again[tried]), PERMUTATIONS)
     best = np.argmin(np.where((fits <= FIT_TOLERANCE_MM) & symmetric[tried], turns, np.inf), axis=1)
     gained = turns[:, 0] - turns[np.arange(len(tried)), best]
     kept = turns[np.arange(len(tried)), best]
     back = (best > 0) & (kept < np.radians(MIN_TURN_GAP_DEG)) & (gained >= np.radians(MIN_TURN_GAP_DEG))
-    return [(int(k), int(b)) for k, b in zip(tried[back], best[back])]
+    return [(int(tried[i]), int(best[i]), rotations[i, best[i]]) for i in np.flatnonzero(back)]
 
 
 def _turn_rate(state: MarkerState, triples: np.ndarray) -> np.ndarray:
