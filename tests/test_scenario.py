@@ -203,3 +203,27 @@ def test_first_frame_gap_names_the_marker(rec) -> None:
 def test_slice_outside_the_recording_is_refused(rec, start: int, frames: int, key: str) -> None:
     with pytest.raises(InputError, match=f"'{key}'"):
         simulate_cloud(rec, Scenario(start_frame=start, frames=frames))
+
+
+def test_unnamed_markers_keep_their_points_lose_their_names_and_score_as_ghosts(rec) -> None:
+    """The same cloud as without the key; three markers drop out of the names, the truth
+    and the labeled frame, and their points are marked -1 (a named marker taking one took a ghost)."""
+    named = simulate_cloud(rec, Scenario(seed=2, frames=50))
+    unnamed = simulate_cloud(rec, Scenario(seed=2, frames=50, unnamed_markers=3))
+    assert all(np.array_equal(p, q) for p, q in zip(named.cloud.points, unnamed.cloud.points))
+    kept = [rec.names.index(n) for n in unnamed.truth.names]
+    gone = sorted(set(range(rec.n_markers)) - set(kept))
+    assert len(gone) == 3 and unnamed.first_frame.names == unnamed.truth.names
+    assert np.array_equal(unnamed.truth.positions, named.truth.positions[:, kept], equal_nan=True)
+    assert np.array_equal(unnamed.first_frame.positions[0], named.first_frame.positions[0, kept])
+    for old, new in zip(named.point_marker, unnamed.point_marker):
+        was_gone = np.isin(old, gone)
+        assert np.all(new[was_gone | (old < 0)] == -1)
+        assert np.array_equal(np.array(kept)[new[~was_gone & (old >= 0)]], old[~was_gone & (old >= 0)])
+
+
+def test_unnamed_markers_need_the_cloud_and_fewer_than_the_take(rec) -> None:
+    with pytest.raises(InputError, match="unnamed_markers"):
+        Scenario(mode="cameras", calibration="x.toml", unnamed_markers=2)
+    with pytest.raises(InputError, match="unnamed_markers"):
+        simulate_cloud(rec, Scenario(frames=5, unnamed_markers=rec.n_markers))

@@ -86,6 +86,9 @@ CONDITIONS: dict[str, Scenario] = {
     "drop-30": _DROP_30,
     "ghosts-10": replace(_DEFAULT, ghosts_per_frame=10.0),
     "combined": replace(_DROP_30, noise_mm=4.0, ghosts_per_frame=10.0),
+    # Three markers' points in the cloud with no name, as `track --start` leaves those
+    # absent in its start frame: persistent tracks no marker should take.
+    "unnamed-3": replace(_DEFAULT, unnamed_markers=3),
 }
 
 

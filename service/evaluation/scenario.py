@@ -16,7 +16,7 @@ ASSOCIATIONS = ("joint-3d", "per-camera")
 _EXPECTED: dict[object, str] = {
     float: "a number", int: "an integer", str: "a string", dict: "a table", bool: "true or false",
 }
-_NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames")
+_NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames", "unnamed_markers")
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,9 @@ class Scenario:
             no labeled frame; the truth only scores).
         second_pass: Cloud mode without a model: label again from the take's distance
             spreads and keep the less doubtful labeling (``LabelingOptions.second_pass``).
+        unnamed_markers: Cloud mode: this many markers, drawn with the seed, keep their points
+            but get no name, as `track --start` leaves the markers absent in its start frame;
+            a named marker on one of their points took a ghost.
     """
 
     mode: str = "cloud"
@@ -80,6 +83,7 @@ class Scenario:
     up_axis: int = 2
     first_frame: str = "labeled"
     second_pass: bool = True
+    unnamed_markers: int = 0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -175,6 +179,8 @@ class Scenario:
         self._require("first_frame", self.first_frame in FIRST_FRAMES, f"one of {', '.join(FIRST_FRAMES)}")
         if self.first_frame == "model":
             self._require("mode", self.mode == "cloud", "cloud when first_frame is model")
+        if self.unnamed_markers:
+            self._require("mode", self.mode == "cloud", "cloud when unnamed_markers is set")
         # p_enter is a probability: r / (b (1 - r)) <= 1, i.e. r <= b / (1 + b).
         if self.deletion_transitions[0] > 1.0:
             raise InputError(

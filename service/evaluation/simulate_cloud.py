@@ -22,6 +22,7 @@ def simulate_cloud(truth: Recording, scenario: Scenario) -> SimulatedCapture:
     4. Add ``Poisson(ghosts_per_frame)`` ghosts per frame, each at a uniformly chosen
        marker of that frame plus an ``N(0, ghost_spread_mm^2 I)`` offset.
     5. Shuffle the points of each frame.
+    6. Leave ``unnamed_markers`` markers unnamed: their points stay, scored as ghosts.
 
     Args:
         truth: Labeled trajectories, millimetres.
@@ -42,13 +43,26 @@ def simulate_cloud(truth: Recording, scenario: Scenario) -> SimulatedCapture:
     visible = present & ~_deletions(rng, present.shape, scenario)
     ghosts = _ghosts(rng, clean.positions, present, scenario)
     points, point_marker = _shuffled_frames(rng, noisy, visible, ghosts)
+    named = _named(rng, clean.n_markers, scenario.unnamed_markers)
+    renumber = np.full(clean.n_markers + 1, -1)  # index -1 (a ghost) stays -1
+    renumber[named] = np.arange(len(named))
     return SimulatedCapture(
         cloud=UnlabeledCloud(points=points, rate=clean.rate),
-        point_marker=point_marker,
-        truth=clean,
-        first_frame=Recording(names=list(clean.names), positions=noisy[:1], rate=clean.rate),
+        point_marker=[renumber[m] for m in point_marker],
+        truth=Recording(names=[clean.names[i] for i in named], positions=clean.positions[:, named], rate=clean.rate),
+        first_frame=Recording(names=[clean.names[i] for i in named], positions=noisy[:1, named], rate=clean.rate),
         scenario=scenario,
     )
+
+
+def _named(rng: np.random.Generator, markers: int, unnamed: int) -> np.ndarray:
+    """Indices of the markers that keep their names, in order (drawn last: the rest of the
+    simulation does not depend on ``unnamed``)."""
+    if unnamed == 0:
+        return np.arange(markers)
+    if unnamed >= markers:
+        raise InputError(f"scenario key 'unnamed_markers' {unnamed}: the recording has {markers} markers")
+    return np.sort(rng.choice(markers, markers - unnamed, replace=False))
 
 
 def _slice(truth: Recording, scenario: Scenario) -> Recording:
