@@ -46,11 +46,12 @@ def simulate_cloud(truth: Recording, scenario: Scenario) -> SimulatedCapture:
     named = _named(rng, clean.n_markers, scenario.unnamed_markers)
     renumber = np.full(clean.n_markers + 1, -1)  # index -1 (a ghost) stays -1
     renumber[named] = np.arange(len(named))
+    names = [clean.names[i] for i in named]
     return SimulatedCapture(
         cloud=UnlabeledCloud(points=points, rate=clean.rate),
         point_marker=[renumber[m] for m in point_marker],
-        truth=Recording(names=[clean.names[i] for i in named], positions=clean.positions[:, named], rate=clean.rate),
-        first_frame=Recording(names=[clean.names[i] for i in named], positions=noisy[:1, named], rate=clean.rate),
+        truth=Recording(names=names, positions=clean.positions[:, named], rate=clean.rate),
+        first_frame=Recording(names=names, positions=noisy[:1, named], rate=clean.rate),
         scenario=scenario,
     )
 
