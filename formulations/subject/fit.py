@@ -11,6 +11,7 @@ from formulations.errors import FormulationError
 from formulations.subject.distances import distance_spread
 from formulations.subject.grouping import Grouping, group_markers, settle
 from formulations.subject.joint_fit import JointFit
+from formulations.subject.joint_rest import rest_rotation
 from formulations.subject.model import Joint, Limb, Segment, SingleMarker, SubjectModel
 from formulations.subject.pair_fit import attach_pairs
 from formulations.subject.segment_fit import SegmentFit, fit_segment
@@ -68,7 +69,7 @@ def fit_subject(names: list[str], positions: Array, options: FitOptions = FitOpt
                if m not in on_segment]
     model = SubjectModel(
         [_segment(s, names, n) for s, n in zip(segments, seg_names)],
-        [_joint(a, b, fit, seg_names) for a, b, fit in skeleton.joints],
+        [_joint(a, b, fit, seg_names, segments) for a, b, fit in skeleton.joints],
         _limbs(skeleton, seg_names),
         [s for s in singles if s is not None],
     )
@@ -96,10 +97,11 @@ def _segment(fit: SegmentFit, names: list[str], name: str) -> Segment:
     return Segment(name, [names[m] for m in fit.markers], fit.coordinates.round(3).tolist(), fit.spread.round(3).tolist())
 
 
-def _joint(a: int, b: int, fit: JointFit, seg_names: list[str]) -> Joint:
+def _joint(a: int, b: int, fit: JointFit, seg_names: list[str], segments: list[SegmentFit]) -> Joint:
     return Joint(
         f"{seg_names[a]}-{seg_names[b]}", (seg_names[a], seg_names[b]),
         (fit.centre_a.round(3).tolist(), fit.centre_b.round(3).tolist()), round(fit.rms, 3),
+        rest_rotation(segments[a].rotation, segments[b].rotation),
     )
 
 

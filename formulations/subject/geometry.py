@@ -39,13 +39,15 @@ class SegmentGeometry:
 
 @dataclass(frozen=True)
 class JointGeometry:
-    """A joint between segments ``a`` and ``b`` (indices), its centre in each frame, and the agreement tolerance."""
+    """A joint between segments ``a`` and ``b`` (indices), its centre in each frame, the agreement
+    tolerance, and b's rest rotation in a's frame (``joint_rest``; None if the model has none)."""
 
     a: int
     b: int
     centre_a: Array
     centre_b: Array
     tolerance: float
+    rest: Array | None = None
 
 
 @dataclass(frozen=True)
@@ -89,6 +91,7 @@ class ModelGeometry:
             JointGeometry(
                 seg_index[j.segments[0]], seg_index[j.segments[1]], np.asarray(j.centres[0], dtype=float),
                 np.asarray(j.centres[1], dtype=float), sigmas * j.rms + 2 * r,
+                None if j.rest is None else np.asarray(j.rest, dtype=float),
             )
             for j in model.joints
         ]

@@ -117,14 +117,18 @@ def _follow_joints(geometry: ModelGeometry, points: Array, poses: dict[int, Pose
     while progress:
         progress = False
         for joint in joints:
-            for known, unknown, c_known, c_unknown in ((joint.a, joint.b, joint.centre_a, joint.centre_b),
-                                                      (joint.b, joint.a, joint.centre_b, joint.centre_a)):
+            rest = joint.rest
+            for known, unknown, c_known, c_unknown, at_rest in (
+                (joint.a, joint.b, joint.centre_a, joint.centre_b, rest),
+                (joint.b, joint.a, joint.centre_b, joint.centre_a, None if rest is None else rest.T),
+            ):
                 if known not in poses or unknown in poses or unknown in tried:
                     continue
                 tried.add(unknown)
                 segment = geometry.segments[unknown]
-                centre = poses[known].place(c_known)
-                pose, taken = place_by_joint(segment, c_unknown, centre, points, ~claimed)
+                parent = poses[known]
+                usual = None if at_rest is None else parent.rotation @ at_rest
+                pose, taken = place_by_joint(segment, c_unknown, parent.place(c_known), points, ~claimed, usual)
                 fixed[segment.markers[taken >= 0]] = taken[taken >= 0]
                 claimed[taken[taken >= 0]] = True
                 if pose is not None:

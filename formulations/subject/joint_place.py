@@ -5,7 +5,13 @@ segment s turns about it: marker p lies on the sphere |y - x| = |u_p - c_s|. Two
 markers (p, q) on their spheres at the right mutual distance, with the centre, are three
 correspondences (c_s, u_p, u_q) -> (x, x_i, x_j): a Kabsch pose, which places the rest of
 the segment. One visible marker gives no pose; it is named only when a single free point
-lies on a single sphere. Either way an ambiguous reading names nothing.
+lies on a single sphere. Either way an ambiguous reading names nothing, with one exception:
+when the markers are about as far from the centre as each other, a pair's two readings
+differ by a half turn about the triangle's axis of symmetry, and the model's rest
+orientation of the joint (``joint_rest``) tells them apart. The reading turned least from
+rest is kept when every other is turned at least ``REST_MARGIN`` more: the true reading is
+turned by the joint's motion, the exchanged one by that and a half turn (close to 180
+degrees), so a quarter turn of margin leaves room for a joint bent 90 degrees from its rest.
 """
 
 from __future__ import annotations
@@ -16,13 +22,16 @@ from numpy.typing import NDArray
 from formulations.markers.rigid import rigid_transform
 from formulations.subject.constellation import Pose
 from formulations.subject.geometry import SegmentGeometry
+from formulations.subject.joint_rest import turned_from
 
 Array = NDArray[np.float64]
 Index = NDArray[np.int64]
+REST_MARGIN = np.pi / 2  # radians (module doc)
 
 
 def place_by_joint(
     geometry: SegmentGeometry, centre_local: Array, centre: Array, points: Array, free: NDArray[np.bool_],
+    usual: Array | None = None,
 ) -> tuple[Pose | None, Index]:
     """The segment's pose (None when fewer than two markers fit) and each marker's point (-1: none).
 
@@ -30,6 +39,8 @@ def place_by_joint(
         geometry: The segment.
         centre_local: c_s, the joint centre in the segment's frame; ``centre`` x in the world.
         points: ``(P, 3)`` the frame's points; ``free`` ``(P,)`` those no other segment took.
+        usual: The rotation the segment has at the joint's rest, its parent as posed (R_a Q of
+            ``joint_rest``), or None: then readings that tie name nothing.
     """
     u, tau = geometry.coordinates, geometry.tolerance
     candidates = np.flatnonzero(free)
@@ -51,11 +62,21 @@ def place_by_joint(
         best = [r for r in readings if r[0] == most]
         if len({tuple(r[2]) for r in best}) == 1:
             return best[0][1], best[0][2]
-        return None, none
+        chosen = None if usual is None else _nearest_rest(best, usual)
+        return (chosen[1], chosen[2]) if chosen is not None else (None, none)
     marker, point = np.nonzero(on_sphere)
     if len(marker) == 1:
         none[marker[0]] = candidates[point[0]]
     return None, none
+
+
+def _nearest_rest(readings: list[tuple[int, Pose, Index]], usual: Array) -> tuple[int, Pose, Index] | None:
+    """The reading turned least from ``usual`` if every reading naming other points is turned
+    at least ``REST_MARGIN`` more (module doc), else None."""
+    turned = [turned_from(usual, pose.rotation) for _, pose, _ in readings]
+    first = int(np.argmin(turned))
+    rivals = [t for t, r in zip(turned, readings) if tuple(r[2]) != tuple(readings[first][2])]
+    return readings[first] if min(rivals) - turned[first] >= REST_MARGIN else None
 
 
 def _pair_poses(

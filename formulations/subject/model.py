@@ -6,6 +6,8 @@ import json
 from dataclasses import asdict, dataclass
 from typing import Any
 
+import numpy as np
+
 from formulations.errors import FormulationError
 
 VERSION = 1
@@ -24,12 +26,15 @@ class Segment:
 
 @dataclass(frozen=True)
 class Joint:
-    """A ball joint: the two segments and the centre in each one's frame (mm); its fit RMS (mm)."""
+    """A ball joint: the two segments and the centre in each one's frame (mm); its fit RMS (mm);
+    ``rest``, the second segment's usual rotation in the first's frame (``joint_rest``; None in
+    models written before it was kept, which then cannot tell a near-isosceles pair's readings apart)."""
 
     name: str
     segments: tuple[str, str]
     centres: tuple[list[float], list[float]]
     rms: float
+    rest: list[list[float]] | None = None
 
 
 @dataclass(frozen=True)
@@ -82,7 +87,8 @@ class SubjectModel:
 
 def _decode(data: dict[str, Any]) -> SubjectModel:
     joints = [
-        Joint(j["name"], (j["segments"][0], j["segments"][1]), (j["centres"][0], j["centres"][1]), float(j["rms"]))
+        Joint(j["name"], (j["segments"][0], j["segments"][1]), (j["centres"][0], j["centres"][1]), float(j["rms"]),
+              j.get("rest"))
         for j in data["joints"]
     ]
     limbs = [Limb(b["segment"], (b["joints"][0], b["joints"][1]), float(b["length"])) for b in data["limbs"]]
@@ -97,4 +103,6 @@ def _decode(data: dict[str, Any]) -> SubjectModel:
     for joint in model.joints:
         if not set(joint.segments) <= names:
             raise ValueError(f"joint {joint.name!r} names an unknown segment")
+        if joint.rest is not None and np.asarray(joint.rest, dtype=float).shape != (3, 3):
+            raise ValueError(f"joint {joint.name!r}: rest is not a 3 x 3 rotation")
     return model

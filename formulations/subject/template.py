@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from formulations.errors import FormulationError
 from formulations.subject.distances import mean_distance
+from formulations.subject.joint_rest import rest_rotation
 from formulations.subject.model import Joint, Limb, Segment, SingleMarker, SubjectModel
 from formulations.subject.segment_fit import SegmentFit, fit_segment
 
@@ -125,7 +126,8 @@ def fit_template(template: Template, names: list[str], positions: Array) -> Subj
         centres[f"{a}-{b}"] = world
         local = [_in_frame(fits[s], world) for s in (a, b)]
         rms = template.joint_rms[k] if k < len(template.joint_rms) else template.skin_mm
-        joints.append(Joint(f"{a}-{b}", (a, b), (local[0], local[1]), rms))
+        rest = rest_rotation(fits[a].rotation, fits[b].rotation)
+        joints.append(Joint(f"{a}-{b}", (a, b), (local[0], local[1]), rms, rest))
     return SubjectModel(segments, joints, _limbs(joints, centres), _singles(names, singles, positions, fits, template.skin_mm))
 
 
