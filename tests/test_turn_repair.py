@@ -66,7 +66,7 @@ def test_a_plate_whose_labels_turned_round_it_is_given_back(order):
     frames, truth = _window(29, 10, noise=0.5)
     wrong = truth.copy()
     wrong[:3, 4:] = truth[list(order), 4:]  # from the window's fifth frame the plate's labels turn round
-    repaired, repairs = repair_turns(state, frames, wrong, triples, symmetric)
+    repaired, repairs, _ = repair_turns(state, frames, wrong, triples, symmetric)
     assert repairs == 1
     assert (repaired == truth).all()
 
@@ -74,7 +74,7 @@ def test_a_plate_whose_labels_turned_round_it_is_given_back(order):
 def test_labels_that_turn_smoothly_are_left_as_they_are():
     state = _state(frames=30, noise=1.0)
     frames, truth = _window(29, 19, noise=1.0, seed=5)
-    repaired, repairs = repair_turns(state, frames, truth, *rigid_triples(state))
+    repaired, repairs, _ = repair_turns(state, frames, truth, *rigid_triples(state))
     assert repairs == 0 and (repaired == truth).all()
 
 
@@ -85,12 +85,12 @@ def test_after_a_gap_the_plate_is_given_back_only_while_it_cannot_have_turned_by
     wrong = truth.copy()
     wrong[:3, 2:7] = -1  # the plate unseen for five frames (six steps of 25 degrees since its last sighting)
     wrong[:3, 7:] = truth[[1, 2, 0], 7:]
-    repaired, repairs = repair_turns(state, frames, wrong, triples, symmetric)
+    repaired, repairs, _ = repair_turns(state, frames, wrong, triples, symmetric)
     assert repairs == 0 and (repaired == wrong).all()  # it may have turned by a third of a turn: nothing to go on
     short = truth.copy()
     short[:3, 2:3] = -1  # unseen for one frame (two steps of 25 degrees since its last sighting), then turned round
     short[:3, 3:] = truth[[1, 2, 0], 3:]
-    repaired, repairs = repair_turns(state, frames, short, triples, symmetric)
+    repaired, repairs, _ = repair_turns(state, frames, short, triples, symmetric)
     expected = truth.copy()
     expected[:3, 2:3] = -1
     assert repairs == 1 and (repaired == expected).all()
@@ -105,3 +105,32 @@ def test_only_the_symmetries_of_a_plate_are_tried():
     triples, symmetric = rigid_triples(_state(frames=30, noise=0.5, plate=isosceles))
     assert triples.tolist() == [[0, 1, 2]]
     assert [tuple(p) for p in PERMUTATIONS[symmetric[0]]] == [(0, 1, 2), (1, 0, 2)]
+
+
+def _carried(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> MarkerState:
+    """The state advanced through a window's labels, as the cloud chain does."""
+    for m, points in enumerate(frames):
+        seen = taken[:, m] >= 0
+        observed = np.zeros((len(seen), 3))
+        observed[seen] = points[taken[seen, m]]
+        state = state.advance(observed, seen)
+    return state
+
+
+def test_a_plate_lost_across_a_window_template_is_read_against_its_last_whole_sighting():
+    state = _state(frames=30, noise=0.5)
+    triples, symmetric = rigid_triples(state)
+    frames, truth = _window(29, 10, noise=0.5)
+    hidden = truth.copy()
+    hidden[:3, 9] = -1  # lost in the window's last frame, the next window's template
+    labels, _, plates = repair_turns(state, frames, hidden, triples, symmetric)
+    after = _carried(state, frames, labels)
+    later, truth_later = _window(39, 10, noise=0.5, seed=1)
+    wrong = truth_later.copy()
+    wrong[:3] = truth_later[[1, 2, 0]]  # back in the next window's first frame, turned round
+    forgotten, repairs, _ = repair_turns(after, later, wrong, triples, symmetric)
+    assert repairs == 0 and (forgotten == wrong).all()  # without the last sighting nothing tells
+    remembered = plates.remembered(after, triples, len(frames))
+    assert (remembered.plate_age[:3] == 1).all() and (remembered.plate_age[3:] == -1).all()
+    repaired, repairs, _ = repair_turns(remembered, later, wrong, triples, symmetric)
+    assert repairs == 1 and (repaired == truth_later).all()

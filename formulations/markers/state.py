@@ -44,6 +44,11 @@ class MarkerState:
             prediction of an occluded marker drifts from where it reappears, and the
             reappearances it was learned from (``motion.learn_drift``; one value for all
             markers, as reappearances are too rare to learn it per marker).
+        plate_position, plate_age, plate_rate: ``(N, 3)``, ``(N,)``, ``(N,)`` where each
+            marker was at the last frame its rigid plate (``turns.rigid_triples``) was seen
+            whole, how many frames ago (-1: never), and how fast the plate turned then (rad
+            per frame, NaN unknown): a plate lost across a window's template is read against
+            it when it comes back (``turns``).
     """
 
     position: np.ndarray
@@ -63,6 +68,9 @@ class MarkerState:
     last_residual: np.ndarray
     drift_var: np.ndarray
     drift_samples: np.ndarray
+    plate_position: np.ndarray
+    plate_age: np.ndarray
+    plate_rate: np.ndarray
 
     @classmethod
     def from_first_frame(cls, position: np.ndarray, n_neighbours: int = 16) -> MarkerState:
@@ -81,6 +89,7 @@ class MarkerState:
             motion_var=np.full(n, MOTION_VAR_PRIOR_MM2), motion_samples=np.zeros(n, int),
             burst_var=np.zeros(n), last_residual=np.zeros((n, 3)),
             drift_var=np.full(n, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(n, int),
+            plate_position=np.full((n, 3), np.nan), plate_age=np.full(n, -1), plate_rate=np.full(n, np.nan),
         )
 
     @property

@@ -35,12 +35,16 @@ isosceles one, none for a scalene one, which the distances already read); otherw
 reading the window chose by a few mm of shape would be turned back by the turn alone.
 
 The repair runs on each window's solution, before the marker state is
-carried through it, so that the next window's predictions follow the repaired labels.
+carried through it, so that the next window's predictions follow the repaired labels. Each
+plate's last whole sighting, its age and the turn rate then are kept in the marker state
+(``MarkerState.plate_*``, ``_Sightings.remembered``), so a plate hidden at a window's template
+is read against the sighting before it when it comes back whole (racing's left scapula, lost
+across a template and back a third of a turn round, stayed so to the end of the take).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import permutations
 
 import numpy as np
@@ -95,8 +99,9 @@ def _altitude(sides: np.ndarray) -> np.ndarray:
 
 def repair_turns(
     template: MarkerState, frames: list[np.ndarray], taken: np.ndarray, triples: np.ndarray, symmetric: np.ndarray,
-) -> tuple[np.ndarray, int]:
-    """``taken`` with the labels of clusters that turned by a symmetry permuted back, and how many repairs.
+) -> tuple[np.ndarray, int, _Sightings]:
+    """``taken`` with the labels of clusters that turned by a symmetry permuted back, how many
+    repairs, and each cluster's last whole sighting at the window's end (``_Sightings.remembered``).
 
     Args:
         template: The markers at the template frame.
@@ -105,10 +110,7 @@ def repair_turns(
         triples, symmetric: Rigid clusters and their symmetries (``rigid_triples``).
     """
     taken = taken.copy()
-    seen = template.visible[triples].all(axis=1)
-    sighting = _Sightings(np.where(seen[:, None, None], template.position[triples], np.nan),
-                          np.where(seen, 0, -1), np.tile(np.eye(3), (len(triples), 1, 1)),
-                          np.where(seen, _turn_rate(template, triples), np.nan))
+    sighting = _Sightings.at_template(template, triples)
     repairs = 0
     for m, points in enumerate(frames):
         current = _positions(points, taken[:, m])
@@ -124,7 +126,7 @@ def repair_turns(
             rotation[2][k, 0] = turned
             repairs += 1
         sighting.seen_now(again, rotation[2][:, 0], current[triples], full)
-    return taken, repairs
+    return taken, repairs, sighting
 
 
 @dataclass
@@ -136,6 +138,32 @@ class _Sightings:
     gap: np.ndarray
     step: np.ndarray
     rate: np.ndarray
+
+    @classmethod
+    def at_template(cls, template: MarkerState, triples: np.ndarray) -> _Sightings:
+        """The sightings a window starts from: a triple seen whole at the template is seen there,
+        turning as its markers' velocities say; one that is not, at its last whole sighting
+        the state remembers (``MarkerState.plate_*``, the same one for its three markers), so
+        that a plate lost across a window's template is still read when it comes back."""
+        seen = template.visible[triples].all(axis=1)
+        age = template.plate_age[triples]
+        remembered = ~seen & (age >= 0).all(axis=1) & (age == age[:, :1]).all(axis=1)
+        gap = np.where(seen, 0, np.where(remembered, age[:, 0], -1))
+        last = np.where(seen[:, None, None], template.position[triples], template.plate_position[triples])
+        rate = np.where(seen, _turn_rate(template, triples), template.plate_rate[triples[:, 0]])
+        return cls(np.where((gap >= 0)[:, None, None], last, np.nan), gap, np.tile(np.eye(3), (len(triples), 1, 1)),
+                   np.where(gap >= 0, rate, np.nan))
+
+    def remembered(self, state: MarkerState, triples: np.ndarray, frames: int) -> MarkerState:
+        """``state`` (``frames`` after the template) with each triple's last whole sighting
+        (``MarkerState.plate_*``); markers of no triple seen whole keep theirs, ``frames`` older."""
+        position, rate = state.plate_position.copy(), state.plate_rate.copy()
+        age = np.where(state.plate_age >= 0, state.plate_age + frames, -1)
+        found = self.gap >= 0
+        position[triples[found]] = self.last[found]
+        age[triples[found]] = self.gap[found, None]
+        rate[triples[found]] = self.rate[found, None]
+        return replace(state, plate_position=position, plate_age=age, plate_rate=rate)
 
     def expected(self, rows: np.ndarray) -> np.ndarray:
         """``(K, 3, 3)`` the turn expected of ``rows`` since their last sighting: the last step

@@ -87,8 +87,10 @@ class CloudChain:
 
     def invert(self, solution: WindowSolution, inverse: CloudInverse) -> WindowLabels:
         taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N, M), -1 occluded
-        taken, _ = repair_turns(inverse.state, inverse.frames, taken, *rigid_triples(inverse.state))
+        triples, symmetric = rigid_triples(inverse.state)
+        taken, _, plates = repair_turns(inverse.state, inverse.frames, taken, triples, symmetric)
         state, filled = _advance(inverse.state, inverse.frames, taken)
+        state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
     def assemble(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
