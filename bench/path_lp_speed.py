@@ -72,7 +72,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--take", type=Path, default=TAKE)
     parser.add_argument("--start", type=int, default=562, help="first frame labeled (03_rolling: its fullest)")
-    parser.add_argument("--windows", type=int, default=0, help="time only the N slowest (0: all; choosing by time biases the comparison)")
+    parser.add_argument("--windows", type=int, default=0,
+                        help="time only the N slowest (0: all; choosing by time biases the comparison)")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     kept = path_lp.SMOOTHING
