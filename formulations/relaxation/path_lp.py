@@ -25,14 +25,6 @@ and the restricted optimum is proven when it meets L(pi). The master has N + G r
 against the arc LP's one per node, which on large windows (long-occluded markers gating
 many points, e.g. 03_rolling) makes it several times faster.
 
-Pricing is stabilised (Wentges 1997): each round prices first at the smoothed duals
-alpha pi_hat + (1 - alpha) pi, pi_hat the duals that gave the best L so far, and only when
-that prices nothing in (a mispricing) at the master's pi itself, so the stopping rule is
-the unsmoothed one; a column enters by its reduced cost at pi. Duals swing from round to
-round, and the smoothed ones price columns nearer the optimal face: on 03_rolling's 86
-path-LP windows (``bench/path_lp_speed.py``, medians of 3) 13 % less LP time (22.9 against
-26.2 s), 17 % fewer path columns, the same optima, and the take's labels unchanged.
-
 The master is solved by interior point until pricing finds nothing new: its duals are
 central in the optimal dual face, where a simplex vertex's are extreme and swing from
 round to round (on 03_rolling's largest windows the primal optimum is reached in a
@@ -55,7 +47,6 @@ from formulations.window.problem import WindowProblem
 MAX_ROUNDS = 1000  # a stall guard for a caller that sets none
 STALLED = "path pricing stopped at its round limit"
 PROVEN = 1e-9  # relative gap between the restricted optimum and L(pi) that proves it optimal
-SMOOTHING = 0.7  # alpha; 0.5-0.8 did alike on 03_rolling's largest windows (module doc)
 
 
 def solve_path_lp(
@@ -92,22 +83,16 @@ def solve_path_lp(
     ))
     seen = {(o, p.tobytes()) for o, p in zip(objects, paths)}
     result = backend.solve()
-    bound, central, centre = -np.inf, True, None
+    bound, central = -np.inf, True
     for _ in range(max_rounds):
         entering: list[int] = []
         if result.optimal:
             sigma, pi = result.row_dual[:n], np.minimum(result.row_dual[n:], 0.0)
-            at_pi = _priced(problem, groups, pi)
-            for duals in ([pi] if centre is None else [SMOOTHING * centre + (1 - SMOOTHING) * pi, pi]):
-                best, distance = shortest_path_arcs(problem, _priced(problem, groups, duals), layers)
-                if distance.sum() + duals.sum() > bound or centre is None:
-                    bound, centre = max(bound, float(distance.sum() + duals.sum())), duals
-                if _proven(result.objective, bound):
-                    break
-                reduced = at_pi[best].sum(axis=1) - sigma
-                entering = [int(o) for o in np.flatnonzero(reduced < 0) if (o, best[o].tobytes()) not in seen]
-                if entering:
-                    break
+            priced = problem.arc_cost - (groups.T @ pi)[problem.arc_head] if len(pi) else problem.arc_cost
+            best, distance = shortest_path_arcs(problem, priced, layers)
+            bound = max(bound, float(distance.sum() + pi.sum()))
+            if not _proven(result.objective, bound):
+                entering = [int(o) for o in np.flatnonzero(distance - sigma < 0) if (o, best[o].tobytes()) not in seen]
         if central and not entering:  # done (or the interior point failed): a vertex, warm from here on
             central = False
             backend.set_primal_simplex()  # added columns keep its basis primal feasible
@@ -130,12 +115,6 @@ def solve_path_lp(
     elif result.optimal and not _proven(result.objective, bound):
         result.optimal, result.status = False, "path pricing stopped short of the LP optimum"
     return result, len(paths)
-
-
-def _priced(problem: WindowProblem, groups: sp.csr_matrix, duals: np.ndarray) -> np.ndarray:
-    """Arc costs less the conflict duals of the node each arc enters: c_a - (G^T pi)_head(a)."""
-    priced: np.ndarray = problem.arc_cost - (groups.T @ duals)[problem.arc_head] if len(duals) else problem.arc_cost
-    return priced
 
 
 def _proven(objective: float, bound: float) -> bool:
