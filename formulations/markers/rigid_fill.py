@@ -56,16 +56,23 @@ ROUNDS = 2  # a third round changed the matrix's fill by 0.2 mm pooled
 MIN_SHARED_FRAMES = 10  # a spread from fewer frames together says nothing of rigidity
 
 
-def rigid_fill(positions: Array, filled: Array) -> Array:
+def rigid_fill(positions: Array, filled: Array, guides: tuple[Array, Mask] | None = None) -> Array:
     """``filled`` ``(F, N, 3)`` with every closed gap of ``positions`` ``(F, N, 3)`` (NaN where
     not labeled) refilled by its donors' rigid motion where both sides have two donors;
     from the second round on (``ROUNDS``) a donor's own refill counts as a sighting, with
-    the variance its two sides' disagreement gives it."""
+    the variance its two sides' disagreement gives it. ``guides`` are further donor tracks
+    ``(F, K, 3)`` with ``(K, N)`` the markers each may serve (the subject model's joint
+    centres, ``subject.joint_tracks``); their own gaps are refilled too, for the second
+    round, but not returned."""
+    markers = positions.shape[1]
+    tracks, serves = guides if guides is not None else (np.empty((len(positions), 0, 3)), np.empty((0, markers), bool))
+    positions, filled = np.concatenate([positions, tracks], axis=1), np.concatenate([filled, tracks], axis=1)
     seen: Mask = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)
-    if seen.all():
-        return filled.copy()
+    if seen[:, :markers].all():
+        return filled[:, :markers].copy()
     spread, _ = distance_spread(positions, MIN_SHARED_FRAMES)
     np.fill_diagonal(spread, np.inf)  # a marker is not its own donor
+    spread[:markers, markers:][~serves.T] = np.inf
     donors = [np.argsort(row)[: int(np.isfinite(row).sum())] for row in spread]
     gaps = [closed_gaps(seen[:, marker]) for marker in range(positions.shape[1])]
     track, doubt = positions, np.where(seen, 0.0, np.inf)
@@ -81,7 +88,7 @@ def rigid_fill(positions: Array, filled: Array) -> Array:
                 )
         carried = np.isfinite(fill_doubt)
         track, doubt = np.where(carried[..., None], refilled, positions), np.where(seen, 0.0, fill_doubt)
-    return refilled
+    return refilled[:, :markers]
 
 
 def _fill_gap(gap: Array, track: Array, donor_doubt: Array, variance: Array) -> Array:

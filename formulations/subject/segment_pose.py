@@ -51,6 +51,15 @@ class SegmentPoses:
 
 def segment_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
     """Poses from ``positions`` ``(F, N, 3)`` in the model's marker order, NaN where not labeled."""
+    poses, count = marker_poses(geometry, positions, within), len(geometry.segments)
+    for _ in range(count):
+        if not any(_pose_by_joints(geometry, poses, s, positions, within) for s in range(count)):
+            break
+    return poses
+
+
+def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
+    """Poses of the segments with three or more labeled markers only (no joint chain)."""
     frames, count = len(positions), len(geometry.segments)
     poses = SegmentPoses(np.tile(np.eye(3), (frames, count, 1, 1)), np.zeros((frames, count, 3)),
                          np.zeros((frames, count), bool))
@@ -59,9 +68,6 @@ def segment_poses(geometry: ModelGeometry, positions: Array, within: float = np.
         source = np.broadcast_to(segment.coordinates, target.shape)
         labeled = np.asarray(np.isfinite(target).all(axis=2), dtype=bool)
         _pose(poses, s, source, target, labeled, within * segment.tolerance)
-    for _ in range(count):
-        if not any(_pose_by_joints(geometry, poses, s, positions, within) for s in range(count)):
-            break
     return poses
 
 

@@ -27,6 +27,8 @@ import numpy as np
 from formulations.cameras.rig import Rig
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill
+from formulations.subject.geometry import ModelGeometry
+from formulations.subject.joint_tracks import joint_tracks
 from formulations.subject.take_learning import learn_from_take
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
@@ -72,6 +74,7 @@ class CaptureLabeling:
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
+        self._geometry = None if capture.model is None else ModelGeometry.of(capture.model)
         if capture.model is not None and capture.points is not None:
             model = capture.model
             if not np.isfinite(capture.first_frame).all():  # identified, not labeled: the take may correct the model
@@ -115,11 +118,13 @@ class CaptureLabeling:
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes; each closed gap's fill tied to
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
-        three (``rigid_fill``); in camera mode with each marker's best view per frame
-        (``service.best_view.markers``); with every label's confidence."""
+        three (``rigid_fill``; with a model its joint centres are donors too); in camera mode
+        with each marker's best view per frame (``service.best_view.markers``); with every
+        label's confidence."""
         labels = self._association.assemble(outcomes)
         if labels.filled.size:
-            labels.filled = rigid_fill(labels.positions, tie_gap_ends(labels.positions, labels.filled))
+            guides = None if self._geometry is None else joint_tracks(self._geometry, labels.names, labels.positions)
+            labels.filled = rigid_fill(labels.positions, tie_gap_ends(labels.positions, labels.filled), guides)
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._view_choice is None:
             return labels
