@@ -1,6 +1,8 @@
-"""Joint centres as fill donors: a segment that loses two of its three markers is carried by its joints."""
+"""A segment that loses two of its three markers: its joint centres as fill donors, and its pose where they disagree."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 from test_subject_model import chain
@@ -8,7 +10,8 @@ from test_subject_model import chain
 from formulations.markers.rigid_fill import rigid_fill
 from formulations.subject.fit import fit_subject
 from formulations.subject.geometry import ModelGeometry
-from formulations.subject.joint_tracks import joint_tracks
+from formulations.subject.joint_tracks import GUIDE_RMS_MM, joint_tracks
+from formulations.subject.pose_fill import pose_fill
 from service.capture.model_input import model_names
 
 FIT = 200
@@ -61,3 +64,41 @@ def test_two_markers_lost_together_are_carried_by_the_joints() -> None:
         error_guided = np.sqrt(np.mean(np.sum((guided - truth) ** 2, axis=-1)))
         assert error_guided < 0.5 * error_alone
         assert error_guided < 8.0
+
+
+def _gap_of_two(seed: int):
+    """The held-out take with two of a middle segment's three markers lost for 40 frames, a
+    fill that bows up to 100 mm off where they are (tying it to the sightings does not
+    straighten it), and which markers."""
+    geometry, order, held, _ = _held_out(seed)
+    middle = next(s for s in range(len(geometry.segments)) if sum(s in (j.a, j.b) for j in geometry.joints) == 2)
+    lost = geometry.segments[middle].markers[:2]
+    positions = held.copy()
+    positions[80:120, lost] = np.nan
+    bow = 100.0 * np.sin(np.pi * (np.arange(len(held)) - 79) / 41)[:, None, None]
+    wrong = np.where(np.isfinite(positions), positions, held + bow)
+    return geometry, order, held, positions, wrong, lost
+
+
+def test_where_the_rigid_carries_disagree_the_segment_pose_fills() -> None:
+    geometry, order, held, positions, wrong, lost = _gap_of_two(0)
+    doubt = np.where(np.isfinite(positions).all(axis=2), 0.0, np.inf)
+    filled = pose_fill(geometry, order, positions, wrong, doubt)
+    error = np.linalg.norm(filled[80:120, lost] - held[80:120, lost], axis=-1)
+    assert np.sqrt(np.mean(error**2)) < 6.0  # the bowed fill, replaced by the tied pose
+    seen = np.isfinite(positions).all(axis=2)
+    assert np.array_equal(filled[seen], wrong[seen])
+
+
+def test_where_the_rigid_carries_agree_their_fill_stays() -> None:
+    geometry, order, held, positions, wrong, lost = _gap_of_two(1)
+    doubt = np.where(np.isfinite(positions).all(axis=2), 0.0, 1.0)  # 1 mm^2: well under any tolerance
+    assert np.array_equal(pose_fill(geometry, order, positions, wrong, doubt), wrong)
+
+
+def test_a_poorly_placed_joint_poses_nothing() -> None:
+    geometry, order, held, positions, wrong, lost = _gap_of_two(2)
+    poor = replace(geometry, joints=[replace(j, tolerance=3 * geometry.sigmas * GUIDE_RMS_MM) for j in geometry.joints])
+    doubt = np.where(np.isfinite(positions).all(axis=2), 0.0, np.inf)
+    filled = pose_fill(poor, order, positions, wrong, doubt)
+    assert np.linalg.norm(filled[90:110, lost] - held[90:110, lost], axis=-1).min() > 50.0

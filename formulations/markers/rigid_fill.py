@@ -57,19 +57,25 @@ MIN_SHARED_FRAMES = 10  # a spread from fewer frames together says nothing of ri
 
 
 def rigid_fill(positions: Array, filled: Array, guides: tuple[Array, Mask] | None = None) -> Array:
+    """``rigid_refill``'s fill alone."""
+    return rigid_refill(positions, filled, guides)[0]
+
+
+def rigid_refill(positions: Array, filled: Array, guides: tuple[Array, Mask] | None = None) -> tuple[Array, Array]:
     """``filled`` ``(F, N, 3)`` with every closed gap of ``positions`` ``(F, N, 3)`` (NaN where
     not labeled) refilled by its donors' rigid motion where both sides have two donors;
     from the second round on (``ROUNDS``) a donor's own refill counts as a sighting, with
     the variance its two sides' disagreement gives it. ``guides`` are further donor tracks
     ``(F, K, 3)`` with ``(K, N)`` the markers each may serve (the subject model's joint
     centres, ``subject.joint_tracks``); their own gaps are refilled too, for the second
-    round, but not returned."""
+    round, but not returned. Also ``(F, N)`` each refill's variance, (|y_a - y_b| / 2)^2 of
+    the last round: 0 where labeled, inf where not refilled."""
     markers = positions.shape[1]
     tracks, serves = guides if guides is not None else (np.empty((len(positions), 0, 3)), np.empty((0, markers), bool))
     positions, filled = np.concatenate([positions, tracks], axis=1), np.concatenate([filled, tracks], axis=1)
     seen: Mask = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)
     if seen[:, :markers].all():
-        return filled[:, :markers].copy()
+        return filled[:, :markers].copy(), np.zeros(seen[:, :markers].shape)
     spread, _ = distance_spread(positions, MIN_SHARED_FRAMES)
     np.fill_diagonal(spread, np.inf)  # a marker is not its own donor
     spread[:markers, markers:][~serves.T] = np.inf
@@ -88,7 +94,7 @@ def rigid_fill(positions: Array, filled: Array, guides: tuple[Array, Mask] | Non
                 )
         carried = np.isfinite(fill_doubt)
         track, doubt = np.where(carried[..., None], refilled, positions), np.where(seen, 0.0, fill_doubt)
-    return refilled[:, :markers]
+    return refilled[:, :markers], doubt[:, :markers]
 
 
 def _fill_gap(gap: Array, track: Array, donor_doubt: Array, variance: Array) -> Array:

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from formulations.subject.geometry import ModelGeometry
+from formulations.subject.geometry import JointGeometry, ModelGeometry
 from formulations.subject.segment_pose import RIGID_WITHIN, marker_poses
 
 Array = NDArray[np.float64]
@@ -49,7 +49,7 @@ def joint_tracks(geometry: ModelGeometry, names: list[str], positions: Array) ->
         if name in column:
             ordered[:, k] = positions[:, column[name]]
     poses = marker_poses(geometry, ordered, RIGID_WITHIN)
-    rms = [(j.tolerance - 2 * geometry.radius) / geometry.sigmas for j in geometry.joints]
+    rms = [joint_rms(geometry, j) for j in geometry.joints]
     sides = [(j.a, j.centre_a, j.b) for j in geometry.joints] + [(j.b, j.centre_b, j.a) for j in geometry.joints]
     centres = np.full((frames, len(sides), 3), np.nan)
     serves = np.zeros((len(sides), len(names)), dtype=bool)
@@ -59,3 +59,8 @@ def joint_tracks(geometry: ModelGeometry, names: list[str], positions: Array) ->
         served = [column[geometry.names[m]] for m in geometry.segments[other].markers if geometry.names[m] in column]
         serves[k, served] = rms[k % len(geometry.joints)] <= GUIDE_RMS_MM
     return centres, serves
+
+
+def joint_rms(geometry: ModelGeometry, joint: JointGeometry) -> float:
+    """The rms with which the model's two segments agree on ``joint``'s centre (mm)."""
+    return (joint.tolerance - 2 * geometry.radius) / geometry.sigmas

@@ -26,9 +26,10 @@ import numpy as np
 
 from formulations.cameras.rig import Rig
 from formulations.markers.gap_ends import tie_gap_ends
-from formulations.markers.rigid_fill import rigid_fill
+from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_tracks import joint_tracks
+from formulations.subject.pose_fill import pose_fill
 from formulations.subject.take_learning import learn_from_take
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
@@ -118,17 +119,26 @@ class CaptureLabeling:
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes; each closed gap's fill tied to
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
-        three (``rigid_fill``; with a model its joint centres are donors too); in camera mode
-        with each marker's best view per frame (``service.best_view.markers``); with every
+        three (``rigid_fill``; with a model also ``joint_tracks`` and ``pose_fill``); in camera
+        mode with each marker's best view per frame (``service.best_view.markers``); with every
         label's confidence."""
         labels = self._association.assemble(outcomes)
         if labels.filled.size:
-            guides = None if self._geometry is None else joint_tracks(self._geometry, labels.names, labels.positions)
-            labels.filled = rigid_fill(labels.positions, tie_gap_ends(labels.positions, labels.filled), guides)
+            labels.filled = self._fill(labels)
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._view_choice is None:
             return labels
         return self._view_choice.attach(labels, self._association.views(outcomes))
+
+    def _fill(self, labels: LabeledTrajectories) -> np.ndarray:
+        """The windows' fill tied to both sightings, refilled from rigid donors; with a model
+        its joint centres are donors too, and the segment's pose fills where they disagree."""
+        tied = tie_gap_ends(labels.positions, labels.filled)
+        if self._geometry is None:
+            return rigid_fill(labels.positions, tied)
+        guides = joint_tracks(self._geometry, labels.names, labels.positions)
+        filled, doubt = rigid_refill(labels.positions, tied, guides)
+        return pose_fill(self._geometry, labels.names, labels.positions, filled, doubt)
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
         """``(F, N, C)`` detection each marker took in each camera, -1 for none (camera mode).
