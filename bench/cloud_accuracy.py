@@ -68,15 +68,16 @@ def main() -> None:
                                                                       frames=frames)) for s in range(args.seeds)]
         jumps = label_jumps(take.truth)[take.start : take.start + frames]
         for name, mu in [(f, m) for f in args.formulations for m in args.mu]:
-            print(_row(recording, name, mu, simulations, jumps), flush=True)
+            print(_row(recording, name, mu, simulations, jumps, scenario.window), flush=True)
 
 
-def _row(recording: str, name: str, mu: float, simulations: list[SimulatedCapture], jumps: np.ndarray) -> str:
+def _row(recording: str, name: str, mu: float, simulations: list[SimulatedCapture], jumps: np.ndarray, window: int) -> str:
     accuracy, swaps, integral, gaps, speed = [], 0, [], [], []
     doubt, known = DoubtCounts(0, 0, 0, 0), DoubtCounts(0, 0, 0, 0)
     for simulated in simulations:
         start = time.perf_counter()
-        result, windows = CaptureLabeling(simulated.capture(), LabelingOptions(formulation=name, layout_weight=mu)).label()
+        options = LabelingOptions(formulation=name, layout_weight=mu, window=window)
+        result, windows = CaptureLabeling(simulated.capture(), options).label()
         speed.append((time.perf_counter() - start) / simulated.cloud.n_frames)
         scores = label_scores(simulated, result)
         accuracy.append(scores.label_accuracy)
