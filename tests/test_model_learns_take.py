@@ -14,7 +14,7 @@ from formulations.subject.fit import fit_subject
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.identify import identify
 from formulations.subject.model import SubjectModel
-from formulations.subject.take_learning import learn_from_take
+from formulations.subject.take_learning import LOOSE_RMS_MM, learn_from_take
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.model_input import model_names
 from service.labeling.capture_labeling import CaptureLabeling
@@ -131,3 +131,46 @@ def test_labeling_from_a_model_with_a_widened_segment_names_it_from_the_start() 
     right = sum(int(owner[f][took[f, m]] == m) for f in range(len(frames)) for m in range(len(names)) if took[f, m] >= 0)
     # every marker, the learned segment's included (measured all; 76 % without learning: the segment 19 %)
     assert right >= 0.99 * len(frames) * len(names)
+
+
+def _hung_from_a_pair_take(wider: float = 70.0):
+    """A chain of a 3-marker segment, a marker pair and a 3-marker end segment hung from the
+    pair alone, its model with two of the end segment's markers ``wider`` mm closer together
+    than in the take; the held-out frames, each point's marker, and the end segment's index."""
+    names, positions, _ = chain(2, segments=3, markers=3, frames=400)
+    keep = [i for i, n in enumerate(names) if n != "S1M2"]
+    names, positions = [names[i] for i in keep], positions[:, keep]
+    model = fit_subject(names, positions[:FIT]).model
+    s = next(k for k, segment in enumerate(model.segments) if "S2M0" in segment.markers)
+    coordinates = np.array(model.segments[s].coordinates)
+    along = (coordinates[1] - coordinates[0]) / np.linalg.norm(coordinates[1] - coordinates[0])
+    coordinates[0] += wider / 2 * along
+    coordinates[1] -= wider / 2 * along
+    segments = list(model.segments)
+    segments[s] = replace(segments[s], coordinates=coordinates.tolist())
+    changed = replace(model, segments=segments)
+    order = [names.index(n) for n in model_names(changed)]
+    frames, owner = _cloud(positions[FIT:, order], np.zeros((400 - FIT, len(order)), bool))
+    return changed, s, frames, owner
+
+
+def test_a_segment_hung_from_a_pair_is_learned_through_the_pair_joint() -> None:
+    model, s, frames, owner = _hung_from_a_pair_take()
+    geometry = ModelGeometry.of(model)
+    assert [len(segment.markers) for segment in geometry.segments].count(2) == 1
+    assert all(2 in {len(geometry.segments[j.a].markers), len(geometry.segments[j.b].markers)}
+               for j in geometry.joints if s in (j.a, j.b))  # its only neighbour is the pair
+    markers = geometry.segments[s].markers
+    assert _right(model, markers, frames[LOOK_AHEAD:], owner[LOOK_AHEAD:]) == 0
+    learned = learn_from_take(model, frames[:LOOK_AHEAD])
+    assert 2 * _right(learned, markers, frames[LOOK_AHEAD:], owner[LOOK_AHEAD:]) > len(frames) - LOOK_AHEAD
+
+
+def test_a_reading_far_from_the_model_constellation_is_not_learned() -> None:
+    # Two of three markers 65 mm off each: the reading's RMS is above LOOSE_RMS_MM, so it is
+    # taken for other points, not this segment (relearned with no bound); 50 mm off each is relearned.
+    assert LOOSE_RMS_MM == 50.0
+    model, _, frames, _ = _widened_take(wider=130.0)
+    assert learn_from_take(model, frames[:LOOK_AHEAD]) == model
+    model, _, frames, _ = _widened_take(wider=100.0)
+    assert learn_from_take(model, frames[:LOOK_AHEAD]) != model
