@@ -6,7 +6,6 @@ from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
-import pytest
 from test_model_start import _cloud
 from test_subject_model import chain
 
@@ -21,11 +20,6 @@ from service.labeling.capture_labeling import CaptureLabeling
 
 FIT = 250
 LOOK_AHEAD = 10
-NAMED_ALONE = pytest.mark.xfail(
-    strict=True, reason="a marker of the segment is named alone on a joint's sphere in frame 0, so take_learning's "
-    "named-in-frame-0 gate skips learning; gating on a pose, or on two markers named, fixes this case but costs "
-    "135_02 9 points and 03_rolling 4 (bench/model_start.py)")
-
 
 def _take_with(marker: str, edit: Callable[[np.ndarray], np.ndarray], seed: int = 0):
     """A 4-segment chain of 3-marker segments, its model with the coordinates of the segment
@@ -80,7 +74,6 @@ def _right(model: SubjectModel, markers: np.ndarray, frames: list[np.ndarray], o
     return hits
 
 
-@NAMED_ALONE
 def test_the_segment_the_model_misses_is_learned_and_then_named() -> None:
     model, s, frames, owner = _moved_marker_take()
     markers = ModelGeometry.of(model).segments[s].markers
@@ -99,7 +92,6 @@ def test_a_model_that_finds_every_segment_is_not_changed() -> None:
     assert learn_from_take(model, frames[:LOOK_AHEAD]) == model
 
 
-@NAMED_ALONE
 def test_labeling_from_the_model_names_the_learned_segment_from_the_start() -> None:
     model, s, frames, owner = _moved_marker_take()
     markers = ModelGeometry.of(model).segments[s].markers
