@@ -98,7 +98,7 @@ def test_where_the_rigid_carries_agree_their_fill_stays() -> None:
 
 def test_a_poorly_placed_joint_poses_nothing() -> None:
     geometry, order, held, positions, wrong, lost = _gap_of_two(2)
-    poor = replace(geometry, joints=[replace(j, tolerance=3 * geometry.sigmas * GUIDE_RMS_MM) for j in geometry.joints])
+    poor = replace(geometry, joints=[replace(j, rms=2 * GUIDE_RMS_MM) for j in geometry.joints])
     doubt = np.where(np.isfinite(positions).all(axis=2), 0.0, np.inf)
     filled = pose_fill(poor, order, positions, wrong, doubt)
     assert np.linalg.norm(filled[90:110, lost] - held[90:110, lost], axis=-1).min() > 50.0

@@ -40,13 +40,15 @@ class SegmentGeometry:
 @dataclass(frozen=True)
 class JointGeometry:
     """A joint between segments ``a`` and ``b`` (indices), its centre in each frame, the agreement
-    tolerance, and b's rest rotation in a's frame (``joint_rest``; None if the model has none)."""
+    tolerance, the rms with which the fit's two segments agree on the centre (mm), and b's rest
+    rotation in a's frame (``joint_rest``; None if the model has none)."""
 
     a: int
     b: int
     centre_a: Array
     centre_b: Array
     tolerance: float
+    rms: float
     rest: Array | None = None
 
 
@@ -90,7 +92,7 @@ class ModelGeometry:
         joints = [
             JointGeometry(
                 seg_index[j.segments[0]], seg_index[j.segments[1]], np.asarray(j.centres[0], dtype=float),
-                np.asarray(j.centres[1], dtype=float), sigmas * j.rms + 2 * r,
+                np.asarray(j.centres[1], dtype=float), sigmas * j.rms + 2 * r, j.rms,
                 None if j.rest is None else np.asarray(j.rest, dtype=float),
             )
             for j in model.joints
@@ -106,6 +108,16 @@ class ModelGeometry:
         for k, segment in enumerate(segments):
             segment_of[segment.markers] = k
         return cls(names, segments, joints, singles, segment_of, r, sigmas)
+
+    def in_model_order(self, names: list[str], positions: Array) -> Array:
+        """``(F, N_model, 3)`` the columns of ``positions`` ``(F, len(names), 3)`` in the model's
+        marker order; NaN for model markers ``names`` does not have."""
+        column = {name: i for i, name in enumerate(names)}
+        ordered = np.full((len(positions), len(self.names), 3), np.nan)
+        for k, name in enumerate(self.names):
+            if name in column:
+                ordered[:, k] = positions[:, column[name]]
+        return ordered
 
     @property
     def tolerance(self) -> Array:

@@ -42,25 +42,19 @@ def joint_tracks(geometry: ModelGeometry, names: list[str], positions: Array) ->
     ``names``, NaN where not labeled) as each of its two segments places it, NaN where that
     segment is not posed; and ``(K, N)`` the markers each may serve: those of the joint's
     other segment (on its own segment a centre only repeats its markers, with their noise)."""
-    frames = len(positions)
-    ordered = np.full((frames, len(geometry.names), 3), np.nan)
-    column = {name: i for i, name in enumerate(names)}
-    for k, name in enumerate(geometry.names):
-        if name in column:
-            ordered[:, k] = positions[:, column[name]]
-    poses = marker_poses(geometry, ordered, RIGID_WITHIN)
-    rms = [joint_rms(geometry, j) for j in geometry.joints]
-    sides = [(j.a, j.centre_a, j.b) for j in geometry.joints] + [(j.b, j.centre_b, j.a) for j in geometry.joints]
-    centres = np.full((frames, len(sides), 3), np.nan)
+    poses = marker_poses(geometry, geometry.in_model_order(names, positions), RIGID_WITHIN)
+    joints = placed_well(geometry)
+    sides = [(j.a, j.centre_a, j.b) for j in joints] + [(j.b, j.centre_b, j.a) for j in joints]
+    centres = np.full((len(positions), len(sides), 3), np.nan)
     serves = np.zeros((len(sides), len(names)), dtype=bool)
+    column = {name: i for i, name in enumerate(names)}
     for k, (s, centre, other) in enumerate(sides):
         at = np.einsum("fij,j->fi", poses.rotation[:, s], centre) + poses.origin[:, s]
         centres[poses.posed[:, s], k] = at[poses.posed[:, s]]
-        served = [column[geometry.names[m]] for m in geometry.segments[other].markers if geometry.names[m] in column]
-        serves[k, served] = rms[k % len(geometry.joints)] <= GUIDE_RMS_MM
+        serves[k, [column[geometry.names[m]] for m in geometry.segments[other].markers if geometry.names[m] in column]] = True
     return centres, serves
 
 
-def joint_rms(geometry: ModelGeometry, joint: JointGeometry) -> float:
-    """The rms with which the model's two segments agree on ``joint``'s centre (mm)."""
-    return (joint.tolerance - 2 * geometry.radius) / geometry.sigmas
+def placed_well(geometry: ModelGeometry) -> list[JointGeometry]:
+    """The joints whose centre the model places within ``GUIDE_RMS_MM``."""
+    return [joint for joint in geometry.joints if joint.rms <= GUIDE_RMS_MM]

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.subject.geometry import ModelGeometry
-from formulations.subject.joint_tracks import GUIDE_RMS_MM, joint_rms
+from formulations.subject.joint_tracks import placed_well
 from formulations.subject.segment_pose import RIGID_WITHIN, segment_poses
 
 Array = NDArray[np.float64]
@@ -42,20 +42,17 @@ def pose_fill(geometry: ModelGeometry, names: list[str], positions: Array, fille
     """``filled`` ``(F, N, 3)`` of the take ``positions`` ``(F, N, 3)`` (markers ``names``, NaN
     where not labeled), replaced by the tied segment pose where the rigid fill's ``doubt``
     ``(F, N)`` (its variance, mm^2) is above the bar and the segment is posed."""
+    sure = replace(geometry, joints=placed_well(geometry))
+    placed = segment_poses(sure, geometry.in_model_order(names, positions), RIGID_WITHIN).place(geometry)
     column = {name: i for i, name in enumerate(names)}
-    ordered = np.full((len(positions), len(geometry.names), 3), np.nan)
-    for k, name in enumerate(geometry.names):
-        if name in column:
-            ordered[:, k] = positions[:, column[name]]
-    sure = replace(geometry, joints=[j for j in geometry.joints if joint_rms(geometry, j) <= GUIDE_RMS_MM])
-    placed = segment_poses(sure, ordered, RIGID_WITHIN).place(geometry)
+    has = [k for k, name in enumerate(geometry.names) if name in column]
+    at = [column[geometry.names[k]] for k in has]
     unseen: NDArray[np.bool_] = ~np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)
-    mixed, bar = filled.copy(), np.full(len(names), np.inf)
-    for k, name in enumerate(geometry.names):
-        if name in column:
-            here = unseen[:, column[name]] & np.isfinite(placed[:, k]).all(axis=1)
-            mixed[here, column[name]] = placed[here, k]
-            bar[column[name]] = (WITHIN_TOLERANCES * geometry.tolerance[k]) ** 2
-    tied = tie_gap_ends(positions, mixed)
+    by_pose = np.full(filled.shape, np.nan)
+    by_pose[:, at] = placed[:, has]
+    bar = np.full(len(names), np.inf)
+    bar[at] = (WITHIN_TOLERANCES * geometry.tolerance[has]) ** 2
+    posed = unseen & np.isfinite(by_pose).all(axis=2)
+    tied = tie_gap_ends(positions, np.where(posed[..., None], by_pose, filled))
     use = unseen & np.isfinite(tied).all(axis=2) & (doubt > bar[None])
     return np.where(use[..., None], tied, filled)

@@ -75,9 +75,8 @@ class CaptureLabeling:
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
-        self._geometry = None if capture.model is None else ModelGeometry.of(capture.model)
-        if capture.model is not None and capture.points is not None:
-            model = capture.model
+        model = capture.model
+        if model is not None and capture.points is not None:
             if not np.isfinite(capture.first_frame).all():  # identified, not labeled: the take may correct the model
                 model = learn_from_take(model, capture.points[: options.window])
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
@@ -86,6 +85,7 @@ class CaptureLabeling:
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
             self._association = _association(capture, options)
+        self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(
         self, after: WindowOutcome | None = None, progress: Progress | None = None, observer: Observer | None = None,
