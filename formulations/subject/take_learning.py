@@ -34,7 +34,7 @@ learned at all. Counting a segment found on one marker named (before the bound o
 readings) kept the learning off readings of other points, at the price of segments named on
 one marker that were never learned; with the bound, two markers: 135_02 98.46 -> 98.57 %,
 03_rolling 40.54 -> 43.19 % from their models, every other row of ``bench/model_start.py``
-unchanged.
+unchanged; posing through ``segment_poses`` (two joints pose a segment too) 03_rolling 45.95 %.
 """
 
 from __future__ import annotations
@@ -42,12 +42,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from formulations.markers.rigid import rigid_transform
 from formulations.subject.constellation import Pose
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.identify import Identification, identify
 from formulations.subject.loose_read import loose_read
 from formulations.subject.model import SubjectModel
+from formulations.subject.segment_pose import segment_poses
 from formulations.subject.segment_relearn import relearned
 
 Array = NDArray[np.float64]
@@ -112,31 +112,9 @@ def _segments_named(geometry: ModelGeometry, found: Identification) -> NDArray[n
 
 
 def _poses(geometry: ModelGeometry, found: Identification) -> dict[int, Pose]:
-    """The pose of each segment of three or more markers identification placed (its placed markers
-    are R u + d exactly; two markers would leave the turn about their line free), then of each
-    placed pair jointed to a posed segment (the joint centre is the third correspondence, as
-    in ``joint_place``), outwards along the chain."""
-    poses = {}
-    for s, segment in enumerate(geometry.segments):
-        placed = found.placed[segment.markers]
-        if len(placed) >= 3 and np.isfinite(placed).all():
-            poses[s] = _kabsch(segment.coordinates, placed)
-    while True:
-        added = False
-        for joint in geometry.joints:
-            for s, t, own, other in ((joint.a, joint.b, joint.centre_a, joint.centre_b),
-                                     (joint.b, joint.a, joint.centre_b, joint.centre_a)):
-                segment = geometry.segments[s]
-                placed = found.placed[segment.markers]
-                if s in poses or t not in poses or len(placed) != 2 or not np.isfinite(placed).all():
-                    continue
-                centre = poses[t].rotation @ other + poses[t].origin
-                poses[s] = _kabsch(np.vstack([segment.coordinates, own]), np.vstack([placed, centre]))
-                added = True
-        if not added:
-            return poses
-
-
-def _kabsch(u: Array, x: Array) -> Pose:
-    rotation, c_s, c_t = rigid_transform(u[None], x[None], np.ones((1, len(u))))
-    return Pose(rotation[0], c_t[0] - rotation[0] @ c_s[0])
+    """The pose of each segment identification placed (its placed markers are R u + d exactly)
+    where that pose is determined (``segment_poses``): three or more markers, or a placed pair
+    jointed to a posed segment, the joint centre its third point (a forearm hung from an
+    upper-arm pair), outwards along the chain."""
+    poses = segment_poses(geometry, found.placed[None])
+    return {int(s): Pose(poses.rotation[0, s], poses.origin[0, s]) for s in np.flatnonzero(poses.posed[0])}
