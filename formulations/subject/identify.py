@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from scipy.spatial.distance import cdist
 
 from formulations.markers.guide import assign_within_gates
+from formulations.subject.chain_support import chain_support
 from formulations.subject.constellation import Pose, segment_hypotheses
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_place import place_by_joint
@@ -89,7 +90,7 @@ def _compete(geometry: ModelGeometry, points: Array) -> dict[int, Pose]:
     """Step 2: the jointly best hypotheses (``tree_choice``); of two sharing a point the better one stays."""
     distance = cdist(points, points)
     by_segment = [segment_hypotheses(s, segment, points, distance) for s, segment in enumerate(geometry.segments)]
-    chosen = choose_hypotheses(geometry, by_segment, len(points))
+    chosen = choose_hypotheses(geometry, by_segment, len(points), chain_support(geometry, by_segment, points))
     taken = np.zeros(len(points), bool)
     poses: dict[int, Pose] = {}
     for s, h in sorted(chosen.items(), key=lambda item: (-item[1].inliers, item[1].rms)):

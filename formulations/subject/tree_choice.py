@@ -5,7 +5,7 @@ thigh), or three markers that happen to match three unrelated points, fits the c
 well as the truth; only its joints tell them apart. So the choice is made for all segments
 at once: with x_s in H_s ∪ {none} and score(h) = inliers(h) - rms(h) / (2 mean tau_s),
 
-    max  sum_s score(x_s)   subject to, for every joint (s, t) with x_s, x_t both chosen:
+    max  sum_s score(x_s) + support(x_s)   subject to, for every joint (s, t) with x_s, x_t both chosen:
          |R_s c_s + d_s - (R_t c_t + d_t)| <= joint tolerance  and  no point shared.
 
 The joints form a forest (``skeleton`` keeps no loop), so dynamic programming from the
@@ -25,9 +25,17 @@ Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
 
 
-def choose_hypotheses(geometry: ModelGeometry, by_segment: list[list[Hypothesis]], points: int) -> dict[int, Hypothesis]:
-    """The jointly best hypothesis of each segment that gets one."""
+def choose_hypotheses(
+    geometry: ModelGeometry, by_segment: list[list[Hypothesis]], points: int, support: list[Array] | None = None,
+) -> dict[int, Hypothesis]:
+    """The jointly best hypothesis of each segment that gets one.
+
+    ``support`` (per segment, per hypothesis) is added to its score: markers of other
+    segments the hypothesis explains (``chain_support``).
+    """
     score = [_scores(geometry, s, h) for s, h in enumerate(by_segment)]
+    if support is not None:
+        score = [value + np.append(extra, 0.0) for value, extra in zip(score, support)]
     neighbours: dict[int, list[tuple[int, Mask]]] = {s: [] for s in range(len(by_segment))}
     for joint in geometry.joints:
         allowed = _compatible(by_segment[joint.a], by_segment[joint.b], joint.centre_a, joint.centre_b,
