@@ -53,16 +53,15 @@ def _plate_choice(geometry: ModelGeometry, points: np.ndarray, support: bool) ->
     return choose_hypotheses(geometry, by_segment, len(points), extra)[0].point
 
 
-def test_without_support_the_plate_is_read_in_the_wrong_order_at_least_once() -> None:
+def test_support_reads_the_plate_right_where_its_own_markers_cannot() -> None:
+    """Over random poses: without support the order is a guess among six (about 1 in 6
+    right); with it, wrong only where a wrong reading's centre also meets the pair by chance."""
     geometry = _geometry()
-    readings = [_plate_choice(geometry, _frame(seed), support=False) for seed in range(8)]
-    assert any(not np.array_equal(r, np.arange(3)) for r in readings)
-
-
-@pytest.mark.parametrize("seed", range(8))
-def test_with_support_the_plate_is_read_in_the_order_its_pair_confirms(seed: int) -> None:
-    geometry = _geometry()
-    assert np.array_equal(_plate_choice(geometry, _frame(seed), support=True), np.arange(3))
+    poses = range(60)
+    right = [np.array_equal(_plate_choice(geometry, _frame(seed), support=True), np.arange(3)) for seed in poses]
+    guessed = [np.array_equal(_plate_choice(geometry, _frame(seed), support=False), np.arange(3)) for seed in poses]
+    assert np.mean(guessed) <= 0.4
+    assert np.mean(right) >= 0.9
 
 
 @pytest.mark.parametrize("seed", range(4))

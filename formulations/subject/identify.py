@@ -129,7 +129,9 @@ def _follow_joints(geometry: ModelGeometry, points: Array, poses: dict[int, Pose
                 segment = geometry.segments[unknown]
                 parent = poses[known]
                 usual = None if at_rest is None else parent.rotation @ at_rest
-                pose, taken = place_by_joint(segment, c_unknown, parent.place(c_known), points, ~claimed, usual)
+                pose, taken = place_by_joint(
+                    segment, c_unknown, parent.place(c_known), points, ~claimed, usual, geometry.sigmas * joint.rms,
+                )
                 fixed[segment.markers[taken >= 0]] = taken[taken >= 0]
                 claimed[taken[taken >= 0]] = True
                 if pose is not None:
