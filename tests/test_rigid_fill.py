@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 
 import formulations.markers.rigid_fill as rigid_fill_module
 from formulations.markers.gap_ends import tie_gap_ends
-from formulations.markers.rigid_fill import rigid_fill
+from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 
 FRAMES = 80
 GAP = slice(30, 55)
@@ -68,13 +68,27 @@ def test_frames_without_two_donors_on_both_sides_keep_their_fill():
     assert np.array_equal(refilled[GAP, 4], tied[GAP, 4], equal_nan=True)
 
 
-def test_a_gap_open_at_either_end_is_left_as_it_was():
+def test_a_gap_open_at_either_end_is_carried_from_its_one_sighting():
     truth = _spinning_body()
     positions = truth.copy()
     positions[:10, 4] = np.nan
     positions[70:, 2] = np.nan
+    filled = np.where(np.isnan(positions), 7.0, np.nan)  # a fill that is nowhere near
+    refilled, variance = rigid_refill(positions, filled)
+    for frames, marker in ((slice(0, 10), 4), (slice(70, None), 2)):
+        assert np.linalg.norm(refilled[frames, marker] - truth[frames, marker], axis=1).max() < 1e-6
+        assert np.all(variance[frames, marker] < 2.0)  # rigid donors: their 1 mm^2 floor, combined
+
+
+def test_a_gap_open_at_an_end_with_one_donor_keeps_its_fill():
+    truth = _spinning_body()
+    positions = truth.copy()
+    positions[:10, 4] = np.nan
+    positions[:10, 1:4] = np.nan  # one donor left in those frames
     filled = np.where(np.isnan(positions), 7.0, np.nan)
-    assert np.array_equal(rigid_fill(positions, filled), filled, equal_nan=True)
+    refilled, variance = rigid_refill(positions, filled)
+    assert np.all(refilled[:10, 4] == 7.0)
+    assert np.all(np.isinf(variance[:10, 4]))
 
 
 def _bar_and_a_far_marker() -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -47,6 +47,14 @@ def closed_gaps(seen: NDArray[np.bool_]) -> list[tuple[int, int]]:
     return [(int(s), int(e)) for s, e in zip(starts, ends[ends >= starts[0]])]
 
 
+def open_gaps(seen: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """``(s, e)`` of the unseen run at the start and at the end of a marker seen somewhere."""
+    if not seen.any() or seen.all():
+        return []
+    first, last = int(np.argmax(seen)), len(seen) - 1 - int(np.argmax(seen[::-1]))
+    return [(s, e) for s, e in ((0, first - 1), (last + 1, len(seen) - 1)) if e >= s]
+
+
 def _tie(gap: Array, track: Array, start: int, end: int) -> None:
     """Move the fill ``gap`` (frames start..end of ``track``) to meet both sightings; in place."""
     if not np.isfinite(gap).all():

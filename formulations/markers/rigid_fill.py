@@ -28,7 +28,12 @@ Two refinements for markers lost together (a hand's three markers, a cluster's t
 
 A frame where either side has fewer than two donors keeps the fill it had (the marker's
 segment pose or its neighbours' motion, tied to both sightings by ``gap_ends``): one side
-alone drifts with nothing to tie it. Gaps open at either end of the take are left as they are.
+alone drifts with nothing to tie it. A gap open at either end of the take has one sighting
+only, and is carried from it alone (after the rounds), with the variance of the donors'
+combined distance, 1 / sum_k (1 / v_k) over the ``MAX_DONORS`` most rigid: nothing else says
+where the marker is there, and the fill it had came from a model or a motion that never saw
+this take (CMU 135_02 from a first-half model: RTHI, grouped with the pelvis, was filled
+from the pelvis for its first 21 unseen frames while the thigh swung, up to 171 mm off).
 
 Measured over the accuracy matrix's 17 takes (``bench/fill_matrix.py``: lp-l1, 600 frames,
 default and 30 % deletions in 60-frame bursts, against the clean truth), against the tied
@@ -45,7 +50,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from formulations.markers.gap_ends import closed_gaps
+from formulations.markers.gap_ends import closed_gaps, open_gaps
 from formulations.markers.rigid import MIN_SPAN_MM, line_motion, rigid_transform, span_across_line
 from formulations.subject.distances import distance_spread
 
@@ -94,7 +99,33 @@ def rigid_refill(positions: Array, filled: Array, guides: tuple[Array, Mask] | N
                 )
         carried = np.isfinite(fill_doubt)
         track, doubt = np.where(carried[..., None], refilled, positions), np.where(seen, 0.0, fill_doubt)
-    return refilled[:, :markers], doubt[:, :markers]
+    variance = doubt[:, :markers].copy()  # the closed gaps' track and doubt stay what donors read
+    for marker in range(markers):
+        combined = 1.0 / np.sum(1.0 / (spread[marker, donors[marker][:MAX_DONORS]] ** 2 + 1.0))
+        for start, end in open_gaps(seen[:, marker]):
+            done = _fill_open(refilled[start : end + 1, marker], track, doubt, marker, donors[marker], spread, start, end)
+            variance[start : end + 1, marker][done] = combined
+    return refilled[:, :markers], variance
+
+
+def _fill_open(
+    gap: Array, track: Array, doubt: Array, marker: int, mine: NDArray[np.intp], spread: Array, start: int, end: int,
+) -> Mask:
+    """Refill ``gap`` (frames start..end, open at one end of the take) in place by the donors'
+    carry from its one sighting; returns the frames carried (two donors or more)."""
+    leading = start == 0
+    sighting = end + 1 if leading else start - 1
+    frames = np.r_[start : end + 1, sighting] if leading else np.r_[sighting, start : end + 1]
+    columns = [marker, *mine]
+    # _carry reads a gap between two sightings; the missing one is padded and never read.
+    pad, pad_doubt = np.full((1, len(columns), 3), np.nan), np.full((1, len(mine)), np.inf)
+    around, around_doubt = track[frames][:, columns], doubt[frames][:, mine]
+    around = np.concatenate([pad, around] if leading else [around, pad])
+    around_doubt = np.concatenate([pad_doubt, around_doubt] if leading else [around_doubt, pad_doubt])
+    side = len(around) - 1 if leading else 0
+    carried, enough = _carry(around, around_doubt, spread[marker, mine] ** 2 + 1.0, side)
+    gap[enough] = carried[enough]
+    return enough
 
 
 def _fill_gap(gap: Array, track: Array, donor_doubt: Array, variance: Array) -> Array:
