@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from formulations.markers.gap_ends import tie_gap_ends
+from formulations.markers.gap_ends import open_gaps, tie_gap_ends
 
 
 def _track(frames: int = 40) -> np.ndarray:
@@ -37,3 +37,10 @@ def test_one_frame_gaps_are_tied_and_a_gap_open_at_the_start_is_left() -> None:
     tied = tie_gap_ends(positions, filled)
     assert np.allclose(tied[5, 0], truth[5, 0]) and np.allclose(tied[9, 0], truth[9, 0])
     assert np.allclose(tied[0, 0], truth[0, 0] + 9.0)
+
+
+def test_open_gaps_are_the_unseen_runs_at_either_end() -> None:
+    seen = np.array([False, False, True, False, True, True, False])
+    assert open_gaps(seen) == [(0, 1), (6, 6)]
+    assert open_gaps(np.ones(4, bool)) == [] and open_gaps(np.zeros(4, bool)) == []
+    assert open_gaps(np.array([True, False, True])) == []
