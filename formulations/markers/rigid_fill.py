@@ -100,7 +100,7 @@ def rigid_refill(positions: Array, filled: Array, guides: tuple[Array, Mask] | N
         carried = np.isfinite(fill_doubt)
         track, doubt = np.where(carried[..., None], refilled, positions), np.where(seen, 0.0, fill_doubt)
     variance = doubt[:, :markers].copy()  # the closed gaps' track and doubt stay what donors read
-    for marker in range(markers):
+    for marker in (m for m in range(markers) if len(donors[m]) >= 2):  # two donors carry, fewer keep the fill
         combined = 1.0 / np.sum(1.0 / (spread[marker, donors[marker][:MAX_DONORS]] ** 2 + 1.0))
         for start, end in open_gaps(seen[:, marker]):
             done = _fill_open(refilled[start : end + 1, marker], track, doubt, marker, donors[marker], spread, start, end)
