@@ -47,8 +47,9 @@ def chain_support(geometry: ModelGeometry, by_segment: list[list[Hypothesis]], p
             if by_segment[t] or not by_segment[s]:
                 continue
             first = by_segment[s][0]
+            best = _points(first)
             for k, h in enumerate(by_segment[s]):
-                if h.inliers < first.inliers or len(_points(h) & _points(first)) < 2:
+                if h.inliers < first.inliers or len(_points(h) & best) < 2:
                     continue
                 free = unclaimed.copy()
                 free[h.point[h.point >= 0]] = False
