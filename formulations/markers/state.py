@@ -10,6 +10,10 @@ from scipy.spatial import cKDTree
 from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_burst, learn_drift, learn_motion
 from formulations.markers.rigid import follow_neighbours
 
+# A displacement further than this many sds of a marker's motion residual (3D) from its
+# neighbours' is a jump of its prediction, not a velocity: the guide's gates are 5 sds wide.
+JUMP_SIGMAS = 5.0
+
 
 @dataclass(frozen=True)
 class MarkerState:
@@ -115,6 +119,7 @@ class MarkerState:
         # velocity from before a gap is wrong for a fast limb), else damped.
         implied = np.where(followed[:, None], predicted - self.position, self.velocity * damping)
         velocity = np.where(was_seen[:, None], observed - self.position, implied)
+        velocity = self._rejoined(velocity, seen & ~self.visible, was_seen)
         residual = observed - predicted
         usable = seen & (self.streak >= 2)
         motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, usable)
@@ -148,6 +153,25 @@ class MarkerState:
             last_residual=np.where(usable[:, None], residual, 0.0),
             drift_var=drift_var, drift_samples=drift_samples,
         )
+
+    def _rejoined(self, velocity: np.ndarray, back: np.ndarray, measured: np.ndarray) -> np.ndarray:
+        """``velocity`` with each marker seen again after a gap (``back``) moving as its
+        neighbours measured in this frame move (weights 1 / (var + 1), rigid ones first).
+
+        The displacement from where the gap left it to where it is predicted now is no
+        velocity: the prediction jumps whenever the neighbours it follows change (one lost,
+        the model re-anchoring it), and a jump taken as a velocity puts the next frame's
+        gate off the marker, which is then lost, predicted on that velocity, found again
+        from its neighbours with the jump reversed: a cycle of every other frame (CMU
+        135_02's right forearm, 40 frames). Where no neighbour was seen twice, the implied
+        displacement stays.
+        """
+        weight = measured[self.neighbours] / (self.distance_var + 1.0)
+        total = weight.sum(axis=1)
+        shared = np.einsum("nk,nkd->nd", weight, velocity[self.neighbours]) / np.maximum(total, 1e-12)[:, None]
+        jump = np.linalg.norm(velocity - shared, axis=1) > JUMP_SIGMAS * np.sqrt(3 * self.step_var)
+        rejoined: np.ndarray = np.where((back & (total > 0) & jump)[:, None], shared, velocity)
+        return rejoined
 
     @property
     def step_var(self) -> np.ndarray:
