@@ -8,6 +8,9 @@ within tau_p of where the model puts it), differs from the labels carried, and t
 point held by a marker of a segment that fits. Its named markers are then seen at their identified points
 (velocity unknown); its markers the reading leaves unnamed, and markers of other segments
 that held one of the reclaimed points, become unseen and follow their segments until seen.
+Where the reading cannot be taken, the segment's own points are assigned again in the order
+that fits it (``reorder``): an exchange within the segment is undone without the frame's
+identification, which can read a loose segment on its mirror image.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from formulations.markers.state import MarkerState
 from formulations.subject.contradiction import contradicting
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.identify import Identification
+from formulations.subject.reorder import reordered
 from formulations.subject.start_state import acquire
 
 Array = NDArray[np.float64]
@@ -41,7 +45,9 @@ def recover(
         return state, []
     found = identified()
     held = _held(state, points)  # (P,) marker holding each point, -1 none
+    labels = np.where(seen[:, None], state.position, np.nan)
     take: list[int] = []
+    at: list[Array] = []
     drop: list[int] = []
     repaired: list[int] = []
     for s in bad:
@@ -51,20 +57,38 @@ def recover(
         holders = held[found.point[named]]
         others = holders[(holders >= 0) & ~np.isin(geometry.segment_of[np.maximum(holders, 0)], bad)]
         if not sound or (holders == named).all() or len(others):
-            continue  # a reading that takes points of segments that fit is no better than the labels
+            # a reading that takes points of segments that fit is no better than the labels;
+            # the segment's own points may still fit it in another order
+            if _reorder(geometry, int(s), labels, take, at, drop):
+                repaired.append(int(s))
+            continue
         repaired.append(int(s))
         take.extend(int(m) for m in named)
+        at.extend(points[found.point[named]])
         drop.extend(int(m) for m in markers[found.point[markers] < 0])
         drop.extend(int(m) for m in holders if m >= 0 and geometry.segment_of[m] != s)
     if not repaired:
         return state, []
     chosen = np.array(take, dtype=np.int64)
-    state = acquire(state, chosen, points[found.point[chosen]])
+    state = acquire(state, chosen, np.array(at))
     lost = np.zeros(len(seen), bool)
     lost[np.array(drop, dtype=np.int64)] = True
     lost[chosen] = False
     return replace(state, unseen=np.where(lost, np.maximum(state.unseen, 1), state.unseen),
                    streak=np.where(lost, 0, state.streak)), repaired
+
+
+def _reorder(geometry: ModelGeometry, segment: int, labels: Array, take: list[int], at: list[Array], drop: list[int]) -> bool:
+    """Queue the segment's own points in the order that fits it (``reorder``); False if none does."""
+    markers = geometry.segments[segment].markers
+    order = reordered(geometry, segment, labels)
+    if order is None:
+        return False
+    holding = markers[np.isfinite(labels[markers]).all(axis=1)]
+    take.extend(int(m) for m in order)
+    at.extend(labels[holding])
+    drop.extend(int(m) for m in holding if m not in order)
+    return True
 
 
 def _held(state: MarkerState, points: Array) -> NDArray[np.int64]:
