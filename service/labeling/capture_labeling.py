@@ -37,6 +37,7 @@ from service.capture.formulation_spec import resolve_formulation
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.cloud import CloudChain
+from service.labeling.extension import extended
 from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
@@ -72,6 +73,7 @@ class CaptureLabeling:
         self.n_windows = len(window_spans(capture.n_frames, options.window))
         self._frames, self._window = capture.n_frames, options.window
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
+        self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
@@ -117,15 +119,18 @@ class CaptureLabeling:
         return outcomes
 
     def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
-        """The labeled trajectories from all windows' outcomes; each closed gap's fill tied to
+        """The labeled trajectories from all windows' outcomes, their tracks extended over the
+        points no marker took (``extension``); each closed gap's fill tied to
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
         three (``rigid_fill``; with a model also ``joint_tracks`` and ``pose_fill``); in camera
         mode with each marker's best view per frame (``service.best_view.markers``); with every
         label's confidence."""
         labels = self._association.assemble(outcomes)
+        labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
+        if self._points is not None:
+            labels = extended(labels, self._points)
         if labels.filled.size:
             labels.filled = self._fill(labels)
-        labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._view_choice is None:
             return labels
         return self._view_choice.attach(labels, self._association.views(outcomes))

@@ -1,0 +1,110 @@
+"""Labeled tracks extended over the points no marker took, frame by frame from each gap's ends.
+
+A window leaves a marker occluded where its gate missed it: one back from a gap whose
+prediction had drifted, picked up frames later, or one a subject model names only at the next
+template frame. Its point was there, and no marker took it. Once every window is labeled, each gap of marker n (frames s..e, unlabeled) is entered from
+each labeled side with at least two labeled frames before it, by constant velocity,
+
+    x^(s) = x(s - 1) + (x(s - 1) - x(s - 2))      (from the left; mirrored from the right),
+
+and takes the point of frame s that no marker holds within g_n of x^ when it is the only
+such point; the step is repeated from the point taken. g_n = ``GATE_MEDIANS`` times the median
+of |x(t + 1) - 2 x(t) + x(t - 1)| over the marker's own labeled triples (at least
+``MIN_TRIPLES``): its own constant-velocity residual, about 4.6 sd per axis for Gaussian
+acceleration, so a ghost is as unlikely to fall inside as the take's noise allows. Every end
+moves one frame per round, from both sides; a point two ends want in one round goes to
+neither, nor does a frame that a marker's two ends read differently (nothing here can say
+which is right), so the result does not depend on the markers' order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+Array = NDArray[np.float64]
+Index = NDArray[np.int64]
+GATE_MEDIANS = 3.0  # the 99.9th percentile of a 3D Gaussian's norm is 2.6 times its median
+MIN_TRIPLES = 10  # fewer labeled triples say nothing of how the marker moves
+_FRAME_APART = 1e9  # mm between frames in the search tree: a query finds its own frame only
+
+
+def extend_tracks(points: Sequence[Array], point_index: Index) -> Index:
+    """``point_index`` ``(F, N)`` (-1 unlabeled) with gaps entered over unclaimed points (module doc)."""
+    taken = np.array(point_index, dtype=np.int64)
+    counts = np.array([len(p) for p in points])
+    if not counts.sum():
+        return taken
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    flat = np.concatenate([np.asarray(p, float).reshape(-1, 3) for p in points])
+    frame_of = np.repeat(np.arange(len(points)), counts)
+    tree = cKDTree(np.column_stack([flat, frame_of * _FRAME_APART]))
+    claimed = np.zeros(len(flat), bool)
+    held = taken >= 0
+    claimed[(offsets[:-1, None] + taken)[held]] = True
+    gate = _gates(flat, offsets, taken)
+    while _extend_once(tree, flat, offsets, claimed, taken, gate):
+        pass
+    return taken
+
+
+def _extend_once(tree: cKDTree, flat: Array, offsets: Index, claimed: NDArray[np.bool_], taken: Index, gate: Array) -> bool:
+    """Move every gap end one frame inwards; True if any marker took a point."""
+    frame, marker, want = (np.concatenate(a) for a in zip(*(
+        _wanted(tree, flat, offsets, claimed, taken, gate, step) for step in (1, -1))))
+    ok = want >= 0
+    frame, marker, want = np.unique(np.column_stack([frame[ok], marker[ok], want[ok]]), axis=0).T
+    # a point two ends want, or a frame one marker's two ends read differently: nothing here can say which is right
+    _, by_point, point_count = np.unique(want, return_inverse=True, return_counts=True)
+    _, by_slot, slot_count = np.unique(np.column_stack([frame, marker]), axis=0, return_inverse=True, return_counts=True)
+    keep = (point_count[by_point] == 1) & (slot_count[by_slot.ravel()] == 1)
+    claimed[want[keep]] = True
+    taken[frame[keep], marker[keep]] = want[keep] - offsets[frame[keep]]
+    return bool(keep.any())
+
+
+def _wanted(
+    tree: cKDTree, flat: Array, offsets: Index, claimed: NDArray[np.bool_], taken: Index, gate: Array, step: int,
+) -> tuple[Index, Index, Index]:
+    """Gap ends entered in direction ``step``: frame, marker and the one free point in the gate (-1 none)."""
+    labeled = taken >= 0
+    ends = ~labeled & _shifted(labeled, step) & _shifted(labeled, 2 * step) & np.isfinite(gate)[None]
+    frame, marker = np.nonzero(ends)
+    want = np.full(len(frame), -1, dtype=np.int64)
+    if not len(frame):
+        return frame, marker, want
+    last = flat[offsets[frame - step] + taken[frame - step, marker]]
+    prior = flat[offsets[frame - 2 * step] + taken[frame - 2 * step, marker]]
+    guess = np.column_stack([2 * last - prior, frame * _FRAME_APART])
+    for k, found in enumerate(tree.query_ball_point(guess, gate[marker])):
+        free = [p for p in found if not claimed[p]]
+        if len(free) == 1:
+            want[k] = free[0]
+    return frame, marker, want
+
+
+def _shifted(labeled: NDArray[np.bool_], lag: int) -> NDArray[np.bool_]:
+    """``(F, N)`` whether the frame ``lag`` before (``lag`` < 0: after) was labeled; False off the take."""
+    out = np.zeros_like(labeled)
+    if lag > 0:
+        out[lag:] = labeled[:-lag]
+    else:
+        out[:lag] = labeled[-lag:]
+    return out
+
+
+def _gates(flat: Array, offsets: Index, taken: Index) -> Array:
+    """``(N,)`` g_n (module doc); inf where a marker has fewer than ``MIN_TRIPLES`` triples."""
+    gate = np.full(taken.shape[1], np.inf)
+    position = np.full(taken.shape + (3,), np.nan)
+    held = taken >= 0
+    position[held] = flat[(offsets[:-1, None] + taken)[held]]
+    residual = np.linalg.norm(position[2:] - 2 * position[1:-1] + position[:-2], axis=2)
+    for n in range(taken.shape[1]):
+        known = residual[:, n][np.isfinite(residual[:, n])]
+        if len(known) >= MIN_TRIPLES:
+            gate[n] = GATE_MEDIANS * float(np.median(known))
+    return gate
