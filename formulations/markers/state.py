@@ -119,7 +119,7 @@ class MarkerState:
         # velocity from before a gap is wrong for a fast limb), else damped.
         implied = np.where(followed[:, None], predicted - self.position, self.velocity * damping)
         velocity = np.where(was_seen[:, None], observed - self.position, implied)
-        velocity = self._rejoined(velocity, seen & ~self.visible, was_seen)
+        velocity = self._rejoined(velocity, seen & ~self.visible, was_seen, position)
         residual = observed - predicted
         usable = seen & (self.streak >= 2)
         motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, usable)
@@ -154,9 +154,10 @@ class MarkerState:
             drift_var=drift_var, drift_samples=drift_samples,
         )
 
-    def _rejoined(self, velocity: np.ndarray, back: np.ndarray, measured: np.ndarray) -> np.ndarray:
-        """``velocity`` with each marker seen again after a gap (``back``) moving as its
-        neighbours measured in this frame move (weights 1 / (var + 1), rigid ones first).
+    def _rejoined(self, velocity: np.ndarray, back: np.ndarray, measured: np.ndarray, now: np.ndarray) -> np.ndarray:
+        """``velocity`` with each marker seen again after a gap (``back``) at ``now`` moved by
+        the rigid motion of its neighbours measured in this frame (``follow_neighbours``,
+        rigid near ones first; a translation with fewer than three).
 
         The displacement from where the gap left it to where it is predicted now is no
         velocity: the prediction jumps whenever the neighbours it follows change (one lost,
@@ -166,11 +167,20 @@ class MarkerState:
         135_02's right forearm, 40 frames). Where no neighbour was seen twice, the implied
         displacement stays.
         """
-        weight = measured[self.neighbours] / (self.distance_var + 1.0)
-        total = weight.sum(axis=1)
-        shared = np.einsum("nk,nkd->nd", weight, velocity[self.neighbours]) / np.maximum(total, 1e-12)[:, None]
-        jump = np.linalg.norm(velocity - shared, axis=1) > JUMP_SIGMAS * np.sqrt(3 * self.step_var)
-        rejoined: np.ndarray = np.where((back & (total > 0) & jump)[:, None], shared, velocity)
+        count = measured[self.neighbours].sum(axis=1)
+        rows = np.flatnonzero(back & (count > 0))
+        if not len(rows):
+            return velocity
+        spacing = np.maximum(self.distance_mean[rows], 1.0)
+        prior = measured[self.neighbours[rows]] / ((self.distance_var[rows] + 1.0) * spacing**2)
+        source, target = self.position[self.neighbours[rows]], now[self.neighbours[rows]]
+        rotation, c_s, c_t, _ = follow_neighbours(source, target, prior, self.step_var[rows])
+        rotation[count[rows] < 3] = np.eye(3)
+        before = np.einsum("sji,sj->si", rotation, now[rows] - c_t) + c_s
+        shared = now[rows] - before
+        jump = np.linalg.norm(velocity[rows] - shared, axis=1) > JUMP_SIGMAS * np.sqrt(3 * self.step_var[rows])
+        rejoined = velocity.copy()
+        rejoined[rows[jump]] = shared[jump]
         return rejoined
 
     @property
