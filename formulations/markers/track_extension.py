@@ -2,8 +2,9 @@
 
 A window leaves a marker occluded where its gate missed it: one back from a gap whose
 prediction had drifted, picked up frames later, or one a subject model names only at the next
-template frame. Its point was there, and no marker took it. Once every window is labeled, each gap of marker n (frames s..e, unlabeled) is entered from
-each labeled side with at least two labeled frames before it, by constant velocity,
+template frame. Its point was there, and no marker took it. Once every window is labeled,
+each gap of marker n (frames s..e, unlabeled) is entered from each labeled side with at
+least two labeled frames before it, by constant velocity,
 
     x^(s) = x(s - 1) + (x(s - 1) - x(s - 2))      (from the left; mirrored from the right),
 
