@@ -86,7 +86,19 @@ def test_extended_labels_carry_the_nearest_window_confidence() -> None:
     positions = np.where((index >= 0)[..., None], truth, np.nan)
     labels = LabeledTrajectories(["a", "b"], positions, index < 0, 100.0, point_index=index,
                                  filled=np.where((index < 0)[..., None], 0.0, np.nan), confidence=confidence)
-    out = extended(labels, _frames(truth))
+    out = extended(labels, _frames(truth), FRAMES)
     assert not out.occluded.any() and np.allclose(out.positions, truth)
     assert np.isnan(out.filled).all()  # a labeled sample has no fill
     assert out.confidence[15:20, 0].tolist() == [0.3] * 5 and out.confidence[20:25, 0].tolist() == [0.8] * 5
+
+
+def test_frames_no_window_labeled_stay_unlabeled() -> None:
+    """A partial result (a job stopped after some windows) is not extended past them."""
+    truth = _walk(7)
+    index = np.tile(np.arange(2), (FRAMES, 1))
+    index[25:] = -1  # the windows labeled frames 0-24
+    positions = np.where((index >= 0)[..., None], truth, np.nan)
+    labels = LabeledTrajectories(["a", "b"], positions, index < 0, 100.0, point_index=index,
+                                 confidence=np.ones((FRAMES, 2)))
+    assert (extended(labels, _frames(truth), 25).point_index[25:] == -1).all()
+    assert (extended(labels, _frames(truth), FRAMES).point_index[25:] >= 0).all()

@@ -128,7 +128,7 @@ class CaptureLabeling:
         labels = self._association.assemble(outcomes)
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._points is not None:
-            labels = extended(labels, self._points)
+            labels = extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
         if labels.filled.size:
             labels.filled = self._fill(labels)
         if self._view_choice is None:

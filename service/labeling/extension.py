@@ -15,9 +15,11 @@ from formulations.markers.track_extension import extend_tracks
 from service.io.recording import LabeledTrajectories
 
 
-def extended(labels: LabeledTrajectories, points: Sequence[np.ndarray]) -> LabeledTrajectories:
-    """``labels`` with gaps entered over unclaimed ``points`` (one array per frame)."""
-    index = extend_tracks(points, labels.point_index)
+def extended(labels: LabeledTrajectories, points: Sequence[np.ndarray], frames: int) -> LabeledTrajectories:
+    """``labels`` with gaps entered over unclaimed ``points`` (one array per frame) within the
+    first ``frames`` frames, those the windows labeled (a partial result stops there)."""
+    index = labels.point_index.copy()
+    index[:frames] = extend_tracks(points[:frames], labels.point_index[:frames])
     new = (index >= 0) & (labels.point_index < 0)
     if not new.any():
         return labels
