@@ -171,17 +171,29 @@ class MarkerState:
         rows = np.flatnonzero(back & (count > 0))
         if not len(rows):
             return velocity
-        spacing = np.maximum(self.distance_mean[rows], 1.0)
-        prior = measured[self.neighbours[rows]] / ((self.distance_var[rows] + 1.0) * spacing**2)
-        source, target = self.position[self.neighbours[rows]], now[self.neighbours[rows]]
-        rotation, c_s, c_t, _ = follow_neighbours(source, target, prior, self.step_var[rows])
-        rotation[count[rows] < 3] = np.eye(3)
+        rotation, c_s, c_t, _ = self._neighbour_motion(
+            rows, measured[self.neighbours[rows]], self.position[self.neighbours[rows]], now[self.neighbours[rows]],
+            self.step_var[rows],
+        )
         before = np.einsum("sji,sj->si", rotation, now[rows] - c_t) + c_s
         shared = now[rows] - before
         jump = np.linalg.norm(velocity[rows] - shared, axis=1) > JUMP_SIGMAS * np.sqrt(3 * self.step_var[rows])
         rejoined = velocity.copy()
         rejoined[rows[jump]] = shared[jump]
         return rejoined
+
+    def _neighbour_motion(
+        self, rows: np.ndarray, usable: np.ndarray, source: np.ndarray, target: np.ndarray, motion_var: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The robust rigid motion (``follow_neighbours``) of markers ``rows``' usable
+        neighbours from ``source`` to ``target`` ``(R, K, 3)``; a translation with fewer than three."""
+        # Rigidity prior: the learned distance variance, and nearness (a neighbour twice as
+        # far is a quarter as likely to share the marker's segment); see ``follow_neighbours``.
+        spacing = np.maximum(self.distance_mean[rows], 1.0)
+        prior = usable / ((self.distance_var[rows] + 1.0) * spacing**2)
+        rotation, c_s, c_t, firm = follow_neighbours(source, target, prior, motion_var)
+        rotation[usable.sum(axis=1) < 3] = np.eye(3)
+        return rotation, c_s, c_t, firm
 
     @property
     def step_var(self) -> np.ndarray:
@@ -226,13 +238,9 @@ class MarkerState:
         follow = np.flatnonzero(followed)
         if len(follow) == 0:
             return ahead, followed, followed
-        # Rigidity prior: the learned distance variance, and nearness (a neighbour twice as
-        # far is a quarter as likely to share the marker's segment); see ``follow_neighbours``.
-        spacing = np.maximum(self.distance_mean[follow], 1.0)
-        prior = usable[follow] / ((self.distance_var[follow] + 1.0) * spacing**2)
-        source, target = self.anchor_neighbours[follow], ahead[self.neighbours[follow]]
-        rotation, c_s, c_t, firm = follow_neighbours(source, target, prior, self.motion_var[follow])
-        rotation[usable[follow].sum(axis=1) < 3] = np.eye(3)
+        rotation, c_s, c_t, firm = self._neighbour_motion(
+            follow, usable[follow], self.anchor_neighbours[follow], ahead[self.neighbours[follow]], self.motion_var[follow],
+        )
         predicted = ahead.copy()
         predicted[follow] = np.einsum("sij,sj->si", rotation, self.anchor[follow] - c_s) + c_t
         carried = np.zeros_like(followed)

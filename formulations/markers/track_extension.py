@@ -104,8 +104,6 @@ def _gates(flat: Array, offsets: Index, taken: Index) -> Array:
     held = taken >= 0
     position[held] = flat[(offsets[:-1, None] + taken)[held]]
     residual = np.linalg.norm(position[2:] - 2 * position[1:-1] + position[:-2], axis=2)
-    for n in range(taken.shape[1]):
-        known = residual[:, n][np.isfinite(residual[:, n])]
-        if len(known) >= MIN_TRIPLES:
-            gate[n] = GATE_MEDIANS * float(np.median(known))
+    enough = np.isfinite(residual).sum(axis=0) >= MIN_TRIPLES
+    gate[enough] = GATE_MEDIANS * np.nanmedian(residual[:, enough], axis=0)
     return gate

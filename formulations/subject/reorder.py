@@ -54,8 +54,5 @@ def reordered(geometry: ModelGeometry, segment: int, positions: Array) -> Index 
     best = int(np.argmin(np.where(fits, (residual**2).sum(axis=1), np.inf)))
     if not fits[best] or (maps[best] == labeled).all():
         return None
-    present = np.flatnonzero((maps == labeled).all(axis=1))
-    if len(present) and (residual[present[0]] ** 2).sum() <= (residual[best] ** 2).sum():
-        return None
     order: Index = seg.markers[maps[best]]
     return order
