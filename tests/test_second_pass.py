@@ -1,4 +1,5 @@
-"""A second labeling from the spreads the first measured, kept when it is less doubtful."""
+"""A second labeling from the spreads the first measured, kept when its rigid pairs agree better
+with the labeled first frame."""
 
 from __future__ import annotations
 
@@ -54,13 +55,14 @@ def test_the_tennis_serve_is_right_only_with_the_second_pass(tmp_path: Path) -> 
     assert _correct(TENNIS, tmp_path / "once.c3d") < 0.97
     assert _correct(TENNIS, tmp_path / "twice.c3d") > 0.99
     choice = twice["second_pass"]
-    assert choice["kept"] == 2 and choice["second_doubtful"] < choice["first_doubtful"]
+    assert choice["kept"] == 2 and choice["second_off_mm"] < choice["first_off_mm"]
     assert twice["doubtful_fraction"] < once["doubtful_fraction"]
     line = subprocess.run(
         [sys.executable, "-m", "service.cli", "-q", "track", str(TENNIS), "--out", str(tmp_path / "line.c3d")],
         capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "400"},
     ).stdout
-    assert f"second pass kept ({choice['first_doubtful']:.1%} -> {choice['second_doubtful']:.1%} doubtful)" in line
+    assert (f"second pass kept (rigid pairs {choice['first_off_mm']:.1f} -> {choice['second_off_mm']:.1f} mm off the "
+            f"first frame; {choice['first_doubtful']:.1%} -> {choice['second_doubtful']:.1%} doubtful)") in line
 
 
 def _stats_doubt(outcomes: list[WindowOutcome], doubtful: int) -> list[WindowOutcome]:
@@ -68,67 +70,39 @@ def _stats_doubt(outcomes: list[WindowOutcome], doubtful: int) -> list[WindowOut
 
 
 @pytest.mark.parametrize(
-    ("first", "second", "kept"), [(10, 3, 2), (10, 10, 1), (10, 30, 1), (2, 0, 1), (0, 0, 1), (70, 40, 2), (80, 40, 1)],
+    ("first", "off", "kept"),
+    [(10, (5.0, 3.0), 2), (10, (5.0, 5.0), 1), (10, (3.0, 5.0), 1), (10, (np.nan, np.nan), 1), (70, (4.0, 2.0), 2),
+     (2, (5.0, 3.0), 1), (0, (5.0, 3.0), 1), (80, (5.0, 3.0), 1)],
 )
-def test_the_pass_kept_is_the_one_with_fewer_doubtful_labels(monkeypatch, first, second, kept) -> None:
+def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, off, kept) -> None:
+    """The first pass's doubt says whether a second runs (above 2 %, up to 75 %); the rigid
+    pairs' disagreement with the first frame says which is kept, whatever the doubt says."""
     capture = generated_capture(frames=40, seed=3)
     labeling = CaptureLabeling(capture, LabelingOptions(window=10))
     outcomes = _stats_doubt(list(labeling.windows()), first)
-    ran = []
+    ran, judged = [], []
     real = second_pass_module.label_windows
 
     def counted(*args, **kwargs):
         ran.append(True)
-        return _stats_doubt(list(real(*args, **kwargs)), second)
+        return _stats_doubt(list(real(*args, **kwargs)), 90)  # far more doubtful, kept or not
+
+    def disagreement(labelings, first_frame, neighbours):
+        judged.append(len(labelings))
+        return np.array(off)
 
     monkeypatch.setattr(second_pass_module, "label_windows", counted)
-    positions = labeling.result(outcomes).positions
+    monkeypatch.setattr(second_pass_module, "first_frame_disagreement", disagreement)
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001  (the pass as refine runs it)
-    kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, lambda: positions)  # noqa: SLF001
+    assemble = lambda labeled: labeling.result(labeled).positions  # noqa: E731
+    kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, assemble)  # noqa: SLF001
     assert choice.kept == kept and (kept_outcomes is outcomes) == (kept == 1)
-    # no more doubt than track warns about (2 %), or mostly doubtful: no second pass
-    assert bool(ran) == (2 < first <= 75)
-    assert (choice.first_doubtful, choice.second_doubtful, choice.kept) == (
-        first / 100, second / 100 if 2 < first <= 75 else None, kept)
-
-
-def _share_doubt(outcomes, markers: int, share: float):
-    """Windows whose every marker holds a point, ``share`` of them doubtful."""
-    for o in outcomes:
-        labels = markers * (o.stats.last - o.stats.template)
-        yield replace(o, stats=replace(o.stats, labels=labels, doubtful=round(share * labels)))
-
-
-@pytest.mark.parametrize("second", [0.05, 0.11, 0.5])
-def test_a_second_pass_that_cannot_be_kept_stops_early_with_the_same_choice(monkeypatch, second) -> None:
-    """Doubtful labels only accumulate: once those so far, over the labels the take can still
-    hold, reach the first pass's share, the rest of the second pass cannot change the choice."""
-    labeling = CaptureLabeling(generated_capture(frames=80, seed=3), LabelingOptions(window=10))
-    markers = len(labeling._first.position)  # noqa: SLF001
-    outcomes = list(_share_doubt(labeling.windows(), markers, 0.1))
-    labeled: list[int] = []
-    real = second_pass_module.label_windows
-
-    def counted(*args, **kwargs):
-        for outcome in _share_doubt(real(*args, **kwargs), markers, second):
-            labeled.append(outcome.index)
-            yield outcome
-
-    monkeypatch.setattr(second_pass_module, "label_windows", counted)
-    run = (labeling._association, labeling.formulation, labeling._first, 80, 10, outcomes)  # noqa: SLF001
-    positions = labeling.result(outcomes).positions
-    kept, choice = second_pass(*run, lambda: positions)
-    early_windows = len(labeled)
-    monkeypatch.setattr(second_pass_module, "_cannot_be_kept", lambda *args: False)
-    labeled.clear()
-    kept_full, full = second_pass(*run, lambda: positions)
-    assert len(labeled) == labeling.n_windows and full.second_complete
-    assert choice.kept == full.kept == (2 if second < 0.1 else 1)
-    assert (kept is outcomes) == (kept_full is outcomes)
-    assert choice.second_complete == (early_windows == labeling.n_windows)
-    assert choice.second_complete == (second < 0.1)  # 0.11 and 0.5 stop before the last window
-    if second == 0.5:
-        assert early_windows <= labeling.n_windows // 2 + 1
+    assert bool(ran) == bool(judged) == (2 < first <= 75)
+    if ran:
+        expected = [None if np.isnan(v) else v for v in off]
+        assert (choice.first_off_mm, choice.second_off_mm, choice.second_doubtful) == (*expected, 0.9)
+    else:
+        assert (choice.first_doubtful, choice.second_doubtful, choice.first_off_mm) == (first / 100, None, None)
 
 
 def test_a_stop_abandons_the_second_pass(monkeypatch) -> None:
@@ -141,8 +115,9 @@ def test_a_stop_abandons_the_second_pass(monkeypatch) -> None:
 def test_a_job_stores_the_kept_pass_windows_with_its_result(monkeypatch, tmp_path: Path) -> None:
     """A second pass the labeler keeps replaces the job's stored windows: what resuming or a
     partial result reads is the labeling the result was assembled from."""
-    shares = iter([0.5, 0.1] * 2)  # the second pass is kept, in the job and in the library alike
-    monkeypatch.setattr(second_pass_module, "doubtful_share", lambda outcomes: next(shares))
+    # a second pass runs and is kept, in the job and in the library alike
+    monkeypatch.setattr(second_pass_module, "doubtful_share", lambda outcomes: 0.5)
+    monkeypatch.setattr(second_pass_module, "first_frame_disagreement", lambda *args: np.array([5.0, 1.0]))
     real = second_pass_module.label_windows
 
     def marked(*args, **kwargs):

@@ -112,8 +112,9 @@ def track_summary(
     (``service.labeling.coincident``).
     ``unnamed_span`` is the longest stretch where no marker is labeled though points are
     there (``service.labeling.lost_subject``: start, frames, points), or None.
-    ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share and the
-    one kept), None when no second pass applied.
+    ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share, its
+    rigid pairs' disagreement with the first frame, and the one kept), None when no second
+    pass applied.
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {
@@ -136,12 +137,13 @@ def track_summary(
 
 
 def _second_pass_note(choice: PassChoice | None) -> str:
-    """What the summary line says of a second pass that ran: which labeling was kept."""
+    """What the summary line says of a second pass that ran: which labeling was kept, and why."""
     if choice is None or choice.second_doubtful is None:
         return ""
     kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
-    so_far = "" if choice.second_complete else " so far, stopped as it could not win"
-    return f"; {kept} ({choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{so_far})"
+    off = "" if choice.first_off_mm is None or choice.second_off_mm is None else (
+        f"rigid pairs {choice.first_off_mm:.1f} -> {choice.second_off_mm:.1f} mm off the first frame; ")
+    return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful)"
 
 
 def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | None:

@@ -105,13 +105,13 @@ class CaptureLabeling:
         self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
     ) -> list[WindowOutcome] | None:
         """The windows to keep once every window is labeled: ``outcomes``, or those of a
-        second pass (``second_pass``) when it is on and has fewer doubtful labels; None when
+        second pass (``second_pass``) when it is on and agrees better with the first frame; None when
         ``stop`` abandoned the second pass. Sets ``choice``."""
         if not self._second_pass:
             return outcomes
         kept = second_pass(
             self._association, self.formulation, self._first, self._frames, self._window, outcomes,
-            lambda: self._association.assemble(outcomes).positions, progress, stop,
+            lambda labeled: self._association.assemble(labeled).positions, progress, stop,
         )
         if kept is None:
             return None

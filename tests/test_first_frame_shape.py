@@ -1,0 +1,89 @@
+"""Judging labelings of one take by their rigid pairs against the labeled first frame."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from formulations.markers.first_frame_shape import first_frame_disagreement
+from formulations.markers.state import MarkerState
+from formulations.markers.take_spread import take_spread
+
+
+def _two_segments(frames: int = 200, seed: int = 0) -> np.ndarray:
+    """``(F, 8, 3)``: a foot-like plate of four markers and a shank of four, 1 mm noise; the
+    shank turns about the plate's first marker, so only pairs within a segment are rigid."""
+    rng = np.random.default_rng(seed)
+    foot = np.array([[0, 0, 0], [80, 0, 0], [180, 30, 0], [150, -40, 10]], float)
+    shank = np.array([[0, 0, 120], [30, 20, 250], [-20, 30, 330], [10, -30, 400]], float)
+    positions = np.empty((frames, 8, 3))
+    for t in range(frames):
+        body = Rotation.from_rotvec([0, 0, 0.01 * t])
+        knee = Rotation.from_rotvec([0.6 * np.sin(t / 15), 0, 0])
+        positions[t, :4] = body.apply(foot) + [2.0 * t, 0, 0]
+        positions[t, 4:] = body.apply(knee.apply(shank)) + [2.0 * t, 0, 0]
+    return positions + rng.normal(0, 1.0, positions.shape)
+
+
+def _neighbours(first: np.ndarray) -> np.ndarray:
+    return MarkerState.from_first_frame(first, n_neighbours=7).neighbours
+
+
+def _cycled(positions: np.ndarray, markers: list[int], start: int) -> np.ndarray:
+    """The labeling with ``markers`` passed round (each holds the next one's point) from ``start``."""
+    wrong = positions.copy()
+    wrong[start:, markers] = positions[start:, np.roll(markers, -1)]
+    return wrong
+
+
+def test_a_labeling_that_passes_a_plate_round_is_judged_worse_than_the_right_one() -> None:
+    right = _two_segments()
+    first = right[0]
+    wrong = _cycled(right, [0, 1, 2, 3], start=40)  # wrong over 80 % of the take
+    off = first_frame_disagreement([wrong, right], first, _neighbours(first))
+    assert off[1] < 3.0 and off[0] > 4 * off[1]  # half the markers wrong over 80 % of the frames
+
+
+def test_the_pairs_judged_are_the_rigid_ones_in_either_labeling() -> None:
+    """Judged by its own spreads alone, the wrong labeling's plate looks loose (its distances
+    change at the exchange) and the right one's partners differ; the rigidity both share is
+    the least spread either shows, so the plate's pairs judge both."""
+    right = _two_segments(seed=1)
+    first, neighbours = right[0], _neighbours(right[0])
+    wrong = _cycled(right, [0, 1, 2, 3], start=40)
+    own_spread = take_spread(wrong, neighbours)
+    plate = np.isin(neighbours[:4], [0, 1, 2, 3])
+    assert np.median(own_spread[:4][plate]) > 100.0  # the wrong pass alone would not call the plate rigid
+    alone = first_frame_disagreement([wrong], first, neighbours)
+    both = first_frame_disagreement([wrong, right], first, neighbours)
+    assert both[0] > alone[0]
+
+
+def test_the_disagreement_is_the_capped_mean_over_partner_pairs_labeled_together() -> None:
+    """Against a loop over frames, markers and partners on random labelings with gaps."""
+    rng = np.random.default_rng(3)
+    labelings = [_two_segments(60, seed=s) + rng.normal(0, 8.0, (60, 8, 3)) for s in (4, 5)]
+    for labeling in labelings:
+        labeling[rng.random((60, 8)) < 0.2] = np.nan
+    first = _two_segments(1, seed=6)[0]
+    neighbours = _neighbours(first)
+    got = first_frame_disagreement(labelings, first, neighbours, partners=2, cap_mm=12.0)
+    spread = np.fmin(*(take_spread(labeling, neighbours) for labeling in labelings))
+    for p, labeling in enumerate(labelings):
+        terms = []
+        for m in range(8):
+            for k in np.argsort(np.where(np.isfinite(spread[m]), spread[m], np.inf))[:2]:
+                j = neighbours[m, k]
+                rest = np.linalg.norm(first[m] - first[j])
+                for t in range(60):
+                    if np.isfinite(labeling[t, m]).all() and np.isfinite(labeling[t, j]).all():
+                        terms.append(min(abs(np.linalg.norm(labeling[t, m] - labeling[t, j]) - rest), 12.0))
+        assert np.isclose(got[p], np.mean(terms))
+
+
+def test_a_labeling_with_no_pair_labeled_together_is_nan() -> None:
+    right = _two_segments(30)
+    lonely = np.full_like(right, np.nan)
+    lonely[:, 0] = right[:, 0]
+    off = first_frame_disagreement([lonely, right], right[0], _neighbours(right[0]))
+    assert np.isnan(off[0]) and np.isfinite(off[1])
