@@ -59,8 +59,9 @@ def test_the_pairs_judged_are_the_rigid_ones_in_either_labeling() -> None:
     assert both[0] > alone[0]
 
 
-def test_the_disagreement_is_the_capped_mean_over_partner_pairs_labeled_together() -> None:
-    """Against a loop over frames, markers and partners on random labelings with gaps."""
+def test_the_disagreement_is_the_capped_mean_over_partner_pairs_either_labeling_labels() -> None:
+    """Against a loop over frames, markers and partners on random labelings with gaps; a pair
+    one labeling leaves out where the other labels it costs it the cap."""
     rng = np.random.default_rng(3)
     labelings = [_two_segments(60, seed=s) + rng.normal(0, 8.0, (60, 8, 3)) for s in (4, 5)]
     for labeling in labelings:
@@ -69,21 +70,35 @@ def test_the_disagreement_is_the_capped_mean_over_partner_pairs_labeled_together
     neighbours = _neighbours(first)
     got = first_frame_disagreement(labelings, first, neighbours, partners=2, cap_mm=12.0)
     spread = np.fmin(*(take_spread(labeling, neighbours) for labeling in labelings))
-    for p, labeling in enumerate(labelings):
-        terms = []
-        for m in range(8):
-            for k in np.argsort(np.where(np.isfinite(spread[m]), spread[m], np.inf))[:2]:
-                j = neighbours[m, k]
-                rest = np.linalg.norm(first[m] - first[j])
-                for t in range(60):
-                    if np.isfinite(labeling[t, m]).all() and np.isfinite(labeling[t, j]).all():
-                        terms.append(min(abs(np.linalg.norm(labeling[t, m] - labeling[t, j]) - rest), 12.0))
-        assert np.isclose(got[p], np.mean(terms))
+    terms: list[list[float]] = [[], []]
+    for m in range(8):
+        for k in np.argsort(np.where(np.isfinite(spread[m]), spread[m], np.inf))[:2]:
+            j = neighbours[m, k]
+            rest = np.linalg.norm(first[m] - first[j])
+            for t in range(60):
+                together = [np.isfinite(lab[t, [m, j]]).all() for lab in labelings]
+                if not any(together):
+                    continue
+                for p, labeling in enumerate(labelings):
+                    off = abs(np.linalg.norm(labeling[t, m] - labeling[t, j]) - rest) if together[p] else 12.0
+                    terms[p].append(min(off, 12.0))
+    assert np.allclose(got, [np.mean(terms[0]), np.mean(terms[1])])
 
 
-def test_a_labeling_with_no_pair_labeled_together_is_nan() -> None:
+def test_a_labeling_that_leaves_right_labels_out_is_judged_worse() -> None:
+    """Judged only on what it labels, a labeling would win by labeling less."""
+    right = _two_segments(seed=2)
+    sparse = right.copy()
+    sparse[::2, 1] = np.nan  # marker 1 left out in every other frame
+    off = first_frame_disagreement([sparse, right], right[0], _neighbours(right[0]))
+    assert off[1] < off[0]
+
+
+def test_nothing_labeled_together_is_nan_and_a_labeling_without_pairs_pays_the_cap() -> None:
     right = _two_segments(30)
     lonely = np.full_like(right, np.nan)
     lonely[:, 0] = right[:, 0]
-    off = first_frame_disagreement([lonely, right], right[0], _neighbours(right[0]))
-    assert np.isnan(off[0]) and np.isfinite(off[1])
+    neighbours = _neighbours(right[0])
+    off = first_frame_disagreement([lonely, right], right[0], neighbours)
+    assert off[0] == 50.0 and off[1] < 5.0
+    assert np.isnan(first_frame_disagreement([lonely, lonely], right[0], neighbours)).all()

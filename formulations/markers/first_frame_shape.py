@@ -13,11 +13,16 @@ v^p_mj of each (``take_spread``: robust to a tenth of wrong labels) give each pa
 r_mj = min_p v^p_mj, the pair as rigid as any labeling shows it: a labeling that is wrong over
 most of the take cannot make a rigid pair look loose to the others. Marker m's partners J_m
 are its ``partners`` neighbours of least r_mj. With d0_mj their distance in the first frame,
+and U the (frame t, marker m, partner j in J_m) triples labeled together in any labeling,
 
-    disagreement(L_p) = mean over frames t, markers m, j in J_m labeled together at t of
-                        min(| ||L_p[t, m] - L_p[t, j]|| - d0_mj |, cap),
+    disagreement(L_p) = mean over U of  min(| ||L_p[t, m] - L_p[t, j]|| - d0_mj |, cap)
+                                        where L_p labels both m and j at t, else cap,
 
-in mm, lower is better. The cap keeps one far wrong label from outweighing many near ones.
+in mm, lower is better. A pair one labeling leaves out where another labels it costs the cap,
+as much as a wrong label: accuracy counts a marker left unlabeled beside its point as wrong,
+and a labeling that judged only what it labeled would win by labeling less (nn-hungarian on
+HDM05 at 4 mm noise: 96.5 % right kept over 99.7 %). The cap keeps one far wrong label from
+outweighing many near ones.
 """
 
 from __future__ import annotations
@@ -36,8 +41,8 @@ CAP_MM = 50.0  # about a marker spacing: beyond it a label is wrong, by how much
 def first_frame_disagreement(
     labelings: list[Array], first: Array, neighbours: NDArray[np.int64], partners: int = PARTNERS, cap_mm: float = CAP_MM,
 ) -> Array:
-    """``(P,)`` each labeling's disagreement with the first frame (module doc), mm; NaN for a
-    labeling with no partner pair labeled together in any frame.
+    """``(P,)`` each labeling's disagreement with the first frame (module doc), mm; all NaN when
+    no labeling has a partner pair labeled together in any frame.
 
     Args:
         labelings: ``(F, N, 3)`` labeled positions of each labeling, NaN where unlabeled.
@@ -48,9 +53,9 @@ def first_frame_disagreement(
     order = np.argsort(np.where(np.isfinite(rigidity), rigidity, np.inf), axis=1)[:, :partners]
     mates = np.take_along_axis(neighbours, order, axis=1)  # (N, R)
     rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
-    scores = []
-    for positions in labelings:
-        distance = np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3)  # (F, N, R)
-        off = np.minimum(np.abs(distance - rest), cap_mm)
-        scores.append(float(np.nanmean(off)) if np.isfinite(off).any() else np.nan)
-    return np.array(scores)
+    off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
+                    for positions in labelings])  # (P, F, N, R), NaN where a pair is not labeled together
+    judged = np.isfinite(off).any(axis=0)
+    if not judged.any():
+        return np.full(len(labelings), np.nan)
+    return np.array([np.where(np.isfinite(each), np.minimum(each, cap_mm), cap_mm)[judged].mean() for each in off])

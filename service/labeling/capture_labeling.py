@@ -111,7 +111,7 @@ class CaptureLabeling:
             return outcomes
         kept = second_pass(
             self._association, self.formulation, self._first, self._frames, self._window, outcomes,
-            lambda labeled: self._association.assemble(labeled).positions, progress, stop,
+            lambda labeled: self._labeled(labeled).positions, progress, stop,
         )
         if kept is None:
             return None
@@ -125,15 +125,20 @@ class CaptureLabeling:
         three (``rigid_fill``; with a model also ``joint_tracks`` and ``pose_fill``); in camera
         mode with each marker's best view per frame (``service.best_view.markers``); with every
         label's confidence."""
-        labels = self._association.assemble(outcomes)
-        labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
-        if self._points is not None:
-            labels = extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
+        labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)
         if self._view_choice is None:
             return labels
         return self._view_choice.attach(labels, self._association.views(outcomes))
+
+    def _labeled(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
+        """The windows' labels with their confidence, tracks extended over free points (3D points)."""
+        labels = self._association.assemble(outcomes)
+        labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
+        if self._points is None:
+            return labels
+        return extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
 
     def _fill(self, labels: LabeledTrajectories) -> np.ndarray:
         """The windows' fill tied to both sightings, refilled from rigid donors; with a model
