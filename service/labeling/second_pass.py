@@ -13,9 +13,10 @@ labels are measured against its distances between rigid mates
 The labels' own doubt was the judge before, and a poor one: each pass's confidence is
 conditional on the spreads it started from, so a second pass from wider spreads doubts the
 same right labels more (CMU 135_02, hard preset, seed 0: 83.6 % right and 20.8 % doubtful
-against 95.6 % right and 25.2 % doubtful; the doubt kept the first). Over 77 simulated runs
-(11 takes, four matrix conditions and the hard preset) the rigid pairs choose 93.43 % mean
-accuracy where the doubt chose 93.17 % and the better pass each time gives 93.55 %.
+against 95.6 % right and 25.2 % doubtful; the doubt kept the first). Over simulated runs of
+both passes (11 takes, four matrix conditions and the hard preset; 49 with lp-l1, 17 with
+nn-hungarian) the rigid pairs choose 93.44 and 93.54 % mean accuracy, the doubt chose 93.17
+and 93.11 %, and the better pass each time gives 93.55 and 93.65 % (README, "Second pass").
 
 The doubt still says whether a second pass is worth running: not when the first pass is no
 more doubtful than a take ``track`` does not warn about (``DOUBTFUL_WARNING``, 2 %), so a
