@@ -37,8 +37,9 @@ class LabelingOptions:
             the best view; default 1.
         best_view_window: Camera mode: N, frames per best-view window; default 30.
         second_pass: 3D points without a subject model: label the take again from the
-            distance spreads the first labeling measured, and keep the labeling with fewer
-            doubtful labels (``service.labeling.second_pass``); up to twice the time.
+            distance spreads the first labeling measured, and keep the labeling whose rigid
+            pairs agree better with the first frame (``service.labeling.second_pass``); up to
+            twice the time.
     """
 
     formulation: str | dict | Formulation = "lp-l1"

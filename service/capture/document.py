@@ -14,7 +14,7 @@
       "formulation": "lp-l1" or {"name": "ilp", "time_limit": 10},
       "window": 20,
       "association": "joint-3d",
-      "second_pass": true                  # 3D points: label again from the take's spreads if less doubtful
+      "second_pass": true                  # 3D points: label again from the take's spreads, keep the pass closer to frame 0
     }
 
 Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only)

@@ -55,7 +55,8 @@ class Scenario:
             ``"model"`` (cloud mode: it gets a subject model, ``markerflow eval --model``, and
             no labeled frame; the truth only scores).
         second_pass: Cloud mode without a model: label again from the take's distance
-            spreads and keep the less doubtful labeling (``LabelingOptions.second_pass``).
+            spreads and keep the labeling closer to the first frame's rigid pairs
+            (``LabelingOptions.second_pass``).
         unnamed_markers: Cloud mode: this many markers, drawn with the seed, keep their points
             but get no name, as `track --start` leaves the markers absent in its start frame;
             a named marker on one of their points took a ghost.
