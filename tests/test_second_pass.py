@@ -16,6 +16,7 @@ from conftest import DATA
 from service_fixtures import document_json, generated_capture
 
 import service.labeling.second_pass as second_pass_module
+from formulations.confidence.two_readings import agreed_confidence
 from service.capture.capture import LabelingOptions
 from service.io.formats import read_labeled
 from service.labeling.capture_labeling import CaptureLabeling
@@ -84,8 +85,8 @@ def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, 
     real = second_pass_module.label_windows
 
     def counted(*args, **kwargs):
-        ran.append(True)
-        return _stats_doubt(list(real(*args, **kwargs)), 90)  # far more doubtful, kept or not
+        ran.append(_stats_doubt(list(real(*args, **kwargs)), 90))  # far more doubtful, kept or not
+        return ran[-1]
 
     def disagreement(labelings, first_frame, neighbours):
         judged.append(len(labelings))
@@ -96,13 +97,20 @@ def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, 
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001  (the pass as refine runs it)
     assemble = lambda labeled: labeling.result(labeled).positions  # noqa: E731
     kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, assemble)  # noqa: SLF001
-    assert choice.kept == kept and (kept_outcomes is outcomes) == (kept == 1)
+    assert choice.kept == kept
     assert bool(ran) == bool(judged) == (2 < first <= 75)
-    if ran:
+    if not ran:
+        assert kept_outcomes is outcomes
+        assert (choice.first_doubtful, choice.second_doubtful, choice.first_off_mm) == (first / 100, None, None)
+    else:  # the kept pass's labels, each confidence judged with the other pass's label
+        source, other = (ran[0], outcomes) if kept == 2 else (outcomes, ran[0])
+        for mine, own, theirs in zip(kept_outcomes, source, other, strict=True):
+            assert np.array_equal(mine.point_index, own.point_index)
+            agreed = agreed_confidence(own.confidence, own.point_index, theirs.confidence, theirs.point_index)
+            assert np.allclose(mine.confidence, agreed)
+            assert mine.stats.doubtful == int((~(mine.point_index < 0) & (agreed < 0.9)).sum())
         expected = [None if np.isnan(v) else v for v in off]
         assert (choice.first_off_mm, choice.second_off_mm, choice.second_doubtful) == (*expected, 0.9)
-    else:
-        assert (choice.first_doubtful, choice.second_doubtful, choice.first_off_mm) == (first / 100, None, None)
 
 
 def test_a_stop_abandons_the_second_pass(monkeypatch) -> None:

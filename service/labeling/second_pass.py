@@ -29,17 +29,18 @@ to 15 points).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from formulations.confidence.two_readings import agreed_confidence
 from formulations.markers.first_frame_shape import first_frame_disagreement
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import with_take_spread
 from formulations.methods.formulation import Formulation
 from service.labeling.loop import Progress, WindowChain, label_windows
 from service.labeling.outcome import WindowOutcome
-from service.labeling.stats import DOUBTFUL_WARNING
+from service.labeling.stats import DOUBTFUL_WARNING, doubtful_labels
 
 MOSTLY_DOUBTFUL = 0.75  # three labels in four doubtful: the spreads are mostly wrong ones (module docstring)
 
@@ -104,4 +105,19 @@ def second_pass(
     # NaN (no rigid pair labeled together) compares False: the first pass stays.
     kept = 2 if off[1] < off[0] else 1
     choice = PassChoice(before, doubtful_share(second), kept, *(None if np.isnan(v) else float(v) for v in off))
-    return (second if kept == 2 else outcomes), choice
+    return (with_other_reading(second, outcomes) if kept == 2 else with_other_reading(outcomes, second)), choice
+
+
+def with_other_reading(kept: list[WindowOutcome], other: list[WindowOutcome]) -> list[WindowOutcome]:
+    """The kept pass's windows, each label's confidence judged with the other pass's
+    (``formulations.confidence.two_readings``) and the windows' doubt counted again. Both
+    passes label the same windows (one take, one window length)."""
+    judged = []
+    for mine, theirs in zip(kept, other, strict=True):
+        if mine.confidence is None or theirs.confidence is None:
+            judged.append(mine)
+            continue
+        confidence = agreed_confidence(mine.confidence, mine.point_index, theirs.confidence, theirs.point_index)
+        doubtful = int(doubtful_labels(confidence, mine.point_index < 0).sum())
+        judged.append(replace(mine, confidence=confidence, stats=replace(mine.stats, doubtful=doubtful)))
+    return judged
