@@ -18,6 +18,10 @@ both passes (11 takes, four matrix conditions and the hard preset; 49 with lp-l1
 nn-hungarian) the rigid pairs choose 93.44 and 93.54 % mean accuracy, the doubt chose 93.17
 and 93.11 %, and the better pass each time gives 93.55 and 93.65 % (README, "Second pass").
 
+The kept windows' confidences are then judged with the other pass's labels
+(``formulations.confidence.two_readings``): a label both give keeps the surer confidence, a
+label the other pass reads otherwise gets at most one minus the other's.
+
 The doubt still says whether a second pass is worth running: not when the first pass is no
 more doubtful than a take ``track`` does not warn about (``DOUBTFUL_WARNING``, 2 %), so a
 clean take costs one pass; nor when three labels in four or more are doubtful
@@ -82,8 +86,9 @@ def second_pass(
     outcomes: list[WindowOutcome], positions: Positions, progress: Progress | None = None,
     stop: Stop | None = None,
 ) -> tuple[list[WindowOutcome], PassChoice] | None:
-    """The windows to keep (``outcomes`` or the second pass's) and the choice; None when
-    ``stop`` asked to abandon the pass.
+    """The windows to keep (``outcomes`` itself when no second pass runs, else the kept
+    pass's with each confidence judged with the other's: ``with_other_reading``) and the
+    choice; None when ``stop`` asked to abandon the pass.
 
     Args:
         chain, formulation, frames, window: As the first pass was labeled.
