@@ -53,7 +53,7 @@ def test_the_tennis_serve_is_right_only_with_the_second_pass(tmp_path: Path) -> 
     once = _track(tmp_path / "once.c3d", "--one-pass")
     twice = _track(tmp_path / "twice.c3d")
     assert once["second_pass"] is None
-    assert _correct(TENNIS, tmp_path / "once.c3d") < 0.97
+    assert _correct(TENNIS, tmp_path / "once.c3d") < 0.98  # 97.05 % (91 % before the median expected steps)
     assert _correct(TENNIS, tmp_path / "twice.c3d") > 0.99
     choice = twice["second_pass"]
     assert choice["kept"] == 2 and choice["second_off_mm"] < choice["first_off_mm"]

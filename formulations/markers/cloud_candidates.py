@@ -32,6 +32,7 @@ from scipy.spatial import cKDTree
 from formulations.markers.guide import Gate, GuideTrack, guide_track
 from formulations.markers.likelihood import marker_likelihood
 from formulations.markers.state import MarkerState
+from formulations.markers.step_motion import HALF_WIDTH, expected_steps
 from formulations.window.candidates import WindowCandidates
 
 SHAPE_CAP_MM = 50.0  # c
@@ -52,6 +53,9 @@ class CloudGating:
         likelihood: Price steps, reappearances and occlusions as negative log-likelihoods
             learned from the take (``markers.likelihood``); the prediction term above and
             the arc weights' constants are then not used.
+        step_median_frames: h of the expected step, the median of the guide's steps
+            h frames each side (``markers.step_motion``); 0: the guide's last step, which
+            looks at no later frame (the frame-by-frame baseline).
     """
 
     gate: Gate = field(default_factory=Gate)
@@ -61,6 +65,7 @@ class CloudGating:
     prediction_cap_sigmas: float = 6.0
     shape_weight: float = 0.5
     likelihood: bool = True
+    step_median_frames: int = HALF_WIDTH
 
 
 @dataclass(frozen=True)
@@ -111,7 +116,8 @@ def cloud_candidates(
         object=obj, frame=frame, location=location,
         template_cost=template_cost,
         resources=_window_resources(frames, point_resources)[offsets[frame - 1] + point],
-        occlusion_location=guide.predicted.transpose(1, 0, 2), motion=guide.velocity.transpose(1, 0, 2),
+        occlusion_location=guide.predicted.transpose(1, 0, 2),
+        motion=expected_steps(guide, gating.step_median_frames).transpose(1, 0, 2),
         likelihood=likelihood,
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)

@@ -25,6 +25,9 @@ class Formulation(ABC):
     """
 
     name: ClassVar[str]
+    # False for a frame-by-frame baseline: its costs must not see the frames after the one it
+    # assigns (the chain then gives it the guide's last step as the expected one).
+    look_ahead: ClassVar[bool] = True
 
     @abstractmethod
     def solve(self, problem: WindowProblem) -> WindowSolution:

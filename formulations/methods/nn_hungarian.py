@@ -40,6 +40,7 @@ class NnHungarian(Formulation):
     """
 
     name: ClassVar[str] = "nn-hungarian"
+    look_ahead: ClassVar[bool] = False
 
     def solve(self, problem: WindowProblem) -> WindowSolution:
         start = time.perf_counter()

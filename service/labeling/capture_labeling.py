@@ -25,6 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from formulations.cameras.rig import Rig
+from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.subject.geometry import ModelGeometry
@@ -82,11 +83,11 @@ class CaptureLabeling:
             if not np.isfinite(capture.first_frame).all():  # identified, not labeled: the take may correct the model
                 model = learn_from_take(model, capture.points[: options.window])
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
-            inner = _association(replace(capture, first_frame=first_frame), options)
+            inner = _association(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
             self._association: Association = ModelChain(inner, model, capture.points)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
-            self._association = _association(capture, options)
+            self._association = _association(capture, options, self.formulation.look_ahead)
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(
@@ -189,15 +190,19 @@ def _confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.
     return confidence
 
 
-def _association(capture: Capture, options: LabelingOptions) -> Association:
-    """The chain of the capture's input mode and the chosen association."""
+def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -> Association:
+    """The chain of the capture's input mode and the chosen association; ``look_ahead``
+    False (a frame-by-frame baseline) keeps later frames out of the expected steps."""
+    gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0)
     if capture.points is not None:
         cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
-        return CloudChain(cloud, capture.names, capture.first_frame, layout_weight=options.layout_weight)
+        return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight)
     cameras, detections = capture.camera_frames()
     if options.association == "per-camera":
         return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)
     if options.association != "joint-3d":
         raise InputError(f"association {options.association!r} is not available; use joint-3d or per-camera")
     cloud, matched = cross_camera_cloud(cameras, detections, capture.rate)
-    return Joint3dChain(cloud, capture.names, capture.first_frame, layout_weight=options.layout_weight, matched=matched)
+    return Joint3dChain(
+        cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight, matched=matched,
+    )
