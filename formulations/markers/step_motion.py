@@ -16,9 +16,8 @@ but only for a marker whose steps in the window differ from one another mostly b
 the guide's picks x: the robust scale s_2 of the marker's second differences D^2 x (its three
 axes pooled; one step's change, 6 sigma^2 + q_n^2 with q_n its acceleration) and the
 window's noise sigma from the third differences of every marker (20 sigma^2 under noise
-alone; ``noise``). The median
-is used where s_2^2 < 2 * 6 sigma^2, i.e. q_n^2 < 6 sigma^2: there it removes more noise
-than it smooths away motion. A hand pushing a racing wheelchair's rim at 70 Hz accelerates
+alone; ``noise``). The median is used where s_2^2 < 2 * 6 sigma^2, i.e. q_n^2 < 6 sigma^2:
+there it removes more noise than it smooths away motion. A hand pushing a racing wheelchair's rim at 70 Hz accelerates
 far more than its noise, and its last step is kept (smoothing it there exchanged two glove
 markers 30 mm apart: the real take 97.21 -> 89.75 %). Steps after a gap keep the
 displacement the neighbours imply (``MarkerState``). Seed-0 accuracy matrix (85 rows): lp-l1
@@ -32,9 +31,9 @@ from __future__ import annotations
 import numpy as np
 
 from formulations.markers.guide import GuideTrack
+from formulations.markers.noise import MAD_TO_SIGMA
 
 HALF_WIDTH = 2  # h: frames each side; one wrong pick in 2h + 1 = 5 steps leaves the median
-MAD_TO_SD = 1.4826  # 1 / Phi^-1(3/4): a normal's sd from its median absolute value
 MIN_MARKER_SAMPLES = 6  # second differences (frames x axes) a marker needs in the window to be judged
 MIN_NOISE_SAMPLES = 10  # third differences the window needs for its noise
 
@@ -62,14 +61,14 @@ def noise_dominated(guide: GuideTrack, seen: np.ndarray) -> np.ndarray:
     position[:-1] = guide.predicted[1:] - guide.velocity[1:]
     position[~picked] = np.nan
     markers = seen.shape[1]
-    second = np.abs(position[2:] - 2 * position[1:-1] + position[:-2]).transpose(0, 2, 1).reshape(-1, markers)
-    third = np.abs(position[3:] - 3 * position[2:-1] + 3 * position[1:-2] - position[:-3])
+    second = np.abs(np.diff(position, n=2, axis=0)).transpose(0, 2, 1).reshape(-1, markers)
+    third = np.abs(np.diff(position, n=3, axis=0))
     third = third[np.isfinite(third)]
     if third.size < MIN_NOISE_SAMPLES:
         return np.zeros(markers, dtype=bool)
-    noise_var = (MAD_TO_SD * np.median(third)) ** 2 / 20.0
+    noise_var = (MAD_TO_SIGMA * np.median(third)) ** 2 / 20.0
     enough = np.isfinite(second).sum(axis=0) >= MIN_MARKER_SAMPLES
-    change_var = (MAD_TO_SD * masked_median(second)) ** 2
+    change_var = (MAD_TO_SIGMA * masked_median(second)) ** 2
     dominated: np.ndarray = enough & (change_var < 2 * 6 * noise_var)
     return dominated
 
