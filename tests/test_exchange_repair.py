@@ -116,3 +116,25 @@ def test_an_exchange_of_close_markers_is_undone_as_far_as_their_labels_are_doubt
     assert moved == 2 and np.allclose(repaired.position, state.position)
     noisy = replace(state, position=state.position + rng.normal(0, 2.0, body.shape))
     assert repair_exchanges(noisy, none, sure(0.05, 0.05))[1] == 0  # right labels, doubted: the ratio keeps them
+
+
+def test_a_change_that_breaks_the_partners_own_distance_is_refused():
+    """A and B mirror each other about the plane of C, D, E, 60 mm apart and each other's
+    most rigid neighbour (CMU's RWRA/RWRB). A is lost; B is seen, and a second point sits
+    10 mm from B (a second triangulation of it). Judged with B left out, A fits B's point
+    exactly and B fits the second point within a few mm: the per-marker test would hand A
+    B's point. With both moved, A and B stand 10 mm apart against their 60."""
+    c, d, e = [0.0, 0.0, 0.0], [0.0, 0.0, 80.0], [0.0, 90.0, 30.0]
+    a, b = [30.0, 20.0, 40.0], [-30.0, 20.0, 40.0]
+    body = np.array([c, d, e, a, b])
+    state = MarkerState.from_first_frame(body, n_neighbours=4)
+    var = np.full(state.neighbours.shape, 25.0)
+    for m, other in ((3, 4), (4, 3)):
+        var[m, list(state.neighbours[m]).index(other)] = 0.25
+    lost_a = replace(state, distance_var=var, unseen=np.array([0, 0, 0, 21, 0]))
+    second = body[4] + [0.0, 6.0, 8.0]
+    fits = shape_deviations(lost_a, np.array([body[4], second]))
+    assert fits[3, 0] < 1.0 and fits[4, 1] < 10.0  # the setup: each fits, judged alone
+    repaired, moved = repair_exchanges(lost_a, second[None], np.array([1.0, 1.0, 1.0, 1.0, 0.5]))
+    assert moved == 0
+    assert np.array_equal(repaired.position, lost_a.position)
