@@ -21,7 +21,7 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 SUMMARY_KEYS = {
     "label_accuracy", "swaps", "ghost_precision", "ghost_recall", "integral_window_fraction",
     "gap_median", "gap_max", "seconds_per_frame", "frames", "markers", "formulation", "doubtful_fraction",
-    "doubtful_share", "doubtful_recall",
+    "doubtful_share", "doubtful_recall", "filled_rmse_mm",
 }  # fmt: skip
 
 
@@ -102,6 +102,8 @@ def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
     assert set(summary) == SUMMARY_KEYS
     assert (summary["frames"], summary["markers"], summary["formulation"]) == (240, 41, "lp-l1")
     assert summary["label_accuracy"] > 0.99
+    # Deleted samples come back filled from rigid donors, within the 15 mm goal of issue 12.
+    assert 0 < summary["filled_rmse_mm"] <= 15.0
     assert_figures_agree(summary, 240)
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+import numpy as np
+
 from formulations.methods.formulation import Formulation
 from service.evaluation.doubt_scores import doubt_scores
 from service.evaluation.scenario import Scenario
@@ -14,7 +16,7 @@ from service.evaluation.simulated import SimulatedCapture
 from service.io.recording import LabeledTrajectories, Recording
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.loop import Progress
-from service.labeling.stats import WindowStats, certificate_figures
+from service.labeling.stats import WindowStats, certificate_figures, finite_or_none
 
 
 @dataclass
@@ -46,7 +48,18 @@ class Evaluation:
             "frames": frames,
             "markers": len(self.capture.first_frame.names),
             "formulation": self.formulation,
+            "filled_rmse_mm": finite_or_none(filled_rmse_mm(self.capture, self.result)),
         }
+
+
+def filled_rmse_mm(capture: SimulatedCapture, result: LabeledTrajectories) -> float:
+    """3D error (mm) of the positions filled in where a marker came back unlabeled, against the
+    clean truth (frame 0, the user's, not counted), as camera mode's ``filled_rmse_mm``; NaN when none."""
+    truth = capture.truth
+    true = truth.positions[:, [truth.names.index(name) for name in result.names]]
+    error = np.linalg.norm(result.filled - true, axis=2)[1:]
+    error = error[result.occluded[1:] & np.isfinite(error)]
+    return float(np.sqrt(np.mean(error**2))) if error.size else float("nan")
 
 
 def evaluate(

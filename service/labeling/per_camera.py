@@ -29,6 +29,7 @@ from formulations.cameras.per_camera.gating import PerCameraGating
 from formulations.cameras.per_camera.guide import per_camera_guide
 from formulations.cameras.per_camera.locate import FrameViews
 from formulations.cameras.per_camera.reacquire import locate_with_reacquisition
+from formulations.cameras.per_camera.single_view import single_views_on_rays
 from formulations.cameras.rig import Rig
 from formulations.markers.state import MarkerState
 from formulations.window.build import build_window
@@ -100,10 +101,26 @@ class PerCameraChain:
         for outcome in outcomes:
             rows = slice(outcome.stats.template + 1, outcome.stats.last + 1)
             positions[rows], filled[rows] = outcome.positions, outcome.filled
+        positions = self._single_views_placed(positions, filled, self.views(outcomes))
         return LabeledTrajectories(
             names=list(self.names), positions=positions, occluded=np.isnan(positions).any(axis=2),
             rate=self.rate, filled=filled,
         )
+
+    def _single_views_placed(self, positions: np.ndarray, filled: np.ndarray, views: np.ndarray) -> np.ndarray:
+        """Each marker-frame located from one view moved along its ray to where its rigid
+        donors put it (``single_view``)."""
+        single = ((views >= 0).sum(axis=2) == 1) & np.isfinite(positions).all(axis=2)
+        frame, marker = np.nonzero(single)
+        camera = np.argmax(views[frame, marker] >= 0, axis=1)
+        detection = views[frame, marker, camera]
+        origin, direction = np.zeros((len(frame), 3)), np.zeros((len(frame), 3))
+        for c, lens in enumerate(self.rig.cameras):
+            rows = np.flatnonzero(camera == c)
+            if len(rows):
+                pixels = np.array([self.detections[frame[r]][c][detection[r]] for r in rows], dtype=float).reshape(-1, 2)
+                origin[rows], direction[rows] = self.rig.centres[c], lens.direction(lens.undistort(pixels))
+        return single_views_on_rays(positions, filled, single, origin, direction)
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
         """``(F, N, C)`` detection each marker took in each camera, -1 for none (frame 0: none)."""
