@@ -129,6 +129,8 @@ class CaptureLabeling:
         labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)
+            if isinstance(self._association, Joint3dChain):
+                labels.filled = self._association.fills_on_lone_views(labels, outcomes)
         if self._view_choice is None:
             return labels
         return self._view_choice.attach(labels, self._association.views(outcomes))
@@ -205,4 +207,5 @@ def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -
     cloud, matched = cross_camera_cloud(cameras, detections, capture.rate)
     return Joint3dChain(
         cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight, matched=matched,
+        rig=Rig.of(cameras), detections=detections,
     )

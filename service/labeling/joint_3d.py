@@ -17,7 +17,9 @@ import numpy as np
 
 from formulations.cameras.camera import Camera
 from formulations.cameras.cross_camera.matching import CrossCameraPoints, match_frames
-from service.io.recording import UnlabeledCloud
+from formulations.cameras.lone_views import fills_on_lone_views
+from formulations.cameras.rig import Rig
+from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.cloud import CloudChain
 from service.labeling.outcome import WindowOutcome
 
@@ -52,6 +54,23 @@ class Joint3dChain(CloudChain):
     """
 
     matched: Sequence[CrossCameraPoints] = ()
+    rig: Rig | None = None
+    detections: Sequence[list[np.ndarray]] = ()
+
+    def fills_on_lone_views(self, result: LabeledTrajectories, outcomes: list[WindowOutcome]) -> np.ndarray:
+        """The result's fill with each marker one camera still sees put on that ray (``lone_views``)."""
+        if self.rig is None:
+            return result.filled
+        views = self.views(outcomes)  # (F, N, C)
+        normalised, used = [], []
+        for f, frame in enumerate(self.detections):
+            pixels = [np.asarray(found, dtype=float).reshape(-1, 2) for found in frame]
+            normalised.append([camera.undistort(p) if len(p) else p for camera, p in zip(self.rig.cameras, pixels)])
+            taken = [np.zeros(len(p), bool) for p in pixels]
+            for c, mask in enumerate(taken):
+                mask[views[f, :, c][views[f, :, c] >= 0]] = True
+            used.append(taken)
+        return fills_on_lone_views(result.filled, result.occluded, result.positions, self.rig, normalised, used)
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
         """``(F, N, C)`` detections behind the cross-camera point each marker took, -1 none."""
