@@ -34,6 +34,10 @@ import numpy.typing as npt
 
 from formulations.errors import FormulationError
 
+# |cost| bound: a window sums at most (frames) costs and switch prices, so with this bound
+# and any take that fits in memory the sums stay finite; no view-quality scale comes near it.
+MAX_COST = 1e100
+
 
 def select_views(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.NDArray[np.int64]:
     """Each object's camera in each frame, by Jiang's sliding-window DP.
@@ -50,10 +54,13 @@ def select_views(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.N
 
     Raises:
         FormulationError: a cost array that is not (F, K, M) with M >= 1, a non-finite
-            cost, a negative or non-finite lambda, or a window under one frame.
+            cost or one past ``MAX_COST``, a negative or non-finite lambda, or a window under one frame.
     """
     c = _checked(costs, switch_cost, window)
     n_frames, n_objects, _ = c.shape
+    # Past the end a window is zero-cost padding, which changes no choice (see _cost_to_go):
+    # a window longer than the take gives exactly the result of one as long as the take.
+    window = min(window, max(n_frames, 1))
     to_go = _cost_to_go(c, switch_cost, window)
     # Keeping b_{-1} is optimal iff V_0(b_{-1}) <= min_m V_0(m) + lambda; otherwise the
     # overall argmin of V_0 is another camera, and the best one to switch to.
@@ -89,8 +96,8 @@ def _checked(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.NDArr
         raise FormulationError("best view: costs must be numeric") from None
     if c.ndim != 3 or c.shape[2] < 1:
         raise FormulationError(f"best view: costs must be (frames, objects, cameras) with a camera, got shape {c.shape}")
-    if not np.isfinite(c).all():
-        raise FormulationError("best view: costs must be finite")
+    if not (np.isfinite(c).all() and (np.abs(c) <= MAX_COST).all()):
+        raise FormulationError(f"best view: costs must be finite, within +-{MAX_COST:g}")
     if not (np.isfinite(switch_cost) and switch_cost >= 0):
         raise FormulationError(f"best view: switch cost must be finite and >= 0, got {switch_cost}")
     if window < 1:

@@ -26,7 +26,8 @@ list; here consistency is a chain of boxes):
   took in the window's last frames is not offered again, since in the next window those
   boxes are the object's, and a longer chain is more evidence for the test. A chain of
   boxes nobody took needs ``min_hits`` of them in the window and is cut at its end (it is
-  offered again from the next window's template).
+  offered again from the next window's template); a window shorter than ``min_hits`` frames
+  (window 2) lets it run to ``min_hits`` frames after the template instead.
 - **Death.** An object unseen for more than ``max_occluded`` frames leaves. One whose
   prediction has crossed the image border leaves sooner, after ``border_occluded`` frames:
   a person walking out of the picture is not behind someone. In the window itself an
@@ -94,15 +95,24 @@ class Lifecycle:
     def window_chains(self, frame: Ints, boxes: Array, free: NDArray[np.bool_], returned: NDArray[np.bool_],
                       template_frame: int, n_frames: int, last_frame: int) -> list[Ints]:
         """Chains of ``free`` boxes starting in frames t0..t0+M (``template_frame``, ``n_frames``)
-        with ``min_hits`` boxes there (cut at the window's end), or, if they hold a ``returned``
+        with ``min_hits`` boxes there (cut at the window's end, or ``lookahead`` frames after the
+        template when the window is shorter than ``min_hits``), or, if they hold a ``returned``
         box, ``min_hits`` boxes up to ``n_frames`` frames past the window (no further than
         ``last_frame``; module doc)."""
         end = template_frame + n_frames
-        reach = min(end + n_frames, last_frame) if returned.any() else end
+        # A window shorter than min_hits (window 2: template + 1) could never hold a chain:
+        # the chain is then cut at the look-ahead, but still starts in the window.
+        cut = min(template_frame + self.lookahead(n_frames), last_frame)
+        reach = max(min(end + n_frames, last_frame), cut) if returned.any() else cut
         found = self.chains(frame, boxes, free & (frame >= template_frame) & (frame <= reach))
         straddling = [c for c in found if frame[c[0]] <= end and returned[c].any()]
-        inside = [c[frame[c] <= end] for c in found if not returned[c].any()]
+        inside = [c[frame[c] <= cut] for c in found if not returned[c].any() and frame[c[0]] <= end]
         return straddling + [c for c in inside if len(c) >= self.min_hits]
+
+    def lookahead(self, n_frames: int) -> int:
+        """Frames after the template a window's chains may use: its own ``n_frames``, or
+        ``min_hits - 1`` when that is more (so a chain of ``min_hits`` boxes fits)."""
+        return max(n_frames, self.min_hits - 1)
 
     def leaving(self, objects: BoxObjects, now: int, image: Array) -> NDArray[np.bool_]:
         """True for the objects that leave at frame ``now``; ``image`` is (x1, y1, x2, y2)."""

@@ -53,7 +53,7 @@ class DpExtended(ComponentwiseFormulation):
     decompose: bool = True
 
     def __post_init__(self) -> None:
-        check_parameters(self, positive=("max_states",))
+        check_parameters(self, positive=("max_states",), flags=("decompose",))
         if not isinstance(self.max_states, numbers.Integral):
             raise FormulationError(f"{self.name}: parameter 'max_states' must be an integer, got {self.max_states!r}")
 

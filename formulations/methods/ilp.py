@@ -61,7 +61,7 @@ class Ilp(ComponentwiseFormulation):
     lp_first: bool = True
 
     def __post_init__(self) -> None:
-        check_parameters(self, non_negative=("mip_gap",), optional_positive=("time_limit",))
+        check_parameters(self, non_negative=("mip_gap",), optional_positive=("time_limit",), flags=("decompose", "lp_first"))
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """The LP's optimum if integral, else one 0/1 program over the whole (sub-)window."""

@@ -5,7 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from formulations.methods.formulation import check_parameters
+from formulations.methods.formulation import (
+    MAX_BRANCHING,
+    MAX_INTEGRALITY_TOLERANCE,
+    TABLE_BRANCHING,
+    check_parameters,
+)
 from formulations.methods.repair import k_best_repair
 from formulations.relaxation.certify import INTEGRALITY_TOLERANCE, round_and_certify
 from formulations.relaxation.decomposition import ComponentwiseFormulation
@@ -24,15 +29,16 @@ class LpL1(ComponentwiseFormulation):
 
     Attributes:
         decompose: Solve independent components apart (Viterbi where exact).
-        integrality_tolerance: xi within this of 0 or 1 counts as integral.
+        integrality_tolerance: xi within this of 0 or 1 counts as integral, in (0, 0.5).
         pricing_min_arcs: Use column generation when a component has more arcs.
         pricing_successors: Cheapest out-arcs per node in the first restricted LP.
         time_limit: Seconds per LP solve (None: no limit).
         repair: I = J of the k-best repair (``formulations.methods.repair``) run on a
-            component whose LP optimum was fractional; 0 turns the repair off.
+            component whose LP optimum was fractional; 0 turns the repair off; at most 100 (code: 10^4).
     """
 
     name: ClassVar[str] = "lp-l1"
+    table_limits: ClassVar[dict[str, float]] = {"repair": TABLE_BRANCHING}
     decompose: bool = True
     integrality_tolerance: float = INTEGRALITY_TOLERANCE
     pricing_min_arcs: int = PRICING_MIN_ARCS
@@ -42,7 +48,9 @@ class LpL1(ComponentwiseFormulation):
 
     def __post_init__(self) -> None:
         check_parameters(self, positive=("integrality_tolerance", "pricing_successors"),
-                         non_negative=("pricing_min_arcs", "repair"), optional_positive=("time_limit",))
+                         non_negative=("pricing_min_arcs", "repair"), optional_positive=("time_limit",),
+                         flags=("decompose",), integers=("pricing_min_arcs", "pricing_successors", "repair"),
+                         at_most={"repair": MAX_BRANCHING}, below={"integrality_tolerance": MAX_INTEGRALITY_TOLERANCE})
 
     def solve_coupled(self, problem: WindowProblem) -> WindowSolution:
         """Build, solve, round and certify one LP over the whole (sub-)window; repair if fractional."""

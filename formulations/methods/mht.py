@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from formulations.assignment.blocks import k_best_assignments
 from formulations.assignment.rankings import RankingCache
 from formulations.errors import FormulationError
-from formulations.methods.formulation import Formulation, check_parameters
+from formulations.methods.formulation import MAX_BRANCHING, TABLE_BRANCHING, Formulation, check_parameters
 from formulations.methods.frame_steps import FrameSteps
 from formulations.methods.mht_association import Association, association
 from formulations.window.objective import path_cost
@@ -68,19 +68,21 @@ class Mht(Formulation):
     """Multiple hypothesis tracking (Ringer & Lasenby): I hypotheses, J associations each by Murty.
 
     Attributes:
-        hypotheses: I, hypotheses kept after each frame (the cheapest, merged).
-        associations: J, best associations (Murty's k-best) expanding each hypothesis.
+        hypotheses: I, hypotheses kept after each frame (the cheapest, merged), 1 to 100 (code: 10^4).
+        associations: J, best associations (Murty's k-best) expanding each hypothesis, 1 to 100 (code: 10^4).
         noise: sigma of the constant-velocity state re-estimated per hypothesis, in
             location units; None holds the state fixed (the arc costs alone rank).
     """
 
     name: ClassVar[str] = "mht"
+    table_limits: ClassVar[dict[str, float]] = {"hypotheses": TABLE_BRANCHING, "associations": TABLE_BRANCHING}
     hypotheses: int = 5
     associations: int = 5
     noise: float | None = None
 
     def __post_init__(self) -> None:
-        check_parameters(self, positive=("hypotheses", "associations"), optional_positive=("noise",))
+        check_parameters(self, positive=("hypotheses", "associations"), optional_positive=("noise",),
+                         at_most={"hypotheses": MAX_BRANCHING, "associations": MAX_BRANCHING})
         for name in ("hypotheses", "associations"):
             if not isinstance(getattr(self, name), numbers.Integral):
                 raise FormulationError(f"{self.name}: parameter '{name}' must be an integer, got {getattr(self, name)!r}")

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from formulations.errors import FormulationError
-from formulations.methods.formulation import check_parameters
+from formulations.methods.formulation import MAX_INTEGRALITY_TOLERANCE, check_parameters
 from formulations.relaxation.certify import Relaxation, round_and_certify
 from formulations.relaxation.decomposition import ComponentwiseFormulation
 from formulations.relaxation.lp_model import inflow_matrix
@@ -47,8 +47,8 @@ class QpL2(ComponentwiseFormulation):
 
     Attributes:
         decompose: Solve independent components apart (Viterbi where exact).
-        integrality_tolerance: xi within this of 0 or 1 counts as integral (interior point:
-            zeros come back as ~1e-9).
+        integrality_tolerance: xi within this of 0 or 1 counts as integral, in (0, 0.5)
+            (interior point: zeros come back as ~1e-9).
         bound: Lower bound on the L1 optimum to report: "arc-lp" or "l1-lp".
     """
 
@@ -58,13 +58,8 @@ class QpL2(ComponentwiseFormulation):
     bound: str = "arc-lp"
 
     def __post_init__(self) -> None:
-        if not isinstance(self.decompose, bool):
-            raise FormulationError(f"{self.name}: parameter 'decompose' must be True or False, got {self.decompose!r}")
-        check_parameters(self, positive=("integrality_tolerance",))
-        if self.integrality_tolerance >= 0.5:
-            raise FormulationError(
-                f"{self.name}: parameter 'integrality_tolerance' must be < 0.5, got {self.integrality_tolerance!r}"
-            )
+        check_parameters(self, positive=("integrality_tolerance",), flags=("decompose",),
+                         below={"integrality_tolerance": MAX_INTEGRALITY_TOLERANCE})
         if self.bound not in BOUNDS:
             raise FormulationError(f"{self.name}: parameter 'bound' must be one of {', '.join(BOUNDS)}, got {self.bound!r}")
 

@@ -97,12 +97,26 @@ def _decode(data: dict[str, Any]) -> SubjectModel:
         [SingleMarker(**m) for m in data["singles"]], float(data["marker_radius"]),
     )
     names = {s.name for s in model.segments}
+    if not (np.isfinite(model.marker_radius) and model.marker_radius >= 0):
+        raise ValueError(f"marker_radius must be a finite number >= 0 (mm), got {model.marker_radius}")
     for segment in model.segments:
         if len(segment.coordinates) != len(segment.markers) or any(len(c) != 3 for c in segment.coordinates):
             raise ValueError(f"segment {segment.name!r}: coordinates do not match its markers")
+        _finite(segment.coordinates, f"segment {segment.name!r}: coordinates")
     for joint in model.joints:
         if not set(joint.segments) <= names:
             raise ValueError(f"joint {joint.name!r} names an unknown segment")
         if joint.rest is not None and np.asarray(joint.rest, dtype=float).shape != (3, 3):
             raise ValueError(f"joint {joint.name!r}: rest is not a 3 x 3 rotation")
+        _finite([*joint.centres, *(joint.rest or [])], f"joint {joint.name!r}: centres and rest")
+    for limb in model.limbs:
+        _finite([limb.length], f"limb of segment {limb.segment!r}: length")
+    for single in model.singles:
+        _finite(single.distances, f"single marker {single.marker!r}: distances")
     return model
+
+
+def _finite(values: Any, what: str) -> None:
+    """JSON takes NaN and Infinity; a model's geometry cannot (an SVD of them fails far from the file)."""
+    if not np.isfinite(np.asarray(values, dtype=float)).all():
+        raise ValueError(f"{what} must be finite numbers")

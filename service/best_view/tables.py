@@ -1,7 +1,7 @@
 """The best-view command's tables: view costs in, chosen cameras out.
 
 COSTS.csv has the header ``frame,object,camera,cost`` and one row per triple: ``frame``
-an integer, ``object`` and ``camera`` any text, ``cost`` a finite number, lower is
+an integer, ``object`` and ``camera`` any text, ``cost`` a finite number (|cost| <= 1e100), lower is
 better. Every object needs a row for every camera (all cameras named in the file) in
 every frame it appears in; its frames are taken in increasing order as consecutive.
 CHOICES.csv has the header ``frame,object,camera``: one row per frame and object, in
@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from formulations.best_view.selection import MAX_COST
 from service.errors import InputError
 
 COSTS_HEADER = ["frame", "object", "camera", "cost"]
@@ -114,4 +115,6 @@ def _cost(cell: str, path: Path, line: int) -> float:
         raise InputError(f"{path}:{line}: cost {cell!r} is not a number") from None
     if not math.isfinite(value):
         raise InputError(f"{path}:{line}: cost {cell!r} is not finite")
+    if abs(value) > MAX_COST:  # window sums would overflow
+        raise InputError(f"{path}:{line}: cost {cell!r} is out of range (|cost| <= {MAX_COST:g})")
     return value

@@ -21,6 +21,9 @@ from service.boxes.detections import BoxDetections, BoxTracks
 from service.errors import InputError
 
 MIN_COLUMNS, MAX_COLUMNS = 7, 10
+# Frames per sequence: 55 minutes at 30 fps, a hundred times MOT17's longest. TrackEval keeps
+# arrays per frame (10^5 frames: seconds), so a stray huge frame number costs for nothing.
+MAX_FRAMES = 100_000
 
 
 @dataclass(frozen=True)
@@ -64,9 +67,10 @@ def _check(path: Path, rows: np.ndarray) -> None:
     if not np.isfinite(rows[:, :7]).all():
         raise InputError(f"{path}: frame, id, box and confidence must be finite numbers")
     frames = rows[:, 0]
-    if (frames < 1).any() or (frames != np.round(frames)).any():
-        raise InputError(f"{path}: line {int(np.argmax((frames < 1) | (frames != np.round(frames)))) + 1}: "
-                         "frames are whole numbers from 1")
+    bad = (frames < 1) | (frames > MAX_FRAMES) | (frames != np.round(frames))
+    if bad.any():
+        line = int(np.argmax(bad))
+        raise InputError(f"{path}: line {line + 1}: frame {frames[line]:g}; frames are whole numbers from 1 to {MAX_FRAMES}")
     if (rows[:, 4:6] <= 0).any():
         raise InputError(f"{path}: line {int(np.argmax((rows[:, 4:6] <= 0).any(axis=1))) + 1}: width and height must be > 0")
 
@@ -81,6 +85,23 @@ def read_detections(path: Path, info: SequenceInfo | None = None) -> BoxDetectio
         frame=rows[:, 0].astype(int), box=rows[:, 2:6].copy(), confidence=rows[:, 6].copy(),
         n_frames=info.length if info is not None else last, image_size=info.image_size if info is not None else None,
     )
+
+
+def dense_ids(path: Path, rows: np.ndarray) -> np.ndarray:
+    """``rows`` with ids renumbered 1, 2, ... in the order of the file's ids, so that any whole
+    id works (TrackEval sizes arrays by the largest id). Scores do not depend on the numbers.
+
+    Raises:
+        InputError: An id that is not a whole number within float precision, naming its line.
+    """
+    ids = rows[:, 1]
+    bad = (ids != np.round(ids)) | (np.abs(ids) > 2.0**53)  # past 2^53, floats merge distinct ids
+    if bad.any():
+        line = int(np.argmax(bad))
+        raise InputError(f"{path}: line {line + 1}: id {ids[line]:g} is not a whole number (of at most 2^53)")
+    dense = rows.copy()
+    dense[:, 1] = np.unique(ids, return_inverse=True)[1] + 1
+    return dense
 
 
 def write_tracks(path: Path, tracks: BoxTracks) -> None:
@@ -104,11 +125,26 @@ def read_seqinfo(path: Path) -> SequenceInfo:
             raise InputError(f"{path}: cannot read")
         section = parser["Sequence"]
         length = int(section["seqLength"])
+        size = None
+        if "imWidth" in section and "imHeight" in section:
+            size = (_positive(section, "imWidth", path), _positive(section, "imHeight", path))
+        rate = _positive(section, "frameRate", path) if "frameRate" in section else None
     except (KeyError, ValueError, configparser.Error) as error:
-        raise InputError(f"{path}: not a seqinfo.ini with [Sequence] seqLength ({error})") from None
-    size = None
-    if "imWidth" in section and "imHeight" in section:
-        size = (float(section["imWidth"]), float(section["imHeight"]))
-    rate = float(section["frameRate"]) if "frameRate" in section else None
+        # configparser's messages run over several lines and quote the raw bytes: keep the first.
+        detail = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise InputError(f"{path}: not a seqinfo.ini with [Sequence] seqLength ({detail})") from None
+    if not 1 <= length <= MAX_FRAMES:
+        raise InputError(f"{path}: seqLength {length} is invalid: a sequence has 1 to {MAX_FRAMES} frames")
     return SequenceInfo(section.get("name", path.parent.name), length, size, rate,
                         section.get("imDir"), section.get("imExt", ".jpg"))
+
+
+def _positive(section: configparser.SectionProxy, key: str, path: Path) -> float:
+    """A size or rate of ``seqinfo.ini``: a finite number > 0, or a one-line error naming it."""
+    try:
+        value = float(section[key])
+    except ValueError:
+        value = float("nan")
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"{path}: {key} must be a finite number > 0, got {section[key]}")
+    return value

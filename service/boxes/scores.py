@@ -1,7 +1,7 @@
 """MOT scores by TrackEval (Luiten et al. 2021): HOTA, MOTA, IDF1, identity switches.
 
 TrackEval reads a MOTChallenge folder tree, so one result and one ground truth are laid out
-in a temporary one (links, no copies) and its dataset class does the reading and the
+in a temporary one (copies with ids renumbered 1, 2, ...: ``mot_files.dense_ids``) and its dataset class does the reading and the
 MOTChallenge preprocessing; its metric classes are then called on that one sequence,
 without the Evaluator (which prints and writes summary files). TrackEval 1.3 runs on
 numpy 2 as is (no ``np.float``/``np.int`` left in it).
@@ -13,14 +13,13 @@ without (MOT15, e.g. TUD-Campus, class -1) as MOT15, without that step.
 
 from __future__ import annotations
 
-import os
 import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from service.boxes.mot_files import read_rows, read_seqinfo
+from service.boxes.mot_files import dense_ids, read_rows, read_seqinfo
 from service.errors import InputError
 
 SEQUENCE, TRACKER = "sequence", "tracker"
@@ -67,11 +66,14 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
         root = Path(folder)
         (root / "gt" / SEQUENCE / "gt").mkdir(parents=True)
         (root / "trackers" / TRACKER / "data").mkdir(parents=True)
-        os.symlink(gt.resolve(), root / "gt" / SEQUENCE / "gt" / "gt.txt")
-        os.symlink(result.resolve(), root / "trackers" / TRACKER / "data" / f"{SEQUENCE}.txt")
+        # %.17g writes every float64 back exactly.
+        np.savetxt(root / "gt" / SEQUENCE / "gt" / "gt.txt", dense_ids(gt, truth), fmt="%.17g", delimiter=",")
+        np.savetxt(root / "trackers" / TRACKER / "data" / f"{SEQUENCE}.txt", dense_ids(result, rows), fmt="%.17g",
+                   delimiter=",")
         config = {
             "GT_FOLDER": str(root / "gt"), "TRACKERS_FOLDER": str(root / "trackers"), "SKIP_SPLIT_FOL": True,
-            "SEQ_INFO": {SEQUENCE: length}, "BENCHMARK": "MOT17" if classes else "MOT15",
+            # Frames after the last box add nothing to any score: TrackEval need not step through them.
+            "SEQ_INFO": {SEQUENCE: int(max(truth[:, 0].max(), rows[:, 0].max()))}, "BENCHMARK": "MOT17" if classes else "MOT15",
             "TRACKERS_TO_EVAL": [TRACKER], "PRINT_CONFIG": False,
         }
         try:

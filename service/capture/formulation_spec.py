@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from formulations.errors import FormulationError
-from formulations.methods.formulation import Formulation
+from formulations.methods.formulation import Formulation, check_table_limits
 from formulations.methods.registry import get_formulation
 from service.errors import InputError
 from service.io.toml_file import read_toml
@@ -21,14 +21,17 @@ def formulation_from_table(table: dict[str, Any], where: str) -> Formulation:
     """The formulation a ``[formulation]`` table names, with its parameters.
 
     Raises:
-        InputError: No name, unknown name or parameter, or a value out of range.
+        InputError: No name, unknown name or parameter, or a value out of range (or past its
+            ``table_limits``: a table asks for at most what runs in reasonable time).
     """
     parameters = dict(table)
     name = parameters.pop("name", None)
     if not isinstance(name, str):
         raise InputError(f"{where}: [formulation] needs name = \"...\" (e.g. \"lp-l1\")")
     try:
-        return get_formulation(name, **parameters)
+        formulation = get_formulation(name, **parameters)
+        check_table_limits(formulation)
+        return formulation
     except (FormulationError, TypeError) as error:
         raise InputError(f"{where}: {error}") from None
 

@@ -23,6 +23,8 @@ def read_model(path: Path) -> SubjectModel:
         text = path.read_text()
     except OSError as error:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file (a subject model is JSON)") from None
     return parse_model(text, str(path))
 
 

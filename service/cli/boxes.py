@@ -11,6 +11,7 @@ from service.boxes.track import track_boxes
 from service.capture.formulation_spec import formulation_from_spec
 from service.cli.output import check_writable_folder
 from service.cli.report import out
+from service.errors import InputError
 
 
 def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | None, images: Path | None,
@@ -19,6 +20,8 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
     check_writable_folder(output.parent if str(output.parent) else Path("."))
     info = read_seqinfo(seqinfo) if seqinfo is not None else None
     boxes = read_detections(detections, info)
+    if boxes.n_frames < 2:  # as `track`: nothing to follow from one frame
+        raise InputError(f"{detections}: the sequence has 1 frame; tracking needs at least 2 (a template and one more)")
     solver = formulation_from_spec(formulation)
     histograms = None
     if images is not None:

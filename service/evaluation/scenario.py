@@ -17,6 +17,16 @@ _EXPECTED: dict[object, str] = {
     float: "a number", int: "an integer", str: "a string", dict: "a table", bool: "true or false",
 }
 _NON_NEGATIVE = ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "seed", "start_frame", "frames", "unnamed_markers")
+# Upper bounds far past any real capture: beyond them a value means nothing physical, and the
+# simulator's memory grows with the counts (points per frame) or its arithmetic overflows (noise).
+_AT_MOST: dict[str, float] = {
+    "noise_mm": 1000.0,  # a metre of noise per coordinate: no body left to label
+    "ghosts_per_frame": 1000.0,  # stray points per frame; each one is stored and labeled
+    "ghost_spread_mm": 100_000.0,  # 100 m from the body: past any capture volume
+    "pixel_noise": 10_000.0,  # px: larger than any sensor
+    "merge_radius_px": 10_000.0,  # px: larger than any sensor
+    "clutter_per_camera": 1000.0,  # spurious detections per camera and frame; each one is stored
+}
 
 
 @dataclass(frozen=True)
@@ -161,6 +171,7 @@ class Scenario:
         self._require("association", self.association in ASSOCIATIONS, f"one of {', '.join(ASSOCIATIONS)}")
         for key in ("pixel_noise", "merge_radius_px", "clutter_per_camera"):
             self._require(key, getattr(self, key) >= 0, ">= 0")
+            self._require(key, getattr(self, key) <= _AT_MOST[key], f"<= {_AT_MOST[key]:g}")
         self._require("occlusion_rate", 0.0 <= self.occlusion_rate < 1.0, "in [0, 1)")
         self._require("occlusion_burst_frames", self.occlusion_burst_frames >= 1.0, ">= 1")
         self._require("up_axis", self.up_axis in (0, 1, 2), "0, 1 or 2")
@@ -173,6 +184,8 @@ class Scenario:
             self._check_cameras()
         for key in _NON_NEGATIVE:
             self._require(key, getattr(self, key) >= 0, ">= 0")
+        for key in ("noise_mm", "ghosts_per_frame", "ghost_spread_mm"):
+            self._require(key, getattr(self, key) <= _AT_MOST[key], f"<= {_AT_MOST[key]:g}")
         self._require("drop_rate", 0.0 <= self.drop_rate < 1.0, "in [0, 1)")
         self._require("drop_burst_frames", self.drop_burst_frames >= 1.0, ">= 1")
         self._require("window", self.window >= 2, ">= 2")

@@ -61,7 +61,12 @@ def place_in_volume(
 
     Returns:
         ``(F, N, 3)`` positions in the rig's world frame, mm.
+
+    Raises:
+        InputError: No finite position at all (e.g. ``start_frame`` past the end).
     """
+    if not np.isfinite(positions).any():  # an empty slice or no sample: nothing to centre
+        raise InputError(f"no marker position in the {len(positions)} frames to place; eval needs at least 2 frames")
     R = rig.rotation
     up = -R[:, 1].mean(axis=0)
     up /= np.linalg.norm(up)
@@ -115,8 +120,10 @@ def simulate_cameras(
         The detections with their true markers.
 
     Raises:
-        InputError: On a setting out of range or a marker missing in frame 0.
+        InputError: Fewer than 2 frames, a setting out of range or a marker missing in frame 0.
     """
+    if truth.n_frames < 2:  # as `track`: the labeled frame and at least one to label
+        raise InputError(f"the scenario's frames leave {truth.n_frames}; eval needs at least 2 frames")
     r, b = occlusion_rate, occlusion_burst_frames
     if not (0.0 <= r < 1.0 and b >= 1.0 and r / (b * (1.0 - r)) <= 1.0):
         raise InputError(

@@ -32,7 +32,7 @@ def simulate_cloud(truth: Recording, scenario: Scenario) -> SimulatedCapture:
         The cloud, each point's true marker, the clean slice and the labeled first frame.
 
     Raises:
-        InputError: If the slice is empty or a marker has no position in its first frame.
+        InputError: If the slice has fewer than 2 frames or a marker has no position in its first frame.
     """
     if scenario.mode != "cloud":
         raise InputError(f"simulate_cloud needs mode 'cloud', got '{scenario.mode}'")
@@ -77,6 +77,11 @@ def _slice(truth: Recording, scenario: Scenario) -> Recording:
     if stop > n:
         raise InputError(
             f"scenario key 'frames': start_frame + frames = {stop} exceeds the {n} frames"
+        )
+    if stop - start < 2:  # as `track`: the labeled frame and at least one to label
+        raise InputError(
+            f"scenario keys 'start_frame' {start} and 'frames' {scenario.frames} leave {stop - start} frame; "
+            "eval needs at least 2 frames"
         )
     positions = truth.positions[start:stop].copy()
     # Some exporters write gaps as (0, 0, 0); NaN keeps them out of any arithmetic.

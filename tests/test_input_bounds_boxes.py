@@ -1,0 +1,178 @@
+"""Box tracking on short windows, sparse or huge frame numbers, and bad MOT files: tracks or one-line errors."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from formulations.boxes.lifecycle import Lifecycle
+from service.boxes.detections import BoxDetections
+from service.boxes.mot_files import read_detections, read_seqinfo
+from service.boxes.track import track_boxes
+from service.cli.app import app
+from service.errors import InputError
+
+runner = CliRunner()
+
+
+def _people(frames: range, people: int = 3) -> list[tuple[float, ...]]:
+    """``people`` walkers far apart, one box per frame each."""
+    return [(f, 100.0 + 300.0 * p + 2.0 * f, 200.0, 60.0, 150.0) for f in frames for p in range(people)]
+
+
+def _detections(rows: list[tuple[float, ...]], n_frames: int) -> BoxDetections:
+    r = np.array(rows)
+    return BoxDetections(r[:, 0].astype(int), r[:, 1:], np.ones(len(r)), n_frames, (1920.0, 1080.0))
+
+
+def _id(value: float) -> str:
+    return str(int(value)) if value == int(value) else str(value)
+
+
+def _mot(path: Path, rows: list[tuple[float, ...]], ids: list[float] | None = None) -> Path:
+    ids = ids if ids is not None else [-1.0] * len(rows)
+    path.write_text("".join(f"{r[0]:g},{_id(i)},{r[1]},{r[2]},{r[3]},{r[4]},0.9,-1,-1,-1\n" for r, i in zip(rows, ids)))
+    return path
+
+
+@pytest.mark.parametrize("formulation", ["lp-l1", "ilp"])
+def test_window_of_two_tracks_everyone(formulation):
+    run = track_boxes(_detections(_people(range(1, 21)), 20), formulation, window=2)
+    assert len(set(run.tracks.track_id.tolist())) == 3
+    assert len(run.tracks.frame) == 60
+
+
+def test_window_of_two_matches_window_of_three_on_easy_walkers():
+    detections = _detections(_people(range(1, 21)), 20)
+    two, three = (track_boxes(detections, "lp-l1", window=w).tracks for w in (2, 3))
+    assert sorted(zip(two.frame.tolist(), two.track_id.tolist())) == sorted(zip(three.frame.tolist(),
+                                                                               three.track_id.tolist()))
+
+
+def test_window_of_two_with_returns_compete_tracks():
+    run = track_boxes(_detections(_people(range(1, 21)), 20), "lp-l1", window=2,
+                      lifecycle=Lifecycle(returns_compete=True))
+    assert len(run.tracks.frame) == 60
+
+
+def test_empty_stretch_costs_nothing_and_changes_nothing():
+    rows = _people(range(1, 11)) + _people(range(400_001, 400_011))
+    start = time.perf_counter()
+    sparse = track_boxes(_detections(rows, 400_010), "lp-l1", window=5).tracks
+    assert time.perf_counter() - start < 20.0
+    assert len(sparse.frame) == 60 and len(set(sparse.track_id.tolist())) == 6
+
+
+@pytest.mark.parametrize("window", [2, 3, 5, 7])
+@pytest.mark.parametrize("options", [{}, {"lifecycle": Lifecycle(returns_compete=True), "likelihood": True}])
+def test_skipping_empty_windows_keeps_the_result(monkeypatch, window, options):
+    # Gaps of a few windows, and boxes after the last one: the skip must land on the same
+    # window grid, with the same counts, as stepping through every window.
+    rows = _people(range(1, 12)) + _people(range(47, 60)) + _people(range(101, 104))
+    detections = _detections(rows, 130)
+    skipped = track_boxes(detections, "lp-l1", window=window, **options).tracks
+    monkeypatch.setattr("service.boxes.track._empty_windows", lambda *_: 0)
+    stepped = track_boxes(detections, "lp-l1", window=window, **options).tracks
+    for name in ("frame", "track_id", "box"):
+        assert np.array_equal(getattr(skipped, name), getattr(stepped, name))
+    assert len(skipped.frame) > 0
+
+
+@pytest.mark.parametrize("frame", ["100000000", "1e300", "-3", "2.5", "nan"])
+def test_bad_frame_numbers_are_one_line(tmp_path, frame):
+    path = tmp_path / "det.txt"
+    path.write_text(f"1,-1,10,10,5,5,0.9\n{frame},-1,10,10,5,5,0.9\n")
+    with pytest.raises(InputError, match="line 2|finite") as error:
+        read_detections(path)
+    assert "\n" not in str(error.value)
+
+
+def test_frame_bound_is_documented_and_accepted(tmp_path):
+    from service.boxes.mot_files import MAX_FRAMES
+    path = tmp_path / "det.txt"
+    path.write_text(f"1,-1,10,10,5,5,0.9\n{MAX_FRAMES},-1,10,10,5,5,0.9\n")
+    assert read_detections(path).n_frames == MAX_FRAMES
+
+
+@pytest.mark.parametrize(("text", "match"), [
+    ("[Sequence]\nseqLength=-5\n", "seqLength -5 is invalid"),
+    ("[Sequence]\nseqLength=0\n", "seqLength 0 is invalid"),
+    ("[Sequence]\nseqLength=1000000\n", "seqLength 1000000 is invalid"),
+    ("[Sequence]\nseqLength=30\nimWidth=0\nimHeight=1080\n", "imWidth"),
+    ("[Sequence]\nseqLength=30\nframeRate=nan\n", "frameRate"),
+])
+def test_bad_seqinfo_values_are_named(tmp_path, text, match):
+    path = tmp_path / "seqinfo.ini"
+    path.write_text(text)
+    with pytest.raises(InputError, match=match):
+        read_seqinfo(path)
+
+
+def test_binary_seqinfo_is_one_line(tmp_path):
+    path = tmp_path / "seqinfo.ini"
+    path.write_bytes(b"\x00\xff\xfe\x01\n\x02garbage\n")
+    with pytest.raises(InputError) as error:
+        read_seqinfo(path)
+    assert "\n" not in str(error.value)
+
+
+def test_cli_one_frame_sequence_is_a_clear_error(tmp_path):
+    det = _mot(tmp_path / "det.txt", _people(range(1, 2)))
+    run = runner.invoke(app, ["boxes", str(det), "--out", str(tmp_path / "r.txt")])
+    assert run.exit_code == 2 and "at least 2" in run.output and len(run.output.strip().splitlines()) == 1
+
+
+def test_cli_window_two_writes_tracks(tmp_path):
+    det = _mot(tmp_path / "det.txt", _people(range(1, 21)))
+    run = runner.invoke(app, ["boxes", str(det), "--out", str(tmp_path / "r.txt"), "-w", "2"])
+    assert run.exit_code == 0, run.output
+    assert len((tmp_path / "r.txt").read_text().splitlines()) == 60
+
+
+def _gt(path: Path, rows: list[tuple[float, ...]], ids: list[float]) -> Path:
+    path.write_text("".join(f"{r[0]:g},{_id(i)},{r[1]},{r[2]},{r[3]},{r[4]},1,1,1\n" for r, i in zip(rows, ids)))
+    return path
+
+
+def test_mot_eval_scores_huge_ids_as_small_ones(tmp_path):
+    rows = _people(range(1, 11), people=2)
+    small = [1.0 + (k % 2) for k in range(len(rows))]
+    huge = [1e15 + (k % 2) for k in range(len(rows))]
+    gt = _gt(tmp_path / "gt.txt", rows, small)
+    gt_huge = _gt(tmp_path / "gt_huge.txt", rows, huge)
+    res = _mot(tmp_path / "res.txt", rows, small)
+    res_huge = _mot(tmp_path / "res_huge.txt", rows, huge)
+    from service.boxes.scores import mot_scores
+    reference = mot_scores(res, gt).as_dict()
+    assert mot_scores(res_huge, gt).as_dict() == reference
+    assert mot_scores(res, gt_huge).as_dict() == reference
+    assert reference["hota"] > 0.9
+
+
+@pytest.mark.parametrize("which", ["gt", "res"])
+def test_mot_eval_fractional_id_names_the_line(tmp_path, which):
+    rows = _people(range(1, 4), people=1)
+    ids = [1.0, 2.5, 1.0]
+    gt = _gt(tmp_path / "gt.txt", rows, ids if which == "gt" else [1.0] * 3)
+    res = _mot(tmp_path / "res.txt", rows, ids if which == "res" else [1.0] * 3)
+    run = runner.invoke(app, ["mot-eval", str(res), str(gt)])
+    assert run.exit_code == 2, run.output
+    assert "line 2" in run.output and "2.5" in run.output and len(run.output.strip().splitlines()) == 1
+
+
+def test_mot_eval_cost_does_not_grow_with_seq_length(tmp_path):
+    from service.boxes.scores import mot_scores
+    rows = _people(range(1, 11), people=2)
+    ids = [1.0 + (k % 2) for k in range(len(rows))]
+    gt, res = _gt(tmp_path / "gt.txt", rows, ids), _mot(tmp_path / "res.txt", rows, ids)
+    (tmp_path / "short.ini").write_text("[Sequence]\nseqLength=10\n")
+    (tmp_path / "long.ini").write_text("[Sequence]\nseqLength=100000\n")
+    short = mot_scores(res, gt, tmp_path / "short.ini").as_dict()
+    start = time.perf_counter()
+    long = mot_scores(res, gt, tmp_path / "long.ini").as_dict()
+    assert time.perf_counter() - start < 5.0
+    assert {**short, "frames": 100000} == long

@@ -1,0 +1,63 @@
+"""Subject model files that are binary, carry non-finite numbers or a negative radius: one-line errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from formulations.errors import FormulationError
+from formulations.subject.model import Joint, Limb, Segment, SingleMarker, SubjectModel
+from service.capture.model_input import read_model
+from service.errors import InputError
+
+
+def _model() -> dict:
+    coordinates = [[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 120.0, 0.0], [0.0, 0.0, 90.0]]
+    segments = [Segment(name, [f"{name}{i}" for i in range(4)], coordinates, [1.0] * 4) for name in ("A", "B")]
+    joints = [Joint("AB", ("A", "B"), ([0.0, 0.0, 200.0], [0.0, 0.0, -50.0]), 2.0)]
+    model = SubjectModel(segments, joints, [Limb("A", ("AB", "AB"), 0.0)], [SingleMarker("S", ["A"], [150.0], [3.0])])
+    return json.loads(model.to_json())
+
+
+def _write(tmp_path: Path, data: dict) -> Path:
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_a_good_model_loads(tmp_path):
+    assert read_model(_write(tmp_path, _model())).marker_radius == 7.0
+
+
+@pytest.mark.parametrize(("edit", "match"), [
+    (lambda d: d["segments"][0]["coordinates"][0].__setitem__(0, float("nan")), "segment 'A'.*coordinates"),
+    (lambda d: d["segments"][1]["coordinates"][2].__setitem__(1, float("inf")), "segment 'B'.*coordinates"),
+    (lambda d: d["joints"][0]["centres"][1].__setitem__(2, float("nan")), "joint 'AB'.*centres"),
+    (lambda d: d.__setitem__("marker_radius", -1.0), "marker_radius"),
+    (lambda d: d.__setitem__("marker_radius", float("nan")), "marker_radius"),
+    (lambda d: d["singles"][0]["distances"].__setitem__(0, float("nan")), "single marker 'S'"),
+    (lambda d: d["limbs"][0].__setitem__("length", float("inf")), "limb"),
+])
+def test_bad_numbers_are_named(tmp_path, edit, match):
+    data = _model()
+    edit(data)
+    with pytest.raises(InputError, match=match) as error:
+        read_model(_write(tmp_path, data))
+    assert "\n" not in str(error.value)
+
+
+def test_from_json_refuses_nan_coordinates():
+    data = _model()
+    data["segments"][0]["coordinates"][1][1] = float("nan")
+    with pytest.raises(FormulationError, match="finite"):
+        SubjectModel.from_json(json.dumps(data))
+
+
+def test_binary_file_is_not_a_model(tmp_path):
+    path = tmp_path / "take.c3d"
+    path.write_bytes(b"\x02P\xff\xfe\x00\x01" * 50)
+    with pytest.raises(InputError, match="not a text file") as error:
+        read_model(path)
+    assert "\n" not in str(error.value)
