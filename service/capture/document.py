@@ -25,6 +25,7 @@ path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 wit
 from __future__ import annotations
 
 import json
+import unicodedata
 from typing import Annotated, Literal
 
 import numpy as np
@@ -42,6 +43,8 @@ Point3 = tuple[Finite, Finite, Finite]
 Pixel = tuple[Finite, Finite]
 MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
 _ONE_ROTATION = "give the world -> camera rotation as exactly one of R or rvec"
+MIN_RATE, MAX_RATE = 1e-3, 1e5  # Hz: see CaptureDocument.rate
+MAX_NAME_BYTES = 255  # a C3D parameter's dimensions are single bytes: longer labels make an unreadable file
 
 
 class CameraDocument(BaseModel):
@@ -79,7 +82,9 @@ class CaptureDocument(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     units: Literal["mm", "m"] = "mm"
-    rate: float = Field(gt=0, allow_inf_nan=False)
+    # Frames per second. C3D stores the rate as float32 (1e308 becomes inf, 1e-300 becomes 0),
+    # and no motion capture runs below a frame per 1000 s or above 100 kHz (high-speed video).
+    rate: float = Field(gt=0, le=MAX_RATE, allow_inf_nan=False)
     markers: list[str] | None = Field(default=None, min_length=1)
     first_frame: list[Point3] | None = None
     model: dict | None = None
@@ -90,6 +95,13 @@ class CaptureDocument(BaseModel):
     window: int = Field(default=20, ge=2)
     association: Literal[ASSOCIATIONS] = "joint-3d"  # type: ignore[valid-type]
     second_pass: bool = True
+
+    @field_validator("rate")
+    @classmethod
+    def _not_too_slow(cls, rate: float) -> float:
+        if rate < MIN_RATE:  # after gt=0, whose message says what a rate of 0 or less lacks
+            raise ValueError(f"Input should be greater than or equal to {MIN_RATE:g} (Hz)")
+        return rate
 
     @field_validator("markers")
     @classmethod
@@ -109,6 +121,8 @@ class CaptureDocument(BaseModel):
             raise ValueError("give markers and first_frame, or a subject model as model")
         elif len(self.first_frame) != len(self.markers):
             raise ValueError(f"first_frame has {len(self.first_frame)} rows for {len(self.markers)} markers")
+        else:
+            check_marker_names(self.markers, "markers.{i}")
         if (self.points is None) == (self.detections is None):
             raise ValueError("give exactly one of points (3D mode) or detections (camera mode)")
         if self.detections is not None:
@@ -122,7 +136,7 @@ class CaptureDocument(BaseModel):
             raise ValueError("model: give either a subject model or markers and first_frame, not both")
         if self.points is None:
             raise ValueError("model: labeling from a subject model needs points (3D mode)")
-        parse_model(json.dumps(self.model), "model")
+        check_marker_names(model_names(parse_model(json.dumps(self.model), "model")), "model (marker {i})")
 
     def _check_detections(self, detections: dict[str, list[list[Pixel]]]) -> None:
         if not self.cameras:
@@ -139,6 +153,12 @@ class CaptureDocument(BaseModel):
             raise ValueError(f"detections: cameras have different frame counts ({listed})")
         for name, frames in detections.items():
             _check_in_image(name, frames, cameras[name].image_size)
+        # A camera without detections sees nothing; with fewer than two seeing, nothing can be
+        # triangulated and every label (even the given frame 0) would come back empty.
+        seeing = [name for name, frames in detections.items() if any(frames)]
+        if len(seeing) < 2:
+            raise ValueError(f"detections: triangulation needs at least 2 cameras with detections; "
+                             f"got {len(seeing)}{f' ({seeing[0]})' if seeing else ''}")
 
     @property
     def n_frames(self) -> int:
@@ -207,6 +227,31 @@ def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[in
         raise ValueError(
             f"detections.{camera}.{f}.{d}: ({u:g}, {v:g}) is outside the {image_size[0]}x{image_size[1]} image"
         )
+
+
+def check_marker_names(names: list[str], path: str) -> None:
+    """Every name survives every result format unchanged: C3D strips labels and cuts them at a
+    NUL, so a blank, padded or overlong name would come back as another name, or not at all.
+
+    Raises:
+        ValueError: ``<path with {i} filled in>: marker name ...`` for the first name that would not.
+    """
+    for i, name in enumerate(names):
+        problem = _name_problem(name)
+        if problem:
+            raise ValueError(f"{path.format(i=i)}: marker name {name[:40]!r} {problem}")
+
+
+def _name_problem(name: str) -> str | None:
+    if not name.strip():
+        return "is blank"
+    if name != name.strip():
+        return "starts or ends with whitespace"
+    if any(unicodedata.category(char) == "Cc" for char in name):
+        return "has a control character"
+    if len(name.encode()) > MAX_NAME_BYTES:
+        return f"is longer than {MAX_NAME_BYTES} bytes (UTF-8)"
+    return None
 
 
 def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:

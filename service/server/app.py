@@ -18,6 +18,7 @@ from fastapi.responses import JSONResponse
 from fastapi_offline import FastAPIOffline
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.capture.document import CaptureDocument
 from service.errors import InputError
@@ -31,6 +32,7 @@ from service.server.store import store_for
 from service.web.pages import mount_web
 
 log = logging.getLogger("markerflow.server")
+BUG_MESSAGE = "internal error; the server log has the details"
 
 
 def create_app(settings: Settings) -> FastAPI:
@@ -53,6 +55,7 @@ def create_app(settings: Settings) -> FastAPI:
     app.state.event_streams = EventStreams(settings.max_event_streams_per_token)
     app.add_middleware(BodyLimit, max_bytes=settings.limits.max_body_bytes, owners=app.state.owners,
                        read_seconds=settings.read_timeout_seconds)
+    app.add_middleware(CatchBugs)  # outermost of ours: a bug in BodyLimit is caught too
     app.state.model_fits = CapacityLimiter(settings.max_parallel_jobs)  # POST /v1/models fits at once
     for router in (routes_jobs.router, routes_solve.router, routes_models.router, routes_info.router):
         app.include_router(router)
@@ -61,7 +64,7 @@ def create_app(settings: Settings) -> FastAPI:
     app.add_exception_handler(InputError, _input_error)  # type: ignore[arg-type]
     app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]
     app.add_exception_handler(HTTPException, _http_error)  # type: ignore[arg-type]
-    app.add_exception_handler(Exception, _bug)
+    app.add_exception_handler(Exception, _bug)  # what CatchBugs cannot answer (a response under way)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]  # FastAPI's documented way to extend the schema
     return app
 
@@ -121,4 +124,34 @@ async def _http_error(request: Request, error: HTTPException) -> JSONResponse:
 
 async def _bug(request: Request, error: Exception) -> JSONResponse:
     log.exception("internal error on %s %s", request.method, request.url.path)
-    return JSONResponse({"message": "internal error; the server log has the details"}, status_code=500)
+    return JSONResponse({"message": BUG_MESSAGE}, status_code=500)
+
+
+class CatchBugs:
+    """ASGI middleware: an unexpected exception answers the one-line 500 and ends there.
+
+    Starlette's ``Exception`` handler (``_bug``) answers too, but then re-raises, and uvicorn
+    closes the connection: a keep-alive client's next request on it fails (connection reset).
+    A response already under way cannot be replaced, so that exception is re-raised.
+    """
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        started = False
+
+        async def watched(message: Message) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
+
+        try:
+            await self.app(scope, receive, watched)
+        except Exception:
+            if started:
+                raise
+            log.exception("internal error on %s %s", scope["method"], scope["path"])
+            await JSONResponse({"message": BUG_MESSAGE}, status_code=500)(scope, receive, send)

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from service.capture.document import CaptureDocument
+from service.capture.document import read_capture_document
+from service.errors import InputError
 from service.io.formats import write_labeled
 from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
@@ -49,7 +50,7 @@ def trajectories_from_bytes(data: bytes) -> LabeledTrajectories:
 
 def stored_windows_trajectories(document: bytes, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
     """What the stored windows label (frame 0 and the windows' frames); later frames occluded."""
-    capture = CaptureDocument.model_validate_json(document)
+    capture = read_capture_document(document, "input")  # stored before a check was added: InputError, a 422
     return CaptureLabeling(capture.capture(), capture.options()).result(outcomes)
 
 
@@ -80,5 +81,8 @@ def render(traj: LabeledTrajectories, format: str) -> bytes:
         return json.dumps(trajectories_json(traj)).encode()
     with tempfile.TemporaryDirectory(prefix="markerflow-result-") as folder:
         path = Path(folder) / f"result.{format}"
-        write_labeled(path, traj)
+        try:
+            write_labeled(path, traj)
+        except InputError as error:  # the writers name their path: the caller sees only the file's name
+            raise InputError(str(error).replace(str(path), path.name)) from None
         return path.read_bytes()

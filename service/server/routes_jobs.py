@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request, Response
 from starlette.concurrency import run_in_threadpool
@@ -13,6 +13,7 @@ from service.server.bodies import read_submission, request_body
 from service.server.results import MEDIA_TYPES, render, stored_windows_trajectories, trajectories_from_bytes
 from service.server.schemas import ErrorBody, JobAccepted, JobPage, JobStatus, JobSummary, LabeledResult, WindowSummary
 from service.server.store import ACTIVE, Job, JobStore
+from service.server.tables import JobState
 
 ERRORS: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorBody}, 404: {"model": ErrorBody, "description": "No such job for this caller."}}
@@ -81,9 +82,10 @@ def _accepted(response: Response, job: Job) -> JobAccepted:
 async def list_jobs(
     request: Request, owner: str = Depends(caller),
     limit: int = Query(50, ge=1, le=500), offset: int = Query(0, ge=0, le=2**62),
+    state: Annotated[JobState | None, Query(description="Only jobs in this state; another value is 422.")] = None,
 ) -> JobPage:
-    """The caller's jobs, newest first."""
-    jobs, total = await run_in_threadpool(_store(request).page, owner, limit, offset)
+    """The caller's jobs, newest first; ``total`` counts those in ``state`` if given."""
+    jobs, total = await run_in_threadpool(_store(request).page, owner, limit, offset, state)
     return JobPage(jobs=[JobSummary.of(job) for job in jobs], total=total, limit=limit, offset=offset)
 
 

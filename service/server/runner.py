@@ -22,7 +22,7 @@ import os
 import socket
 from collections.abc import Callable
 
-from service.capture.document import CaptureDocument
+from service.capture.document import read_capture_document
 from service.errors import InputError
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import StaleOutcome, WindowOutcome
@@ -46,7 +46,7 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         return store.known(job_id).state
     where = ""  # "window k: " once the windows are being computed
     try:
-        document = CaptureDocument.model_validate_json(store.input(job_id))
+        document = read_capture_document(store.input(job_id), "input")  # stored before a check was added: InputError
         labeling = CaptureLabeling(document.capture(), document.options())
         outcomes = _resumable_outcomes(store, job_id)
         where = f"window {len(outcomes)}: "
@@ -69,7 +69,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         store.fail(job_id, f"{where}{error}")
     except Exception as error:  # a bug: the job fails with its name, the server keeps serving
         log.exception("job %s failed", job_id)
-        store.fail(job_id, f"{where}internal error: {type(error).__name__}: {error}")
+        first_line = next(iter(str(error).splitlines()), "")  # the job's error is one line, like every message
+        store.fail(job_id, f"{where}internal error: {type(error).__name__}: {first_line}")
     return store.known(job_id).state
 
 

@@ -131,13 +131,14 @@ class JobStore:
         with self.session() as session:
             return Job.of(session.execute(select(JobRow).where(JobRow.id == job_id)).scalar_one())
 
-    def page(self, owner: str, limit: int, offset: int) -> tuple[list[Job], int]:
-        """The owner's jobs, newest first, and how many there are."""
+    def page(self, owner: str, limit: int, offset: int, state: JobState | None = None) -> tuple[list[Job], int]:
+        """The owner's jobs (in ``state``, if given), newest first, and how many there are."""
+        chosen = [JobRow.owner == owner] + ([JobRow.state == state] if state is not None else [])
         with self.session() as session:
             rows = session.scalars(
-                select(JobRow).where(JobRow.owner == owner).order_by(JobRow.seq.desc()).limit(limit).offset(offset)
+                select(JobRow).where(*chosen).order_by(JobRow.seq.desc()).limit(limit).offset(offset)
             ).all()
-            total = session.execute(select(func.count()).select_from(JobRow).where(JobRow.owner == owner)).scalar_one()
+            total = session.execute(select(func.count()).select_from(JobRow).where(*chosen)).scalar_one()
             return [Job.of(row) for row in rows], total
 
     def unfinished(self) -> list[str]:

@@ -107,12 +107,13 @@ def check_formulation(formulation: str | dict) -> None:
     so that ``decompose = "no"`` is refused rather than read as true.
     """
     table = {"name": formulation} if isinstance(formulation, str) else formulation
-    formulation_from_table(table, "formulation")
-    defaults = {p.name: p.default for d in describe() if d.name == table["name"] for p in d.parameters}
+    # Types first, so the message names the field path (formulation.decompose) as others do.
+    defaults = {p.name: p.default for d in describe() if d.name == table.get("name") for p in d.parameters}
     for name, value in table.items():
         default = defaults.get(name)
         if isinstance(default, (bool, str)) and type(value) is not type(default):
             raise InputError(f"formulation.{name}: expected a {type(default).__name__}, got {value!r}")
+    formulation_from_table(table, "formulation")
 
 
 def _formulation_field(value: str | UploadFile | None) -> str | dict:
