@@ -108,8 +108,14 @@ def rigid_bound(state: MarkerState) -> float:
 def rigid_groups(allowed: np.ndarray, learned: LearnedPairs, bound: float, size: int) -> tuple[np.ndarray, np.ndarray]:
     """``(N, size)`` each marker and its ``size - 1`` nearest ``allowed`` markers rigid with it
     (learned distance variance at most ``bound``), and ``(N,)`` whether the marker is allowed
-    with that many such, rigid with one another too."""
+    with that many such, rigid with one another too.
+
+    Fewer than ``size`` markers form no group: a take of one or two markers (or three, for
+    quadruples) has nothing for the mirror and turn repairs to do.
+    """
     n = len(allowed)
+    if n < size:
+        return np.zeros((n, size), dtype=int), np.zeros(n, dtype=bool)
     rigid = allowed[:, None] & allowed[None, :] & (learned.var <= bound) & ~np.eye(n, dtype=bool)
     near = np.where(rigid, learned.mean, np.inf)
     nearest = np.argsort(near, axis=1)[:, : size - 1]

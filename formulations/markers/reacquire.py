@@ -91,7 +91,8 @@ def refine_by_segment(
     which follows a limb that swung while the subject was away.
     """
     index = np.flatnonzero(lost)
-    if len(index) == 0 or len(points) < 3:
+    # A neighbourhood of fewer than three markers (a take of one or two) fixes no rotation.
+    if len(index) == 0 or len(points) < 3 or neighbours.shape[1] < 2:
         return guess
     rigidity = 1.0 / (distance_var[index] + 1.0)
     weight = np.column_stack([rigidity.max(axis=1), rigidity])  # (L, K + 1)

@@ -26,7 +26,7 @@ from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
-from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion_warning
+from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion_warning, scale_warning
 
 
 def run_track(
@@ -88,6 +88,7 @@ def run_track(
         )
     warn_doubtful(summary["doubtful_fraction"])
     warn(fast_motion_warning([FastMarker(**fast) for fast in summary["fast_markers"]]))
+    warn(scale_warning(capture.first_frame, result.positions, capture.rate, source.unit if source else "mm"))
     warn(coincident_warning([(a, b) for a, b in summary["coincident_markers"]]))
     span = summary["unnamed_span"]
     warn(unnamed_warning(None if span is None else UnnamedSpan(**span), capture.rate, start or 0))

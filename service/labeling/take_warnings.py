@@ -1,4 +1,5 @@
-"""Markers that move more per frame than their neighbours are apart: a warning for the take.
+"""Markers that move more per frame than their neighbours are apart: a warning for the take
+(and ``scale_warning``: a take that is not human-sized in its declared unit).
 
 A marker's gate is centred on its prediction. With little motion seen, or motion that
 turns within a frame, the prediction is close to the last position, and a marker whose
@@ -19,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from service.labeling.coincident import COINCIDENT_MM, sampled_distances
 
@@ -68,6 +70,40 @@ def fast_motion_warning(fast: list[FastMarker]) -> str | None:
     more = f" and {len(fast) - LISTED} more" if len(fast) > LISTED else ""
     return (f"warning: {len(fast)} markers move more per frame than half the distance to their nearest "
             f"neighbour (medians: {named}{more}); their labels may swap at this frame rate")
+
+
+# Human-scale mocap, generously: skin markers sit 35-190 mm from their nearest neighbour in
+# every take we hold (CMU, HDM05, OpenSim, BTS, Vicon, Qualisys, Pose2Sim) and a body moves
+# at most a few m/s. A file in the wrong unit is off by 10x-1000x and lands far outside.
+SPACING_MM = (1.0, 5000.0)  # median nearest-neighbour distance in the labeled frame
+MAX_SPEED_MM_S = 50_000.0  # median marker speed: a thrown ball's, not a limb's
+
+
+def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, unit: str) -> str | None:
+    """One line when the take does not look human-sized in ``unit``: the median spacing of
+    the labeled ``first_frame`` ``(N, 3)`` or the median speed of the labeled ``positions``
+    ``(F, N, 3)`` (mm, NaN unlabeled) outside ``SPACING_MM``/``MAX_SPEED_MM_S``; else None.
+
+    A warning, not an error: a surveyed site or a mm-sized model is possible, but a wrong
+    unit otherwise labels without complaint (gates sized for mm miss points 1000x apart).
+    """
+    seen = first_frame[np.isfinite(first_frame).all(axis=1)]
+    found: list[str] = []
+    if len(seen) >= 2:
+        spacing = float(np.median(cKDTree(seen).query(seen, k=2)[0][:, 1]))
+        if not SPACING_MM[0] <= spacing <= SPACING_MM[1]:
+            found.append(f"markers {spacing:.3g} mm from their nearest neighbour in the labeled frame "
+                         f"(expected {SPACING_MM[0]:g} mm to {SPACING_MM[1] / 1000:g} m)")
+    steps = np.linalg.norm(np.diff(positions, axis=0), axis=2) if len(positions) > 1 else np.zeros(0)
+    steps = steps[np.isfinite(steps)]
+    speed = float(np.median(steps)) * rate if len(steps) else 0.0
+    if speed > MAX_SPEED_MM_S:
+        found.append(f"a median speed of {speed / 1000:.3g} m/s at {rate:g} Hz (expected under {MAX_SPEED_MM_S / 1000:g} m/s)")
+    if not found:
+        return None
+    rate_too = " and frame rate" if speed > MAX_SPEED_MM_S else ""
+    return (f"warning: read in {unit}, the take does not look human-sized: {'; '.join(found)}; "
+            f"check the file's length unit{rate_too}")
 
 
 def _median_or_nan(values: np.ndarray) -> np.ndarray:

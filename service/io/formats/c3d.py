@@ -20,6 +20,7 @@ from service.io.formats.conventions import (
     from_millimetres,
     hidden_samples,
     require_file,
+    require_samples,
     to_millimetres,
     zero_gaps_to_nan,
 )
@@ -36,7 +37,8 @@ def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | 
     Raises:
         InputError: missing, unreadable or truncated file; a broken parameter section; more
             points or frames than allowed; no labeled points, a blank label or one that is
-            not UTF-8 text; zero frames; no frame rate; a length unit other than mm, cm or m.
+            not UTF-8 text; zero frames; no frame rate; a length unit other than mm, cm or m;
+            a label twice or an infinite or absurd coordinate (``require_samples``).
     """
     path = require_file(path)
     _check_layout(path, max_points, max_frames)
@@ -50,6 +52,7 @@ def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | 
         raise InputError(f"{path}: C3D file has no point frame rate")
     units = list(c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])) or [""]
     positions = to_millimetres(points.transpose(2, 1, 0), units[0], path)
+    require_samples(names, positions, path)
     source = SourceFile(units[0].strip().lower(), int(c3d["header"]["points"]["first_frame"]), c3d)
     return Recording(names, zero_gaps_to_nan(positions), rate, source)
 

@@ -10,6 +10,9 @@ from service.errors import InputError
 from service.io.recording import LabeledTrajectories
 
 MM_PER_UNIT = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
+# As the HTTP service's documents (``service.capture.document``): no capture spans 1000 km,
+# and sums of squares of larger coordinates overflow to inf inside the geometry.
+MAX_MM = 1e9
 
 
 def require_file(path: str | Path) -> Path:
@@ -32,6 +35,30 @@ def to_millimetres(values: np.ndarray, unit: str, path: Path) -> np.ndarray:
     if scale is None:
         raise InputError(f"{path}: unsupported length unit {unit!r} (expected mm, cm or m)")
     return np.asarray(values, dtype=float) * scale
+
+
+def require_samples(names: list[str], positions: np.ndarray, path: Path) -> None:
+    """Refuse what no labeling can answer for: a marker name twice (which column is it?), or
+    a coordinate that is +-inf or beyond ``MAX_MM`` (an overflow, not a gap).
+
+    A gap is written blank, NaN or (0, 0, 0), and those stay gaps; an infinite or absurd
+    number is a broken export, refused like a non-numeric cell, with the marker and frame
+    (counted from 0, as ``--start``) so it can be found. The HTTP service refuses both too.
+
+    Raises:
+        InputError: the first duplicate name, or the first such coordinate.
+    """
+    seen: set[str] = set()
+    for name in names:
+        if name in seen:
+            raise InputError(f"{path}: marker name {name!r} appears twice")
+        seen.add(name)
+    bad = np.argwhere(~(np.abs(positions) <= MAX_MM) & ~np.isnan(positions))
+    if len(bad):
+        frame, marker, axis = (int(i) for i in bad[0])
+        value = float(positions[frame, marker, axis])
+        why = "" if np.isinf(value) else f", beyond the {MAX_MM:.0e} mm any capture fits in"
+        raise InputError(f"{path}: marker {names[marker]!r} has {'xyz'[axis]} = {value:.3g} mm in frame {frame}{why}")
 
 
 def from_millimetres(values: np.ndarray, unit: str) -> np.ndarray:

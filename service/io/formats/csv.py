@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from service.errors import InputError
-from service.io.formats.conventions import hidden_samples, require_file, sample_cells
+from service.io.formats.conventions import hidden_samples, require_file, require_samples, sample_cells
 from service.io.recording import LabeledTrajectories, SourceFile
 
 _AXES = ("x", "y", "z")
@@ -57,8 +57,9 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
     """Read a table written by :func:`write_csv`; the rate comes from the time column.
 
     Raises:
-        InputError: missing file, bad header, a non-numeric cell, a ragged row, or fewer
-            than two frames (no rate to infer).
+        InputError: missing file, bad header, a non-numeric cell, a ragged row, fewer
+            than two frames (no rate to infer), or a name twice or an infinite or absurd
+            coordinate (``require_samples``).
     """
     path = require_file(path)
     try:
@@ -75,6 +76,7 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
     if len(table) < 2:
         raise InputError(f"{path}: needs at least two frames to infer the frame rate")
     positions = table[:, 2:].reshape(len(table), len(names), 3)
+    require_samples(names, positions, path)
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
     labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))

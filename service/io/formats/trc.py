@@ -15,6 +15,7 @@ from service.io.formats.conventions import (
     from_millimetres,
     hidden_samples,
     require_file,
+    require_samples,
     sample_cells,
     to_millimetres,
     zero_gaps_to_nan,
@@ -32,9 +33,10 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     before any row is read.
 
     Raises:
-        InputError: missing or malformed file (header, names, a non-numeric cell, a
-            row count other than NumFrames), zero frames, an unknown unit, or more
-            markers or frames than allowed.
+        InputError: missing or malformed file (header, a NumMarkers other than the names
+            on line 4, a non-numeric cell, a row count other than NumFrames, rows out of
+            order), zero frames, an unknown unit, more markers or frames than allowed, or a
+            name twice or an infinite or absurd coordinate (``require_samples``).
     """
     path = require_file(path)
     lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
@@ -43,22 +45,25 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     if len(lines) < _FIRST_DATA_LINE - 1:
         raise InputError(f"{path}: TRC file ends inside its header")
     header = _header(lines, path)
-    n_markers = int(_number(header, "NumMarkers", path))
-    declared = int(_number(header, "NumFrames", path))
+    n_markers = _count(header, "NumMarkers", path)
+    declared = _count(header, "NumFrames", path)
     _at_most(n_markers, "markers", max_markers, "max_markers", path)
     _at_most(declared, "frames", max_frames, "max_frames", path)
     names = _names(lines[3], n_markers, path)
-    rows = [
-        _row(line, n_markers, f"{path}:{number}")
+    numbered = [
+        (f"{path}:{number}", line)
         for number, line in enumerate(lines[_FIRST_DATA_LINE - 1 :], start=_FIRST_DATA_LINE)
         if line.strip()
     ]
-    if len(rows) != declared:
-        raise InputError(f"{path}: header says NumFrames {declared} but has {len(rows)} rows")
-    if not rows:
+    if len(numbered) != declared:
+        raise InputError(f"{path}: header says NumFrames {declared} but has {len(numbered)} rows")
+    if not numbered:
         raise InputError(f"{path}: TRC file has zero frames")
+    _check_order(numbered)
+    rows = [_row(line, n_markers, where) for where, line in numbered]
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
+    require_samples(names, positions, path)
     source = SourceFile(unit=header["Units"].strip().lower())
     return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
 
@@ -130,12 +135,49 @@ def _number(header: dict[str, str], key: str, path: Path) -> float:
     return value
 
 
+def _count(header: dict[str, str], key: str, path: Path) -> int:
+    """NumMarkers or NumFrames: a whole number (2.5 markers is a broken header, not 2)."""
+    value = _number(header, key, path)
+    if not value.is_integer():
+        raise InputError(f"{path}: TRC header {key} is {header[key]!r}, not a whole number")
+    return int(value)
+
+
 def _names(line: str, n_markers: int, path: Path) -> list[str]:
-    """One name per marker after Frame# and Time, then two blank cells (its Y and Z)."""
-    names = [name.strip() for name in line.split("\t")[2::3]][:n_markers]
-    if len(names) < n_markers or not all(names):
-        raise InputError(f"{path}: line 4 should name {n_markers} markers (NumMarkers)")
+    """One name per marker after Frame# and Time, then two blank cells (its Y and Z).
+
+    Exactly NumMarkers of them, as OpenSim's TRCFileAdapter requires: a header that
+    disagrees with the names leaves no telling which is right, and reading only the
+    first NumMarkers columns dropped the rest silently.
+    """
+    names = [name.strip() for name in line.split("\t")[2::3]]
+    while names and not names[-1]:
+        names.pop()
+    if len(names) != n_markers or not all(names):
+        raise InputError(f"{path}: line 4 names {len(names)} markers but the header says NumMarkers {n_markers}"
+                         if len(names) != n_markers and all(names) else
+                         f"{path}: line 4 should name {n_markers} markers (NumMarkers)")
     return names
+
+
+def _check_order(numbered: list[tuple[str, str]]) -> None:
+    """Frame# and Time must increase row by row, as OpenSim requires of Time.
+
+    Refused rather than sorted: rows out of order are a broken export (a row whose
+    positions are another frame's), and a sorted table would hide that its output's
+    frames are not the input's rows.
+    """
+    previous: tuple[float, float] | None = None
+    for where, line in numbered:
+        cells = line.split("\t")
+        try:
+            frame, time = float(cells[0]), float(cells[1] if len(cells) > 1 else "")
+        except ValueError:
+            raise InputError(f"{where}: a row should start with its Frame# and Time, got {cells[:2]}") from None
+        if previous is not None and not (frame > previous[0] and time > previous[1]):
+            raise InputError(f"{where}: frame {cells[0].strip()} at time {cells[1].strip()} does not follow "
+                             f"frame {previous[0]:g} at time {previous[1]:g}; rows must be in order")
+        previous = (frame, time)
 
 
 def _row(line: str, n_markers: int, where: str) -> list[float]:

@@ -1,0 +1,189 @@
+"""The marker file readers refuse what no labeling can answer for (an infinite or absurd
+coordinate, a marker name twice, a TRC header that disagrees with its columns, rows out of
+order) with one line naming it; a take in the wrong unit is labeled with a warning."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import ezc3d
+import numpy as np
+import pytest
+
+from service.errors import InputError
+from service.io.formats import read_labeled, write_labeled
+from service.io.recording import LabeledTrajectories
+from service.labeling.take_warnings import scale_warning
+
+NAMES = ["a", "b", "c", "d"]
+
+
+def take(frames: int = 30, scale: float = 1.0) -> np.ndarray:
+    """``(frames, 4, 3)`` mm: four markers 60-100 mm apart walking 10 mm a frame, times ``scale``."""
+    corners = np.array([[0.0, 0, 900], [80, 0, 900], [0, 60, 900], [30, 30, 980]])
+    walk = np.arange(frames)[:, None, None] * np.array([10.0, 1.0, 0.0])
+    return scale * (corners[None] + walk)
+
+
+def write_c3d(path: Path, positions: np.ndarray, names: list[str] = NAMES, unit: str = "mm") -> Path:
+    """A C3D of ``positions`` ``(frames, markers, 3)`` in ``unit``, written by ezc3d itself."""
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = np.array([100.0])
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = list(names)
+    c3d["parameters"]["POINT"]["UNITS"]["value"] = [unit]
+    points = np.ones((4, positions.shape[1], positions.shape[0]))
+    points[:3] = positions.transpose(2, 1, 0)
+    c3d["data"]["points"] = points
+    c3d.write(str(path))
+    return path
+
+
+def write_table(path: Path, positions: np.ndarray, names: list[str] = NAMES) -> Path:
+    """A .trc or .csv of ``positions`` as markerflow writes them."""
+    frames = len(positions)
+    write_labeled(path, LabeledTrajectories(list(names), positions, np.zeros((frames, len(names)), bool), 100.0))
+    return path
+
+
+def edited(path: Path, line: int, old: str, new: str) -> Path:
+    lines = path.read_text().splitlines()
+    assert old in lines[line], lines[line]
+    lines[line] = lines[line].replace(old, new, 1)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+# Non-finite and absurd coordinates: refused, naming marker and frame.
+
+def test_c3d_infinite_sample_is_refused_naming_marker_and_frame(tmp_path):
+    positions = take()
+    positions[5, 2, 1] = np.inf
+    path = write_c3d(tmp_path / "inf.c3d", positions)
+    assert np.isinf(ezc3d.c3d(str(path))["data"]["points"][1, 2, 5])  # ezc3d keeps the inf
+    with pytest.raises(InputError, match=r"^.*inf\.c3d: marker 'c' has y = inf mm in frame 5$"):
+        read_labeled(path)
+
+
+def test_c3d_beyond_1000_km_is_refused_but_a_large_hall_reads(tmp_path):
+    with pytest.raises(InputError, match=r"marker 'a' has z = 1e\+12 mm in frame 0, beyond the 1e\+09 mm"):
+        read_labeled(write_c3d(tmp_path / "far.c3d", take(scale=1e12 / 900.0)))
+    assert read_labeled(write_c3d(tmp_path / "m.c3d", take() / 1000.0, unit="m")).positions.max() < 2000
+
+
+@pytest.mark.parametrize("cell", ["inf", "-inf", "1e400"])
+def test_trc_infinite_cell_is_refused(tmp_path, cell):
+    path = edited(write_table(tmp_path / "t.trc", take()), 9, "\t110.0\t", f"\t{cell}\t")  # frame 3, b's x
+    with pytest.raises(InputError, match=r"t\.trc: marker 'b' has x = -?inf mm in frame 3$"):
+        read_labeled(path)
+
+
+def test_trc_nan_cell_stays_a_gap(tmp_path):
+    path = edited(write_table(tmp_path / "t.trc", take()), 9, "\t110.0\t", "\tnan\t")
+    recording = read_labeled(path)
+    assert recording.missing()[3, 1] and recording.missing().sum() == 1
+
+
+def test_csv_overflowing_cell_is_refused(tmp_path):
+    path = edited(write_table(tmp_path / "t.csv", take()), 4, ",110.0,", ",1e400,")
+    with pytest.raises(InputError, match=r"t\.csv: marker 'b' has x = inf mm in frame 3$"):
+        read_labeled(path)
+
+
+# Duplicate names: refused as the HTTP service refuses them.
+
+def test_c3d_duplicate_label_is_refused(tmp_path):
+    path = write_c3d(tmp_path / "dup.c3d", take(), ["a", "b", "a", "d"])
+    with pytest.raises(InputError, match=r"dup\.c3d: marker name 'a' appears twice$"):
+        read_labeled(path)
+
+
+@pytest.mark.parametrize("suffix", [".trc", ".csv"])
+def test_table_duplicate_name_is_refused(tmp_path, suffix):
+    path = write_table(tmp_path / f"dup{suffix}", take(), ["a", "b", "b", "d"])
+    with pytest.raises(InputError, match=r"marker name 'b' appears twice$"):
+        read_labeled(path)
+
+
+def test_cli_refuses_duplicate_names_in_one_line(tmp_path):
+    path = write_c3d(tmp_path / "dup.c3d", take(), ["a", "b", "a", "d"])
+    run = subprocess.run([sys.executable, "-m", "service.cli", "-q", "track", str(path), "-o", str(tmp_path / "o.trc")],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode != 0
+    assert run.stderr.strip().splitlines() == [f"error: {path}: marker name 'a' appears twice"]
+
+
+# TRC headers and row order.
+
+@pytest.mark.parametrize("declared,message", [
+    ("2", r"line 4 names 4 markers but the header says NumMarkers 2$"),
+    ("5", r"line 4 names 4 markers but the header says NumMarkers 5$"),
+    ("3.5", r"TRC header NumMarkers is '3\.5', not a whole number$"),
+])
+def test_trc_num_markers_must_match_the_names(tmp_path, declared, message):
+    path = edited(write_table(tmp_path / "t.trc", take()), 2, "\t4\tmm", f"\t{declared}\tmm")
+    with pytest.raises(InputError, match=message):
+        read_labeled(path)
+
+
+def test_trc_fractional_num_frames_is_refused(tmp_path):
+    path = edited(write_table(tmp_path / "t.trc", take()), 2, "\t30\t4\t", "\t30.5\t4\t")
+    with pytest.raises(InputError, match=r"NumFrames is '30\.5', not a whole number$"):
+        read_labeled(path)
+
+
+def test_trc_rows_out_of_order_are_refused(tmp_path):
+    path = write_table(tmp_path / "t.trc", take())
+    lines = path.read_text().splitlines()
+    lines[10], lines[20] = lines[20], lines[10]  # frames 5 and 15 swapped, Frame# and Time with them
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"t\.trc:12: frame 6 at time 0\.05 does not follow frame 15 at time 0\.14"):
+        read_labeled(path)
+
+
+def test_trc_frame_numbers_may_skip(tmp_path):
+    path = write_table(tmp_path / "t.trc", take())
+    lines = path.read_text().splitlines()
+    for i in range(6, len(lines)):  # every other frame of a take at twice the rate
+        frame, time, rest = lines[i].split("\t", 2)
+        lines[i] = f"{2 * int(frame)}\t{time}\t{rest}"
+    path.write_text("\n".join(lines) + "\n")
+    np.testing.assert_allclose(read_labeled(path).positions, take())
+
+
+# A take in the wrong unit: labeled, with a warning naming the unit read.
+
+@pytest.mark.parametrize("scale", [1.0, 0.1, 10.0])
+def test_human_sized_takes_raise_no_scale_warning(scale):
+    positions = take(scale=scale)
+    assert scale_warning(positions[0], positions, 100.0, "mm") is None
+
+
+@pytest.mark.parametrize("scale,spacing", [(1000.0, "7e+04 mm"), (0.001, "0.07 mm")])
+def test_wrong_unit_spacing_is_warned(scale, spacing):
+    positions = take(scale=scale)
+    line = scale_warning(positions[0], positions, 100.0, "mm")
+    assert line is not None and line.startswith("warning: read in mm,")
+    assert f"markers {spacing} from their nearest neighbour" in line
+
+
+def test_implausible_speed_is_warned_with_the_rate():
+    positions = take()
+    line = scale_warning(positions[0], positions, 1e5, "m")  # 10 mm a frame at 100 kHz: 1 km/s
+    assert line is not None and "read in m," in line and "1e+03 m/s at 100000 Hz" in line
+    assert line.endswith("check the file's length unit and frame rate")
+
+
+def test_one_marker_and_unlabeled_frames_have_no_scale_to_judge():
+    positions = np.full((5, 1, 3), np.nan)
+    positions[0] = 1.0
+    assert scale_warning(positions[0], positions, 100.0, "mm") is None
+
+
+def test_cli_warns_of_a_take_in_metres_labelled_mm(tmp_path):
+    path = write_c3d(tmp_path / "metres.c3d", take() / 1000.0, unit="mm")
+    run = subprocess.run([sys.executable, "-m", "service.cli", "-q", "track", str(path), "-o", str(tmp_path / "o.trc")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "warning: read in mm, the take does not look human-sized: markers 0.07 mm" in run.stderr
