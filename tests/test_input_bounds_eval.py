@@ -1,9 +1,12 @@
 """Scenario keys past their documented bounds, and evaluations too short to score, are refused in one line."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from service.errors import InputError
+from service.evaluation.cameras import evaluate_cameras
 from service.evaluation.cloud import evaluate
 from service.evaluation.scenario import Scenario
 from service.evaluation.simulate_cameras import place_in_volume, simulate_cameras
@@ -61,3 +64,13 @@ def test_camera_simulation_refuses_one_frame():
 def test_placing_no_frames_is_refused_without_warning():
     with pytest.raises(InputError, match="needs at least 2 frames"):
         place_in_volume(np.zeros((0, 3, 3)), None)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("start", "frames", "match"), [
+    (7, 0, "'start_frame' 7 is past the end"), (4, 5, "start_frame \\+ frames = 9 exceeds"), (5, 0, "at least 2 frames"),
+])
+def test_camera_scenarios_name_the_span_key_as_cloud_ones_do(start, frames, match):
+    calibration = Path(__file__).resolve().parents[2] / "shared/data/multicam2d_pose2sim_demo/calibration/Calib_qualisys.toml"
+    scenario = Scenario.from_dict({"mode": "cameras", "calibration": str(calibration), "start_frame": start, "frames": frames})
+    with pytest.raises(InputError, match=match):
+        evaluate_cameras(_walk(), scenario)

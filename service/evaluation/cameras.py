@@ -60,8 +60,8 @@ def evaluate_cameras(
     """
     cameras = load_calibration(Path(scenario.calibration), units="mm")
     rig = Rig.of(cameras)
-    stop = scenario.start_frame + scenario.frames if scenario.frames else truth.n_frames
-    positions = place_in_volume(truth.positions[scenario.start_frame : stop], rig, up_axis=scenario.up_axis)
+    start, stop = scenario.frame_span(truth.n_frames)
+    positions = place_in_volume(truth.positions[start:stop], rig, up_axis=scenario.up_axis)
     simulated = simulate_cameras(
         Recording(truth.names, positions, truth.rate), rig, pixel_noise=scenario.pixel_noise,
         merge_radius_px=scenario.merge_radius_px, occlusion_rate=scenario.occlusion_rate,

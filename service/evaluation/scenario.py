@@ -146,6 +146,26 @@ class Scenario:
             association=self.association, second_pass=self.second_pass,
         )
 
+    def frame_span(self, n_frames: int) -> tuple[int, int]:
+        """``(start, stop)`` of the recording's frames this scenario uses, both modes.
+
+        Raises:
+            InputError: A start past the end, a span past the end, or fewer than 2 frames
+                (as ``track``: the labeled frame and at least one to label).
+        """
+        start = self.start_frame
+        if start >= n_frames:
+            raise InputError(f"scenario key 'start_frame' {start} is past the end ({n_frames} frames)")
+        stop = start + self.frames if self.frames else n_frames
+        if stop > n_frames:
+            raise InputError(f"scenario key 'frames': start_frame + frames = {stop} exceeds the {n_frames} frames")
+        if stop - start < 2:
+            raise InputError(
+                f"scenario keys 'start_frame' {start} and 'frames' {self.frames} leave {stop - start} frame; "
+                "eval needs at least 2 frames"
+            )
+        return start, stop
+
     @property
     def deletion_transitions(self) -> tuple[float, float]:
         """Per-frame transition probabilities of the visible/deleted Markov chain.

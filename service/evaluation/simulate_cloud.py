@@ -68,21 +68,9 @@ def _named(rng: np.random.Generator, markers: int, unnamed: int) -> np.ndarray:
 
 def _slice(truth: Recording, scenario: Scenario) -> Recording:
     """The requested frames, gaps written as NaN, with a complete first frame."""
-    start, n = scenario.start_frame, truth.n_frames
     if truth.n_markers == 0:
         raise InputError("the recording has no markers")
-    if start >= n:
-        raise InputError(f"scenario key 'start_frame' {start} is past the end ({n} frames)")
-    stop = start + scenario.frames if scenario.frames else n
-    if stop > n:
-        raise InputError(
-            f"scenario key 'frames': start_frame + frames = {stop} exceeds the {n} frames"
-        )
-    if stop - start < 2:  # as `track`: the labeled frame and at least one to label
-        raise InputError(
-            f"scenario keys 'start_frame' {start} and 'frames' {scenario.frames} leave {stop - start} frame; "
-            "eval needs at least 2 frames"
-        )
+    start, stop = scenario.frame_span(truth.n_frames)
     positions = truth.positions[start:stop].copy()
     # Some exporters write gaps as (0, 0, 0); NaN keeps them out of any arithmetic.
     positions[truth.missing()[start:stop]] = np.nan
