@@ -60,8 +60,8 @@ def evaluate_cameras(
     """
     cameras = load_calibration(Path(scenario.calibration), units="mm")
     rig = Rig.of(cameras)
-    start, stop = scenario.frame_span(truth.n_frames)
-    positions = place_in_volume(truth.positions[start:stop], rig, up_axis=scenario.up_axis)
+    first_used, stop = scenario.frame_span(truth.n_frames)
+    positions = place_in_volume(truth.positions[first_used:stop], rig, up_axis=scenario.up_axis)
     simulated = simulate_cameras(
         Recording(truth.names, positions, truth.rate), rig, pixel_noise=scenario.pixel_noise,
         merge_radius_px=scenario.merge_radius_px, occlusion_rate=scenario.occlusion_rate,
