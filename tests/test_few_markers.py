@@ -16,7 +16,7 @@ from service.capture.capture import Capture
 from service.io.formats import read_labeled
 from service.labeling.capture_labeling import CaptureLabeling
 
-BTS = Path("/work/shared/data/c3d_ezc3d_testfiles/BTS.c3d")
+BTS = Path(__file__).resolve().parents[2] / "shared" / "data" / "c3d_ezc3d_testfiles" / "BTS.c3d"
 CORNERS = np.array([[0.0, 0, 0], [80, 0, 0], [0, 60, 0], [20, 30, 70]])
 
 
