@@ -17,10 +17,8 @@ from service.errors import InputError
 
 def test_huge_window_is_the_takes_length():
     costs = np.random.default_rng(0).uniform(0, 1, (40, 3, 4))
-    start = __import__("time").perf_counter()
-    huge = select_views(costs, 0.5, 1_000_000_000)
-    assert __import__("time").perf_counter() - start < 5.0
-    assert np.array_equal(huge, select_views(costs, 0.5, 40))
+    # A billion-frame window is clamped to the take (it would otherwise be a billion DP steps).
+    assert np.array_equal(select_views(costs, 0.5, 1_000_000_000), select_views(costs, 0.5, 40))
 
 
 def test_huge_cost_is_refused_naming_the_line(tmp_path):

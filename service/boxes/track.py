@@ -113,18 +113,7 @@ def track_boxes(
     births = BirthRates()
     windows = integral = 0
     t0, next_ident = 1, 1
-    sorted_frames, step = np.sort(frame), window - 1
     while t0 < detections.n_frames:
-        if not objects.n_objects:  # nothing alive: jump over the windows with no box to see
-            skip = _empty_windows(sorted_frames, t0, step, lifecycle.lookahead(step))
-            if skip is None:
-                break
-            if skip:
-                births = births.counted(0, skip * step, objects.last_seen, np.zeros((0, skip * step), int), t0,
-                                        np.zeros(0, bool)) if lifecycle.returns_compete else births
-                rates = None if rates is None else rates.counted(0, 0, 0, skip * step)
-                t0 += skip * step
-                continue
         m = min(window - 1, detections.n_frames - t0)
         inside = (frame > t0) & (frame <= t0 + m)
         posing = _Posing(t0, m, frame, boxes, histograms, model, rule, rates, image)
@@ -207,16 +196,6 @@ def _solve(
         owner[taken[n][taken[n] >= 0]] = objects.ident[n]
     moved = advance(objects, p.t0, taken, p.boxes, p.histograms, HISTOGRAM_RATE)
     return moved, taken, bool(solution.integral)
-
-
-def _empty_windows(sorted_frames: np.ndarray, t0: int, step: int, lookahead: int) -> int | None:
-    """How many windows from ``t0`` (``step`` apart) see no box in their template and look-ahead
-    frames, so that, with no object alive, stepping through them would change nothing but the
-    frame counts; None when no box is left. Keeps the cost of a run independent of frame numbers."""
-    k = int(np.searchsorted(sorted_frames, t0))
-    if k == len(sorted_frames):
-        return None
-    return max(0, -(-(int(sorted_frames[k]) - lookahead - t0) // step))
 
 
 def _named(objects: BoxObjects, old: int, owner: np.ndarray, next_ident: int) -> tuple[BoxObjects, int]:
