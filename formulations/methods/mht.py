@@ -42,7 +42,6 @@ depends on its frame-m nodes only) and the search is Viterbi over every joint st
 
 from __future__ import annotations
 
-import numbers
 import time
 from dataclasses import dataclass
 from typing import ClassVar
@@ -52,7 +51,6 @@ from numpy.typing import NDArray
 
 from formulations.assignment.blocks import k_best_assignments
 from formulations.assignment.rankings import RankingCache
-from formulations.errors import FormulationError
 from formulations.methods.formulation import MAX_BRANCHING, TABLE_BRANCHING, Formulation, check_parameters
 from formulations.methods.frame_steps import FrameSteps
 from formulations.methods.mht_association import Association, association
@@ -82,10 +80,8 @@ class Mht(Formulation):
 
     def __post_init__(self) -> None:
         check_parameters(self, positive=("hypotheses", "associations"), optional_positive=("noise",),
+                         integers=("hypotheses", "associations"),
                          at_most={"hypotheses": MAX_BRANCHING, "associations": MAX_BRANCHING})
-        for name in ("hypotheses", "associations"):
-            if not isinstance(getattr(self, name), numbers.Integral):
-                raise FormulationError(f"{self.name}: parameter '{name}' must be an integer, got {getattr(self, name)!r}")
 
     def solve(self, problem: WindowProblem) -> WindowSolution:
         start = time.perf_counter()
