@@ -58,19 +58,25 @@ class Joint3dChain(CloudChain):
     detections: Sequence[list[np.ndarray]] = ()
 
     def fills_on_lone_views(self, result: LabeledTrajectories, outcomes: list[WindowOutcome]) -> np.ndarray:
-        """The result's fill with each marker one camera still sees put on that ray (``lone_views``)."""
+        """The result's fill with each marker one camera still sees put on that ray (``lone_views``).
+        Detections are undistorted only in the frames that have a fill to place."""
         if self.rig is None:
             return result.filled
-        views = self.views(outcomes)  # (F, N, C)
-        normalised, used = [], []
-        for f, frame in enumerate(self.detections):
-            pixels = [np.asarray(found, dtype=float).reshape(-1, 2) for found in frame]
-            normalised.append([camera.undistort(p) if len(p) else p for camera, p in zip(self.rig.cameras, pixels)])
-            taken = [np.zeros(len(p), bool) for p in pixels]
-            for c, mask in enumerate(taken):
-                mask[views[f, :, c][views[f, :, c] >= 0]] = True
-            used.append(taken)
-        return fills_on_lone_views(result.filled, result.occluded, result.positions, self.rig, normalised, used)
+        rig, views = self.rig, self.views(outcomes)  # (F, N, C)
+
+        def pixels(f: int) -> list[np.ndarray]:
+            return [np.asarray(found, dtype=float).reshape(-1, 2) for found in self.detections[f]]
+
+        def normalised(f: int) -> list[np.ndarray]:
+            return [camera.undistort(p) if len(p) else p for camera, p in zip(rig.cameras, pixels(f))]
+
+        def used(f: int) -> list[np.ndarray]:
+            taken = views[f].T  # (C, N)
+            return [np.isin(np.arange(len(p)), taken[c][taken[c] >= 0]) for c, p in enumerate(pixels(f))]
+
+        n = len(self.detections)
+        return fills_on_lone_views(result.filled, result.occluded, result.positions, rig,
+                                   LazyFrames(n, normalised), LazyFrames(n, used))
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
         """``(F, N, C)`` detections behind the cross-camera point each marker took, -1 none."""
