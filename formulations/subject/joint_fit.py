@@ -55,11 +55,11 @@ def fit_joint(a: SegmentFit, b: SegmentFit, positions: Array) -> JointFit:
     step = np.linalg.lstsq(lhs, rhs - lhs @ prior, rcond=RCOND)[0]
     centre = prior + step
     ca, cb = centre[:3], centre[3:]
-    trajectory, error, terms = _centre_trajectory(a, b, ca, cb, positions)
+    trajectory, error, terms = centre_trajectory(a, b, ca, cb, positions)
     return JointFit(ca, cb, trajectory, error, float(np.sqrt(error / max(terms, 1))))
 
 
-def _centre_trajectory(
+def centre_trajectory(
     a: SegmentFit, b: SegmentFit, ca: Array, cb: Array, positions: Array
 ) -> tuple[Array, float, int]:
     """t(k) and E of eq. (5) given R, e; frames where either segment has no pose are NaN."""
