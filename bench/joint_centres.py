@@ -3,8 +3,9 @@
 - opensim-core_walking2.c3d: fitted on every marker but the lab's ``*JC`` centres, scored
   against those centres in the frames that have them.
 - rajagopal_motion_capture_run.trc: fitted on the run; the lab's centres exist only in the
-  static trial, so each is carried into the run by the segment it rides on (the pelvis for
-  the hip, the thigh for the knee, the shank for the ankle, the upper arm for the elbow).
+  static trial, so each is carried into the run by the markers of the segment it is fixed to
+  (the pelvis for the hip, the thigh for the knee, the shank for the ankle, the upper arm
+  for the elbow), by Kabsch from the static trial's mean frame.
 
 For each joint it prints the median distance, and what an oracle gets that sets the k
 weakest directions of the joint's least-squares system (eq. 4 with the poses fixed) to the
@@ -32,12 +33,15 @@ from service.io.formats import read_labeled  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data" / "mocap_opensim"
 Array = np.ndarray
-# lab centre -> a marker on the proximal segment, one on the distal segment (and, in the run, one on its carrier)
+# lab centre -> a marker on the proximal segment, one on the distal segment
 WALKING2 = {"RHJC": ("RASI", "RTH1"), "LHJC": ("LASI", "LTH1"), "RKJC": ("RTH1", "RTB1"),
             "LKJC": ("LTH1", "LTB1"), "RAJC": ("RTB1", "RCAL"), "LAJC": ("LTB1", "LCAL")}
-RUN = {"RHJC": ("LPSI", "RTH2", "LPSI"), "LHJC": ("LPSI", "LTH2", "LPSI"), "RKJC": ("RTH2", "RTB1", "RTH2"),
-       "LKJC": ("LTH2", "LTB1", "LTH2"), "RAJC": ("RTB1", "RCAL", "RTB1"), "LAJC": ("LTB1", "LCAL", "LTB1"),
-       "REJC": ("RUA1", "RLEL", "RUA1"), "LEJC": ("LUA1", "LFAsuperior", "LUA1")}
+PELVIS = ["LASI", "RASI", "LPSI", "RPSI"]
+# in the run, also the markers that carry the static centre (the segment it is fixed to)
+RUN = {"RHJC": ("LPSI", "RTH2", PELVIS), "LHJC": ("LPSI", "LTH2", PELVIS),
+       "RKJC": ("RTH2", "RTB1", ["RTH1", "RTH2", "RTH3"]), "LKJC": ("LTH2", "LTB1", ["LTH1", "LTH2", "LTH3"]),
+       "RAJC": ("RTB1", "RCAL", ["RTB1", "RTB2", "RTB3"]), "LAJC": ("LTB1", "LCAL", ["LTB1", "LTB2", "LTB3"]),
+       "REJC": ("RUA1", "RLEL", ["RUA1", "RUA2", "RUA3"]), "LEJC": ("LUA1", "LFAsuperior", ["LUA1", "LUA2", "LUA3"])}
 
 
 def positions_of(path: Path) -> tuple[list[str], Array]:
@@ -94,15 +98,11 @@ def rajagopal() -> None:
     fit = fit_subject(names, positions)
     still = np.nanmean(static, axis=0)
     print("rajagopal_motion_capture_run.trc, lab centres of the static trial carried by their segment:")
-    for label, (a, b, carrier) in RUN.items():
-        markers = [m for m in segment_of(fit, carrier) if m in static_names]
+    for label, (a, b, markers) in RUN.items():
         source = still[[static_names.index(m) for m in markers]]
         target = positions[:, [names.index(m) for m in markers]]
         weight = np.isfinite(target).all(axis=2).astype(float)
         ok = weight.sum(axis=1) >= 3
-        if not ok.any():
-            print(f"{label:5s} its carrier {markers} has fewer than 3 markers in the static trial")
-            continue
         rot, c_s, c_t = rigid_transform(np.broadcast_to(source, target[ok].shape), np.nan_to_num(target[ok]), weight[ok])
         truth = np.full((len(positions), 3), np.nan)
         truth[ok] = np.einsum("kij,kj->ki", rot, still[static_names.index(label)] - c_s) + c_t
