@@ -37,7 +37,9 @@ def main(
 
 @app.command()
 def demo(
-    out: Annotated[Path, typer.Option(help="Folder for the labeled C3D and the plot.")] = Path("out"),
+    out: Annotated[Path, typer.Option(
+        help="Folder for the labeled C3D, the plot and the unlabeled input as a capture JSON.",
+    )] = Path("out"),
     frames: Annotated[int, typer.Option(help="Frames of the generated scene.")] = 600,
     seed: Annotated[int, typer.Option(help="Seed of the scene and the simulated capture.")] = 0,
 ) -> None:
@@ -63,7 +65,8 @@ def track(
     )] = None,
     start: Annotated[int | None, typer.Option(
         help="First frame to label (default 0). A recording starts from its own labels there (markers absent there "
-        "stay unlabeled); with --model, from the model's identification. Frames outside --start/--end are kept, unlabeled.",
+        "stay unlabeled); with --model, from the model's identification. A .c3d output keeps the frames outside "
+        "--start/--end, unlabeled; a .trc or .csv output holds the labeled frames only.",
     )] = None,
     end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
     second_pass: Annotated[bool | None, typer.Option(
