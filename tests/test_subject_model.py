@@ -87,6 +87,20 @@ def test_static_take_fails_naming_the_markers() -> None:
         fit_subject(names, positions)
 
 
+def test_static_body_beside_one_moving_part_fails() -> None:
+    """A static trial whose head nods: the head is a segment of its own, the rest one rigid
+    body; jointing the two would be a model of nothing (the head's centre is anywhere)."""
+    names, positions, _ = chain(1, motion=0.0)
+    t = np.linspace(0, 1, len(positions))[:, None]
+    nod = Rotation.from_rotvec(0.4 * np.sin(2 * np.pi * 3 * t) * np.array([1.0, 0.3, 0.0])).as_matrix()
+    head = np.array([[60.0, 0, 0], [-60, 0, 0], [0, 80, 40]])
+    top = positions[:, 0] + np.array([0.0, 0.0, 300.0])
+    moving = np.einsum("kij,pj->kpi", nod, head) + top[:, None]
+    positions = np.concatenate([positions, moving], axis=1)
+    with pytest.raises(FormulationError, match="too static to separate segments: markers S0M0, S0M1"):
+        fit_subject([*names, "H0", "H1", "H2"], positions)
+
+
 def test_too_few_frames_fails() -> None:
     names, positions, _ = chain(1, frames=10)
     with pytest.raises(FormulationError, match="only 10 frames"):
