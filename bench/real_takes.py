@@ -49,7 +49,7 @@ from service.evaluation.matrix import DATA, RECORDINGS  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
 from service.io.recording import Recording  # noqa: E402
 
-MARKERFLOW = ROOT / ".venv" / "bin" / "markerflow"
+MARKERFLOW = [sys.executable, "-m", "service.cli"]  # the interpreter running this bench, as `markerflow`
 SAME_POINT_MM = 1e-3  # the output holds the input's own coordinates, through a unit round trip
 
 
@@ -102,7 +102,7 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row) -> None:
 
 def run(command: list[str], row: Row) -> dict | None:
     began = time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True)
+    done = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
     row.wall = time.perf_counter() - began
     if done.returncode != 0:
         row.failure = f"rc {done.returncode}: {(done.stderr.strip().splitlines() or ['?'])[-1][:120]}"
@@ -120,7 +120,7 @@ def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool) -> 
         start = int(np.argmax((~missing).sum(axis=1)))  # 0 when frame 0 has every marker
         end = min(truth.n_frames, start + cap) if cap else truth.n_frames
         row = Row(name, f"frame {start}", end - start, truth.n_markers)
-        command = [str(MARKERFLOW), "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
+        command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
         if run(command, row) is not None:
             score(truth, read_labeled(out), slice(start, end), row)
         return row
@@ -135,7 +135,7 @@ def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool) -> 
         return row
     model_path = folder / f"{name}.json"
     model_path.write_text(model.to_json())
-    command = [str(MARKERFLOW), "track", str(path), "--out", str(out), "--json", "--model", str(model_path),
+    command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--model", str(model_path),
                "--start", str(half), "--end", str(end)]
     if run(command, row) is not None:
         score(truth, read_labeled(out), slice(half, end), row)
