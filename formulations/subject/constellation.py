@@ -19,6 +19,7 @@ from itertools import combinations
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from formulations.markers.rigid import rigid_transform
 from formulations.subject.geometry import SegmentGeometry
@@ -81,10 +82,15 @@ def segment_hypotheses(segment: int, geometry: SegmentGeometry, points: Array, d
 
 
 def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -> list[Hypothesis]:
-    """Inliers of each placed constellation, refitted on them; duplicates dropped, best first."""
-    gap = np.linalg.norm(placed[:, :, None] - points[None, None], axis=3)  # (H, S, P)
-    nearest = gap.argmin(axis=2)
-    inlier = np.take_along_axis(gap, nearest[:, :, None], axis=2)[:, :, 0] <= tau
+    """Inliers of each placed constellation, refitted on them; duplicates dropped, best first.
+
+    Vectorised over the hypotheses (a frame's segments have hundreds each): the nearest point
+    of every placed marker by one k-d tree query, every refit at once, and Python objects only
+    for the survivors.
+    """
+    gap, nearest = cKDTree(points).query(placed.reshape(-1, 3))
+    gap, nearest = gap.reshape(placed.shape[:2]), nearest.reshape(placed.shape[:2])
+    inlier = gap <= tau
     keep = inlier.sum(axis=1) >= 3
     nearest, inlier = nearest[keep], inlier[keep]
     if not len(nearest):
@@ -94,13 +100,13 @@ def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -
     taken, inlier = taken[first], inlier[first]
     source = np.broadcast_to(u, (len(taken),) + u.shape)
     rotation, c_s, c_t = rigid_transform(source, points[np.maximum(taken, 0)], inlier.astype(float))
-    hypotheses = []
-    for h in range(len(taken)):
-        pose = Pose(rotation[h], c_t[h] - rotation[h] @ c_s[h])
-        residual = np.linalg.norm(pose.place(u) - points[np.maximum(taken[h], 0)], axis=1)
-        ok = inlier[h] & (residual <= tau)
-        if ok.sum() < 3 or len(set(taken[h][ok])) < ok.sum():
-            continue
-        hypotheses.append(Hypothesis(segment, pose, np.where(ok, taken[h], -1), float(np.sqrt(np.mean(residual[ok] ** 2)))))
-    hypotheses.sort(key=lambda h: (-h.inliers, h.rms))
-    return hypotheses
+    origin = c_t - np.einsum("hij,hj->hi", rotation, c_s)
+    residual = np.linalg.norm(np.einsum("hij,pj->hpi", rotation, u) + origin[:, None] - points[np.maximum(taken, 0)], axis=2)
+    ok = inlier & (residual <= tau)
+    count = ok.sum(axis=1)
+    claimed = np.sort(np.where(ok, taken, -1 - np.arange(taken.shape[1])), axis=1)  # -1-p: never equal
+    distinct = (np.diff(claimed, axis=1) != 0).all(axis=1)  # no point taken twice
+    rms = np.sqrt((np.where(ok, residual, 0.0) ** 2).sum(axis=1) / np.maximum(count, 1))
+    good = np.flatnonzero((count >= 3) & distinct)
+    good = good[np.lexsort((rms[good], -count[good]))]
+    return [Hypothesis(segment, Pose(rotation[h], origin[h]), np.where(ok[h], taken[h], -1), float(rms[h])) for h in good]
