@@ -15,6 +15,8 @@ where ``none`` is compatible with everything (an unseen segment does not constra
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -33,13 +35,13 @@ def choose_hypotheses(
     ``support`` (per segment, per hypothesis) is added to its score: markers of other
     segments the hypothesis explains (``chain_support``).
     """
-    score = [_scores(geometry, s, h) for s, h in enumerate(by_segment)]
+    stacked = [_Stacked.of(h, points) for h in by_segment]
+    score = [_scores(geometry, s, h) for s, h in enumerate(stacked)]
     if support is not None:
         score = [value + np.append(extra, 0.0) for value, extra in zip(score, support)]
     neighbours: dict[int, list[tuple[int, Mask]]] = {s: [] for s in range(len(by_segment))}
     for joint in geometry.joints:
-        allowed = _compatible(by_segment[joint.a], by_segment[joint.b], joint.centre_a, joint.centre_b,
-                              joint.tolerance, points)
+        allowed = _compatible(stacked[joint.a], stacked[joint.b], joint.centre_a, joint.centre_b, joint.tolerance)
         neighbours[joint.a].append((joint.b, allowed))
         neighbours[joint.b].append((joint.a, allowed.T))
     chosen: dict[int, Hypothesis] = {}
@@ -67,33 +69,48 @@ def choose_hypotheses(
     return chosen
 
 
-def _scores(geometry: ModelGeometry, segment: int, hypotheses: list[Hypothesis]) -> Array:
+@dataclass(frozen=True)
+class _Stacked:
+    """A segment's hypotheses as arrays (hundreds of them: no loop over Python objects)."""
+
+    rotation: Array  # (H, 3, 3)
+    origin: Array  # (H, 3)
+    uses: Mask  # (H, points): the points each hypothesis takes
+    inliers: Array  # (H,)
+    rms: Array  # (H,)
+
+    @classmethod
+    def of(cls, hypotheses: list[Hypothesis], points: int) -> _Stacked:
+        if not hypotheses:
+            return cls(np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, points), bool), np.zeros(0), np.zeros(0))
+        taken = np.stack([h.point for h in hypotheses])
+        rows, cols = np.nonzero(taken >= 0)
+        uses = np.zeros((len(hypotheses), points), bool)
+        uses[rows, taken[rows, cols]] = True
+        return cls(np.stack([h.pose.rotation for h in hypotheses]), np.stack([h.pose.origin for h in hypotheses]),
+                   uses, (taken >= 0).sum(axis=1).astype(float), np.array([h.rms for h in hypotheses]))
+
+    def place(self, local: Array) -> Array:
+        """``(H, 3)`` where each hypothesis puts the point ``local`` of the segment frame."""
+        placed: Array = np.einsum("hij,j->hi", self.rotation, local) + self.origin
+        return placed
+
+
+def _scores(geometry: ModelGeometry, segment: int, hypotheses: _Stacked) -> Array:
     """score(h) per hypothesis, and 0 for ``none`` (the last entry)."""
     tau = float(geometry.segments[segment].tolerance.mean())
-    return np.array([h.inliers - h.rms / (2 * tau) for h in hypotheses] + [0.0])
+    return np.append(hypotheses.inliers - hypotheses.rms / (2 * tau), 0.0)
 
 
-def _compatible(
-    a: list[Hypothesis], b: list[Hypothesis], centre_a: Array, centre_b: Array, tolerance: float, points: int,
-) -> NDArray[np.bool_]:
+def _compatible(a: _Stacked, b: _Stacked, centre_a: Array, centre_b: Array, tolerance: float) -> NDArray[np.bool_]:
     """``(|H_a| + 1, |H_b| + 1)`` pairs allowed across a joint; ``none`` (last row, column) goes with all."""
-    allowed = np.ones((len(a) + 1, len(b) + 1), bool)
-    if not a or not b:
+    allowed = np.ones((len(a.rms) + 1, len(b.rms) + 1), bool)
+    if not len(a.rms) or not len(b.rms):
         return allowed
-    at_a = np.stack([h.pose.place(centre_a) for h in a])
-    at_b = np.stack([h.pose.place(centre_b) for h in b])
-    close = np.linalg.norm(at_a[:, None] - at_b[None], axis=2) <= tolerance
-    uses_a, uses_b = _uses(a, points), _uses(b, points)
-    disjoint = (uses_a.astype(np.int32) @ uses_b.T.astype(np.int32)) == 0
+    close = np.linalg.norm(a.place(centre_a)[:, None] - b.place(centre_b)[None], axis=2) <= tolerance
+    disjoint = (a.uses.astype(np.int32) @ b.uses.T.astype(np.int32)) == 0
     allowed[:-1, :-1] = close & disjoint
     return allowed
-
-
-def _uses(hypotheses: list[Hypothesis], points: int) -> NDArray[np.bool_]:
-    uses = np.zeros((len(hypotheses), points), bool)
-    for k, h in enumerate(hypotheses):
-        uses[k, h.point[h.point >= 0]] = True
-    return uses
 
 
 def _tree(root: int, neighbours: dict[int, list[tuple[int, Mask]]], seen: set[int]) -> tuple[list[int], dict[int, int]]:
