@@ -64,18 +64,17 @@ def segment_hypotheses(segment: int, geometry: SegmentGeometry, points: Array, d
     """
     u, tau = geometry.coordinates, geometry.tolerance
     model_distance = np.linalg.norm(u[:, None] - u[None], axis=2)
-    triples: list[tuple[int, ...]] = []
+    triples: list[Index] = []
     for a, b, c in combinations(range(len(u)), 3):
         near = [np.abs(distance - model_distance[p, q]) <= np.hypot(tau[p], tau[q]) for p, q in ((a, b), (a, c), (b, c))]
         i, j = np.nonzero(near[0])
         k_mask = near[1][i] & near[2][j]
         pair, k = np.nonzero(k_mask)
-        found = np.column_stack([i[pair], j[pair], k])
-        found = found[(found[:, 0] != found[:, 2]) & (found[:, 1] != found[:, 2])]
-        triples.extend((a, b, c, *row) for row in found)
-    if not triples:
+        found = np.column_stack([np.broadcast_to([a, b, c], (len(k), 3)), i[pair], j[pair], k])
+        triples.append(found[(found[:, 3] != found[:, 5]) & (found[:, 4] != found[:, 5])])
+    base = np.concatenate(triples).astype(np.int64) if triples else np.zeros((0, 6), np.int64)
+    if not len(base):
         return []
-    base = np.asarray(triples, dtype=np.int64)
     rotation, c_s, c_t = rigid_transform(u[base[:, :3]], points[base[:, 3:]], np.ones((len(base), 3)))
     placed = np.einsum("hij,pj->hpi", rotation, u) - np.einsum("hij,hj->hi", rotation, c_s)[:, None] + c_t[:, None]
     return _refined(segment, u, tau, placed, points)
