@@ -52,10 +52,22 @@ class SegmentPoses:
 def segment_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
     """Poses from ``positions`` ``(F, N, 3)`` in the model's marker order, NaN where not labeled."""
     poses, count = marker_poses(geometry, positions, within), len(geometry.segments)
+    jointed = [{j.b if j.a == s else j.a for j in geometry.joints if s in (j.a, j.b)} for s in range(count)]
+    # A try that poses nothing changes nothing, so it fails again until a jointed segment
+    # is posed somewhere new: skipping it meanwhile leaves every pass as it was, faster.
+    stale: set[int] = set()
     for _ in range(count):
-        if not any(_pose_by_joints(geometry, poses, s, positions, within) for s in range(count)):
+        posed = next((s for s in range(count) if s not in stale and _tried(geometry, poses, s, positions, within, stale)), None)
+        if posed is None:
             break
+        stale -= jointed[posed]
     return poses
+
+
+def _tried(geometry: ModelGeometry, poses: SegmentPoses, s: int, positions: Array, within: float, stale: set[int]) -> bool:
+    """``_pose_by_joints``; the segment is stale afterwards either way (posed: its remaining frames lack what they lacked)."""
+    stale.add(s)
+    return _pose_by_joints(geometry, poses, s, positions, within)
 
 
 def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
@@ -79,11 +91,14 @@ def _pose_by_joints(geometry: ModelGeometry, poses: SegmentPoses, s: int, positi
     if not ends or not todo.any():
         return False
     segment = geometry.segments[s]
+    labeled = np.isfinite(positions[:, segment.markers]).all(axis=2)
+    ended = np.stack([poses.posed[:, t] for _, t, _ in ends], axis=1)
+    if not (todo & (labeled.sum(axis=1) + ended.sum(axis=1) >= 3)).any():
+        return False  # what _pose would find first: no frame with three correspondences (most calls)
     local = np.concatenate([segment.coordinates, np.stack([own for own, _, _ in ends])])
     seen = [np.einsum("fij,j->fi", poses.rotation[:, t], c) + poses.origin[:, t] for _, t, c in ends]
     target = np.concatenate([positions[:, segment.markers], np.stack(seen, axis=1)], axis=1)
-    weight = np.concatenate([np.isfinite(positions[:, segment.markers]).all(axis=2),
-                             np.stack([poses.posed[:, t] for _, t, _ in ends], axis=1)], axis=1)
+    weight = np.concatenate([labeled, ended], axis=1)
     limit = within * np.concatenate([segment.tolerance, [j.tolerance for j in joints]])
     return _pose(poses, s, np.broadcast_to(local, target.shape), target, weight & todo[:, None], limit)
 
