@@ -108,4 +108,5 @@ def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -
     rms = np.sqrt((np.where(ok, residual, 0.0) ** 2).sum(axis=1) / np.maximum(count, 1))
     good = np.flatnonzero((count >= 3) & distinct)
     good = good[np.lexsort((rms[good], -count[good]))]
-    return [Hypothesis(segment, Pose(rotation[h], origin[h]), np.where(ok[h], taken[h], -1), float(rms[h])) for h in good]
+    point, rms_of = np.where(ok, taken, -1), rms.tolist()  # once, not per hypothesis
+    return [Hypothesis(segment, Pose(rotation[h], origin[h]), point[h], rms_of[h]) for h in good]
