@@ -71,15 +71,41 @@ def _tried(geometry: ModelGeometry, poses: SegmentPoses, s: int, positions: Arra
 
 
 def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
-    """Poses of the segments with three or more labeled markers only (no joint chain)."""
+    """Poses of the segments with three or more labeled markers only (no joint chain).
+
+    Every segment and frame in one batch (markers padded with weight 0), as ``_pose`` does
+    one segment: called on single template frames at every window, per-segment calls cost
+    more than the fits.
+    """
     frames, count = len(positions), len(geometry.segments)
     poses = SegmentPoses(np.tile(np.eye(3), (frames, count, 1, 1)), np.zeros((frames, count, 3)),
                          np.zeros((frames, count), bool))
+    width = max((len(segment.markers) for segment in geometry.segments), default=0)
+    if width == 0 or frames == 0:
+        return poses
+    source, target = np.zeros((count, width, 3)), np.zeros((frames, count, width, 3))
+    weight, limit = np.zeros((frames, count, width), bool), np.full((count, width), np.inf)
     for s, segment in enumerate(geometry.segments):
-        target = positions[:, segment.markers]
-        source = np.broadcast_to(segment.coordinates, target.shape)
-        labeled = np.asarray(np.isfinite(target).all(axis=2), dtype=bool)
-        _pose(poses, s, source, target, labeled, within * segment.tolerance)
+        k = len(segment.markers)
+        source[s, :k], limit[s, :k] = segment.coordinates, within * segment.tolerance
+        target[:, s, :k] = positions[:, segment.markers]
+        weight[:, s, :k] = np.isfinite(positions[:, segment.markers]).all(axis=2)
+    frame, segment_index = np.nonzero(weight.sum(axis=2) >= 3)
+    if not len(frame):
+        return poses
+    w = weight[frame, segment_index].astype(float)
+    a, b = source[segment_index], np.where(weight[frame, segment_index, :, None], target[frame, segment_index], 0.0)
+    keep = span_across_line(a, w) >= MIN_SPAN_MM
+    frame, segment_index, a, b, w = frame[keep], segment_index[keep], a[keep], b[keep], w[keep]
+    if not len(frame):
+        return poses
+    rotation, c_s, c_t = rigid_transform(a, b, w)
+    origin = c_t - np.einsum("fij,fj->fi", rotation, c_s)
+    residual = np.linalg.norm(np.einsum("fij,fkj->fki", rotation, a) + origin[:, None] - b, axis=2)
+    fits = ~((residual > limit[segment_index]) & (w > 0)).any(axis=1)
+    frame, segment_index = frame[fits], segment_index[fits]
+    poses.rotation[frame, segment_index], poses.origin[frame, segment_index] = rotation[fits], origin[fits]
+    poses.posed[frame, segment_index] = True
     return poses
 
 
