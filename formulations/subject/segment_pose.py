@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.markers.rigid import MIN_SPAN_MM, rigid_transform, span_across_line
-from formulations.subject.geometry import ModelGeometry
+from formulations.subject.geometry import JointGeometry, ModelGeometry, SegmentGeometry
 
 Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
@@ -52,22 +52,41 @@ class SegmentPoses:
 def segment_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
     """Poses from ``positions`` ``(F, N, 3)`` in the model's marker order, NaN where not labeled."""
     poses, count = marker_poses(geometry, positions, within), len(geometry.segments)
-    jointed = [{j.b if j.a == s else j.a for j in geometry.joints if s in (j.a, j.b)} for s in range(count)]
+    chains = [_Chain.of(geometry, s, positions) for s in range(count)]
     # A try that poses nothing changes nothing, so it fails again until a jointed segment
     # is posed somewhere new: skipping it meanwhile leaves every pass as it was, faster.
     stale: set[int] = set()
     for _ in range(count):
-        posed = next((s for s in range(count) if s not in stale and _tried(geometry, poses, s, positions, within, stale)), None)
+        posed = next((s for s in range(count) if s not in stale and _tried(chains[s], poses, s, positions, within, stale)),
+                     None)
         if posed is None:
             break
-        stale -= jointed[posed]
+        stale -= {t for _, t, _ in chains[posed].ends}
     return poses
 
 
-def _tried(geometry: ModelGeometry, poses: SegmentPoses, s: int, positions: Array, within: float, stale: set[int]) -> bool:
+@dataclass(frozen=True)
+class _Chain:
+    """Segment s's joints, each seen from s as (its centre in s, the other segment, the centre
+    in that one), and ``(F, P)`` which of its markers are labeled: built once per call."""
+
+    segment: SegmentGeometry
+    joints: list[JointGeometry]
+    ends: list[tuple[Array, int, Array]]
+    labeled: Mask
+
+    @classmethod
+    def of(cls, geometry: ModelGeometry, s: int, positions: Array) -> _Chain:
+        joints = [j for j in geometry.joints if s in (j.a, j.b)]
+        ends = [(j.centre_a, j.b, j.centre_b) if j.a == s else (j.centre_b, j.a, j.centre_a) for j in joints]
+        segment = geometry.segments[s]
+        return cls(segment, joints, ends, np.asarray(np.isfinite(positions[:, segment.markers]).all(axis=2), dtype=bool))
+
+
+def _tried(chain: _Chain, poses: SegmentPoses, s: int, positions: Array, within: float, stale: set[int]) -> bool:
     """``_pose_by_joints``; the segment is stale afterwards either way (posed: its remaining frames lack what they lacked)."""
     stale.add(s)
-    return _pose_by_joints(geometry, poses, s, positions, within)
+    return _pose_by_joints(chain, poses, s, positions, within)
 
 
 def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
@@ -109,15 +128,12 @@ def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.i
     return poses
 
 
-def _pose_by_joints(geometry: ModelGeometry, poses: SegmentPoses, s: int, positions: Array, within: float) -> bool:
+def _pose_by_joints(chain: _Chain, poses: SegmentPoses, s: int, positions: Array, within: float) -> bool:
     """Pose segment ``s`` where it has no pose yet from its labeled markers and posed neighbours' joints."""
     todo = ~poses.posed[:, s]
-    joints = [j for j in geometry.joints if s in (j.a, j.b)]
-    ends = [(j.centre_a, j.b, j.centre_b) if j.a == s else (j.centre_b, j.a, j.centre_a) for j in joints]
+    ends, segment, labeled = chain.ends, chain.segment, chain.labeled
     if not ends or not todo.any():
         return False
-    segment = geometry.segments[s]
-    labeled = np.isfinite(positions[:, segment.markers]).all(axis=2)
     ended = np.stack([poses.posed[:, t] for _, t, _ in ends], axis=1)
     if not (todo & (labeled.sum(axis=1) + ended.sum(axis=1) >= 3)).any():
         return False  # what _pose would find first: no frame with three correspondences (most calls)
@@ -125,7 +141,7 @@ def _pose_by_joints(geometry: ModelGeometry, poses: SegmentPoses, s: int, positi
     seen = [np.einsum("fij,j->fi", poses.rotation[:, t], c) + poses.origin[:, t] for _, t, c in ends]
     target = np.concatenate([positions[:, segment.markers], np.stack(seen, axis=1)], axis=1)
     weight = np.concatenate([labeled, ended], axis=1)
-    limit = within * np.concatenate([segment.tolerance, [j.tolerance for j in joints]])
+    limit = within * np.concatenate([segment.tolerance, [j.tolerance for j in chain.joints]])
     return _pose(poses, s, np.broadcast_to(local, target.shape), target, weight & todo[:, None], limit)
 
 
