@@ -1,5 +1,5 @@
-"""README.md's examples and the command line's help say what the code does: the capture JSON
-example is a document ``markerflow track`` labels, and the API comment names real fields."""
+"""README.md's examples say what the code does: the capture JSON example is a document
+``markerflow track`` labels, and the API comment names real fields."""
 
 from __future__ import annotations
 
