@@ -157,8 +157,8 @@ def test_no_marker_is_acquired_from_a_reading_that_moves_a_seen_mate() -> None:
     unseen = segment[0]
     state = replace(state, unseen=np.where(np.arange(len(frame)) == unseen, 5, state.unseen))
     chain = ModelChain(inner=None, model=model, points=[frame])
-    assert chain._acquired(state, frame, lambda: found).visible[unseen]  # a reading that agrees is acquired from
+    assert chain._acquired(state, frame, found).visible[unseen]  # a reading that agrees is acquired from
     turned = replace(found, point=found.point.copy())
     turned.point[segment[[1, 2]]] = found.point[segment[[2, 1]]]  # the reading exchanges two seen mates
-    kept = chain._acquired(state, frame, lambda: turned)
+    kept = chain._acquired(state, frame, turned)
     assert not kept.visible[unseen] and np.array_equal(kept.position, state.position)

@@ -25,7 +25,7 @@ from scipy.spatial.distance import cdist
 
 from formulations.markers.guide import assign_within_gates
 from formulations.subject.chain_support import chain_support
-from formulations.subject.constellation import Pose, segment_hypotheses
+from formulations.subject.constellation import Hypothesis, Pose, segment_hypotheses
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_place import place_by_joint
 from formulations.subject.tree_choice import choose_hypotheses
@@ -56,11 +56,12 @@ class Identification:
         return named
 
 
-def identify(geometry: ModelGeometry, points: Array) -> Identification:
-    """Name ``points`` ``(P, 3)`` (mm) with the markers of ``geometry``."""
+def identify(geometry: ModelGeometry, points: Array, known: dict[int, Hypothesis] | None = None) -> Identification:
+    """Name ``points`` ``(P, 3)`` (mm) with the markers of ``geometry``; segments in ``known``
+    take that reading as their only hypothesis instead of a search (``labeled_reading``)."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(geometry.names)
-    poses = _compete(geometry, points) if len(points) >= 3 else {}
+    poses = _compete(geometry, points, known or {}) if len(points) >= 3 else {}
     fixed = np.full(n, -1, dtype=np.int64)
     _follow_joints(geometry, points, poses, fixed)
     placed = np.full((n, 3), np.nan)
@@ -86,10 +87,11 @@ def placed_origin(geometry: ModelGeometry, placed: Array, segments: Index) -> Ar
     return np.stack([placed[geometry.segments[s].markers].mean(axis=0) for s in segments])
 
 
-def _compete(geometry: ModelGeometry, points: Array) -> dict[int, Pose]:
+def _compete(geometry: ModelGeometry, points: Array, known: dict[int, Hypothesis]) -> dict[int, Pose]:
     """Step 2: the jointly best hypotheses (``tree_choice``); of two sharing a point the better one stays."""
     distance = cdist(points, points)
-    by_segment = [segment_hypotheses(s, segment, points, distance) for s, segment in enumerate(geometry.segments)]
+    by_segment = [[known[s]] if s in known else segment_hypotheses(s, segment, points, distance)
+                  for s, segment in enumerate(geometry.segments)]
     chosen = choose_hypotheses(geometry, by_segment, len(points), chain_support(geometry, by_segment, points))
     taken = np.zeros(len(points), bool)
     poses: dict[int, Pose] = {}

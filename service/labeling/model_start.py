@@ -22,7 +22,6 @@ inner chain's fill stays where the model poses nothing (single markers, unposed 
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cache, partial
 from typing import Any
@@ -37,6 +36,7 @@ from formulations.subject.agreement import agreeing
 from formulations.subject.follow import follow_segments
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.identify import Identification, identify
+from formulations.subject.labeled_reading import labeled_readings
 from formulations.subject.model import SubjectModel
 from formulations.subject.recover import HELD_MM, recover
 from formulations.subject.segment_fill import segment_fill
@@ -111,8 +111,8 @@ class ModelChain:
         62.0 % (its arm, forearm and wheel carry identical marker plates, which fit each
         other's places), 03_rolling 40.3 -> 37.8 %, racing 80.3 -> 80.1 %."""
         points = self.points[template]
-        found = cache(partial(identify, self._geometry, points))  # one identification serves both
-        state = self._acquired(state, points, found)
+        found = cache(partial(identify, self._geometry, points))  # recovery's, only when a segment contradicts
+        state = self._acquired(state, points)
         state, repaired = recover(self._geometry, state, points, found)
         self.repaired.extend((template, s) for s in repaired)
         problem, inverse = self.inner.pose(follow_segments(self._geometry, state), template, last)
@@ -145,20 +145,34 @@ class ModelChain:
         placed = segment_fill(self._geometry, state, np.concatenate([template_positions, positions]), RIGID_WITHIN)
         return np.where(np.isfinite(placed[1:]), placed[1:], labels.filled)
 
-    def _acquired(self, state: MarkerState, points: np.ndarray, identified: Callable[[], Identification]) -> MarkerState:
+    def _acquired(self, state: MarkerState, points: np.ndarray, found: Identification | None = None) -> MarkerState:
+        """Unseen markers named in the template's cloud by ``found``: by default an identification
+        that searches only for the segments with a marker unseen, the others read from their
+        labels where those fit (``labeled_reading``)."""
         unseen = ~state.visible
         if not unseen.any() or len(points) == 0:
             return state
-        found = identified()
+        point_of = _held(state, points)
         held = np.zeros(len(points), bool)
-        if state.visible.any():
-            gap = np.linalg.norm(points[:, None] - state.position[state.visible][None], axis=2)
-            held = (gap <= HELD_MM).any(axis=1)
+        held[point_of[point_of >= 0]] = True
+        if found is None:
+            found = identify(self._geometry, points, labeled_readings(self._geometry, point_of, points))
         new = np.flatnonzero(unseen & found.named & agreeing(self._geometry, state, points, found))
         new = new[~held[found.point[new]]]
         if not len(new):
             return state
         return acquire(state, new, points[found.point[new]])
+
+
+def _held(state: MarkerState, points: np.ndarray) -> np.ndarray:
+    """``(N,)`` the point each seen marker holds (its state position is that point), -1 none."""
+    point_of = np.full(len(state.position), -1, dtype=np.int64)
+    if state.visible.any():
+        gap = np.linalg.norm(points[:, None] - state.position[state.visible][None], axis=2)  # (P, seen)
+        nearest = gap.argmin(axis=0)
+        hit = gap[nearest, np.arange(gap.shape[1])] <= HELD_MM
+        point_of[np.flatnonzero(state.visible)[hit]] = nearest[hit]
+    return point_of
 
 
 def segment_layout(problem: WindowProblem, segment_of: np.ndarray, mu: float) -> WindowProblem:
