@@ -1,9 +1,11 @@
-"""A fully labeled, fitting segment is read from its labels instead of searched for, and
-identification with those readings names the cloud as the full search does."""
+"""A fully labeled, fitting segment is read from its labels instead of searched for, and on
+clean synthetic takes identification with those readings names the cloud as the full search
+does (on real takes it differs where the search misreads such a segment: README)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from test_model_start import FIT, _take
 
 from formulations.subject.geometry import ModelGeometry
@@ -12,8 +14,8 @@ from formulations.subject.labeled_reading import labeled_readings
 from service.capture.model_input import model_names
 
 
-def _frames():
-    names, positions, model = _take()
+def _frames(seed: int = 0):
+    names, positions, model = _take(seed)
     order = [names.index(n) for n in model_names(model)]
     return ModelGeometry.of(model), positions[FIT:, order]
 
@@ -41,10 +43,11 @@ def test_a_segment_with_a_marker_unlabeled_or_off_its_place_is_searched() -> Non
     assert first not in readings and second not in readings and len(readings) > 0
 
 
-def test_identification_with_the_labeled_readings_names_as_the_search_does() -> None:
-    geometry, held = _frames()
-    rng = np.random.default_rng(0)
-    for f in range(0, len(held), 40):
+@pytest.mark.parametrize("seed", range(3))
+def test_identification_with_the_labeled_readings_names_as_the_search_does(seed: int) -> None:
+    geometry, held = _frames(seed)
+    rng = np.random.default_rng(seed)
+    for f in range(0, len(held), 10):
         frame = held[f]
         seen = np.flatnonzero(np.isfinite(frame).all(axis=1) & (rng.random(len(frame)) > 0.1))
         ghosts = frame[seen[:2]] + rng.normal(0, 150, (2, 3))

@@ -5,9 +5,12 @@ whose markers are all held, and whose labeled constellation fits the model (ever
 within tau_p of its Kabsch pose), has one reading worth considering: its labels. Searching
 the cloud for its constellation (``constellation.segment_hypotheses``, hundreds of
 hypotheses for a segment of five or six markers) costs most of an identification, and on
-such a segment ranks the labeled reading first anyway (all markers inliers, the least rms).
-So acquisition identifies the cloud with these segments' readings fixed, and searches only
-for the segments with a marker unseen.
+such a segment mostly ranks the labeled reading first (all markers inliers, the least rms).
+Where it does not, it is mostly wrong: on 164 frames of four real takes (10 % of markers
+deleted, 2 ghosts, labels from the file) identification named 4,502 points right and 532
+wrong with these readings, 4,362 and 608 with the full search. So acquisition identifies
+the cloud with these segments' readings fixed, and searches only for the segments with a
+marker unseen.
 """
 
 from __future__ import annotations
