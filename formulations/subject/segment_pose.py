@@ -28,6 +28,7 @@ from formulations.subject.geometry import JointGeometry, ModelGeometry, SegmentG
 
 Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
+Index = NDArray[np.intp]
 RIGID_WITHIN = 2.0  # a fit within twice every tolerance is a segment moving as the model says
 
 
@@ -57,11 +58,15 @@ def segment_poses(geometry: ModelGeometry, positions: Array, within: float = np.
     # is posed somewhere new: skipping it meanwhile leaves every pass as it was, faster.
     stale: set[int] = set()
     for _ in range(count):
-        posed = next((s for s in range(count) if s not in stale and _tried(chains[s], poses, s, positions, within, stale)),
-                     None)
-        if posed is None:
+        for s in range(count):
+            if s in stale:
+                continue
+            stale.add(s)  # posed or not, its remaining frames lack what they lacked
+            if _pose_by_joints(chains[s], poses, s, positions, within):
+                stale -= {t for _, t, _ in chains[s].ends}
+                break
+        else:
             break
-        stale -= {t for _, t, _ in chains[posed].ends}
     return poses
 
 
@@ -83,25 +88,16 @@ class _Chain:
         return cls(segment, joints, ends, np.asarray(np.isfinite(positions[:, segment.markers]).all(axis=2), dtype=bool))
 
 
-def _tried(chain: _Chain, poses: SegmentPoses, s: int, positions: Array, within: float, stale: set[int]) -> bool:
-    """``_pose_by_joints``; the segment is stale afterwards either way (posed: its remaining frames lack what they lacked)."""
-    stale.add(s)
-    return _pose_by_joints(chain, poses, s, positions, within)
-
-
 def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.inf) -> SegmentPoses:
     """Poses of the segments with three or more labeled markers only (no joint chain).
 
-    Every segment and frame in one batch (markers padded with weight 0), as ``_pose`` does
-    one segment: called on single template frames at every window, per-segment calls cost
-    more than the fits.
+    Every segment and frame in one batch (markers padded with weight 0): called on single
+    template frames at every window, per-segment calls cost more than the fits.
     """
     frames, count = len(positions), len(geometry.segments)
     poses = SegmentPoses(np.tile(np.eye(3), (frames, count, 1, 1)), np.zeros((frames, count, 3)),
                          np.zeros((frames, count), bool))
     width = max((len(segment.markers) for segment in geometry.segments), default=0)
-    if width == 0 or frames == 0:
-        return poses
     source, target = np.zeros((count, width, 3)), np.zeros((frames, count, width, 3))
     weight, limit = np.zeros((frames, count, width), bool), np.full((count, width), np.inf)
     for s, segment in enumerate(geometry.segments):
@@ -110,59 +106,44 @@ def marker_poses(geometry: ModelGeometry, positions: Array, within: float = np.i
         target[:, s, :k] = positions[:, segment.markers]
         weight[:, s, :k] = np.isfinite(positions[:, segment.markers]).all(axis=2)
     frame, segment_index = np.nonzero(weight.sum(axis=2) >= 3)
-    if not len(frame):
-        return poses
-    w = weight[frame, segment_index].astype(float)
-    a, b = source[segment_index], np.where(weight[frame, segment_index, :, None], target[frame, segment_index], 0.0)
-    keep = span_across_line(a, w) >= MIN_SPAN_MM
-    frame, segment_index, a, b, w = frame[keep], segment_index[keep], a[keep], b[keep], w[keep]
-    if not len(frame):
-        return poses
-    rotation, c_s, c_t = rigid_transform(a, b, w)
-    origin = c_t - np.einsum("fij,fj->fi", rotation, c_s)
-    residual = np.linalg.norm(np.einsum("fij,fkj->fki", rotation, a) + origin[:, None] - b, axis=2)
-    fits = ~((residual > limit[segment_index]) & (w > 0)).any(axis=1)
-    frame, segment_index = frame[fits], segment_index[fits]
-    poses.rotation[frame, segment_index], poses.origin[frame, segment_index] = rotation[fits], origin[fits]
-    poses.posed[frame, segment_index] = True
+    _fit(poses, frame, segment_index, source[segment_index], target[frame, segment_index],
+         weight[frame, segment_index], limit[segment_index])
     return poses
 
 
 def _pose_by_joints(chain: _Chain, poses: SegmentPoses, s: int, positions: Array, within: float) -> bool:
     """Pose segment ``s`` where it has no pose yet from its labeled markers and posed neighbours' joints."""
-    todo = ~poses.posed[:, s]
-    ends, segment, labeled = chain.ends, chain.segment, chain.labeled
-    if not ends or not todo.any():
+    ends, segment = chain.ends, chain.segment
+    if not ends:
         return False
     ended = np.stack([poses.posed[:, t] for _, t, _ in ends], axis=1)
-    if not (todo & (labeled.sum(axis=1) + ended.sum(axis=1) >= 3)).any():
-        return False  # what _pose would find first: no frame with three correspondences (most calls)
+    frame = np.flatnonzero(~poses.posed[:, s] & (chain.labeled.sum(axis=1) + ended.sum(axis=1) >= 3))
+    if not len(frame):
+        return False  # no frame left with three correspondences (most calls)
     local = np.concatenate([segment.coordinates, np.stack([own for own, _, _ in ends])])
-    seen = [np.einsum("fij,j->fi", poses.rotation[:, t], c) + poses.origin[:, t] for _, t, c in ends]
-    target = np.concatenate([positions[:, segment.markers], np.stack(seen, axis=1)], axis=1)
-    weight = np.concatenate([labeled, ended], axis=1)
+    seen = [np.einsum("fij,j->fi", poses.rotation[frame, t], c) + poses.origin[frame, t] for _, t, c in ends]
+    target = np.concatenate([positions[frame][:, segment.markers], np.stack(seen, axis=1)], axis=1)
+    weight = np.concatenate([chain.labeled[frame], ended[frame]], axis=1)
     limit = within * np.concatenate([segment.tolerance, [j.tolerance for j in chain.joints]])
-    return _pose(poses, s, np.broadcast_to(local, target.shape), target, weight & todo[:, None], limit)
+    return _fit(poses, frame, np.full(len(frame), s), np.broadcast_to(local, target.shape), target, weight,
+                np.broadcast_to(limit, weight.shape))
 
 
-def _pose(poses: SegmentPoses, s: int, source: Array, target: Array, weight: Mask, limit: Array) -> bool:
-    """Kabsch pose of segment ``s`` in the frames with three well-spread correspondences, each
-    fitted within ``limit`` ``(K,)`` mm; in place."""
-    frames = np.flatnonzero((weight.sum(axis=1) >= 3) & ~poses.posed[:, s])
-    if not len(frames):
-        return False
-    w = weight[frames].astype(float)
-    a, b = source[frames], np.where(weight[frames, :, None], target[frames], 0.0)
+def _fit(poses: SegmentPoses, frame: Index, segment: Index, source: Array, target: Array, weight: Mask, limit: Array) -> bool:
+    """Kabsch pose of each row's segment in its frame, ``(R, K)`` correspondences of which
+    ``weight`` are used (three or more), kept where they span more than a line and each lies
+    within ``limit`` mm of the fit; in place. Whether any row was posed."""
+    w = weight.astype(float)
+    a, b = source, np.where(weight[..., None], target, 0.0)
     keep = span_across_line(a, w) >= MIN_SPAN_MM
     if not keep.any():
         return False
-    frames, a, b, w = frames[keep], a[keep], b[keep], w[keep]
+    frame, segment, a, b, w, limit = frame[keep], segment[keep], a[keep], b[keep], w[keep], limit[keep]
     rotation, c_s, c_t = rigid_transform(a, b, w)
     origin = c_t - np.einsum("fij,fj->fi", rotation, c_s)
     residual = np.linalg.norm(np.einsum("fij,fkj->fki", rotation, a) + origin[:, None] - b, axis=2)
     fits = ~((residual > limit) & (w > 0)).any(axis=1)
-    frames = frames[fits]
-    poses.rotation[frames, s] = rotation[fits]
-    poses.origin[frames, s] = origin[fits]
-    poses.posed[frames, s] = True
+    frame, segment = frame[fits], segment[fits]
+    poses.rotation[frame, segment], poses.origin[frame, segment] = rotation[fits], origin[fits]
+    poses.posed[frame, segment] = True
     return bool(fits.any())
