@@ -44,7 +44,7 @@ def recover(
     if not len(bad) or not len(points):
         return state, []
     found = identified()
-    held = _held(state, points)  # (P,) marker holding each point, -1 none
+    held = point_holders(state, points)  # (P,) marker holding each point, -1 none
     labels = np.where(seen[:, None], state.position, np.nan)
     take: list[int] = []
     at: list[Array] = []
@@ -91,7 +91,7 @@ def _reorder(geometry: ModelGeometry, segment: int, labels: Array, take: list[in
     return True
 
 
-def _held(state: MarkerState, points: Array) -> NDArray[np.int64]:
+def point_holders(state: MarkerState, points: Array) -> NDArray[np.int64]:
     """``(P,)`` the seen marker whose state position is each point, -1 for none."""
     held = np.full(len(points), -1, dtype=np.int64)
     seen = np.flatnonzero(state.visible)

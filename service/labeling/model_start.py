@@ -38,7 +38,7 @@ from formulations.subject.geometry import ModelGeometry
 from formulations.subject.identify import Identification, identify
 from formulations.subject.labeled_reading import labeled_readings
 from formulations.subject.model import SubjectModel
-from formulations.subject.recover import HELD_MM, recover
+from formulations.subject.recover import point_holders, recover
 from formulations.subject.segment_fill import segment_fill
 from formulations.subject.segment_pose import RIGID_WITHIN, segment_poses
 from formulations.subject.start_state import acquire, model_start_state
@@ -152,9 +152,10 @@ class ModelChain:
         unseen = ~state.visible
         if not unseen.any() or len(points) == 0:
             return state
-        point_of = _held(state, points)
-        held = np.zeros(len(points), bool)
-        held[point_of[point_of >= 0]] = True
+        holder = point_holders(state, points)  # (P,) the seen marker on each point, -1 none
+        held = holder >= 0
+        point_of = np.full(len(unseen), -1, dtype=np.int64)  # (N,) the point each seen marker holds
+        point_of[holder[held]] = np.flatnonzero(held)
         if found is None:
             found = identify(self._geometry, points, labeled_readings(self._geometry, point_of, points))
         new = np.flatnonzero(unseen & found.named & agreeing(self._geometry, state, points, found))
@@ -162,17 +163,6 @@ class ModelChain:
         if not len(new):
             return state
         return acquire(state, new, points[found.point[new]])
-
-
-def _held(state: MarkerState, points: np.ndarray) -> np.ndarray:
-    """``(N,)`` the point each seen marker holds (its state position is that point), -1 none."""
-    point_of = np.full(len(state.position), -1, dtype=np.int64)
-    if state.visible.any():
-        gap = np.linalg.norm(points[:, None] - state.position[state.visible][None], axis=2)  # (P, seen)
-        nearest = gap.argmin(axis=0)
-        hit = gap[nearest, np.arange(gap.shape[1])] <= HELD_MM
-        point_of[np.flatnonzero(state.visible)[hit]] = nearest[hit]
-    return point_of
 
 
 def segment_layout(problem: WindowProblem, segment_of: np.ndarray, mu: float) -> WindowProblem:
