@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 from formulations.markers.rigid import rigid_transform  # noqa: E402
 from formulations.subject.fit import SubjectFit, fit_subject  # noqa: E402
-from formulations.subject.joint_fit import centre_trajectory  # noqa: E402
+from formulations.subject.joint_fit import centre_trajectory, joint_system  # noqa: E402
 from formulations.subject.segment_fit import fit_segment  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
 
@@ -65,10 +65,9 @@ def report(label: str, names: list[str], positions: Array, fit: SubjectFit, trut
         print(f"{label:5s} {fitted:6.1f} mm   (a two-marker segment: no oracle)")
         return
     fa, fb = (fit_segment(positions, [names.index(m) for m in s]) for s in (seg_a, seg_b))
-    both = fa.valid & fb.valid
-    lhs = np.concatenate([fa.rotation[both], -fb.rotation[both]], axis=2).reshape(-1, 6)
-    solution = np.linalg.lstsq(lhs, (fb.origin[both] - fa.origin[both]).reshape(-1), rcond=None)[0]
-    seen = both & np.isfinite(truth).all(axis=1)
+    lhs, rhs = joint_system(fa, fb)
+    solution = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+    seen = fa.valid & fb.valid & np.isfinite(truth).all(axis=1)
     lab = np.concatenate([np.einsum("kji,kj->i", f.rotation[seen], truth[seen] - f.origin[seen]) / seen.sum()
                           for f in (fa, fb)])
     _, singular, axes = np.linalg.svd(lhs, full_matrices=False)

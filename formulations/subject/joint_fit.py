@@ -41,22 +41,32 @@ def fit_joint(a: SegmentFit, b: SegmentFit, positions: Array) -> JointFit:
     Then t(k) = mean over the seen markers of z - R_l(k) e_l (the least-squares t for fixed R, e),
     and E = sum_k sum_l sum_p |R_l(k) e_l^p + t(k) - z_l^p(k)|^2.
     """
+    lhs, rhs = joint_system(a, b)
     both = a.valid & b.valid
-    if both.sum() < 3:
-        raise ValueError("the two segments share fewer than 3 frames")
     ra, rb = a.rotation[both], b.rotation[both]
     da, db = a.origin[both], b.origin[both]
     mid = (da + db) / 2
     prior = np.concatenate([
         np.einsum("kji,kj->i", ra, mid - da) / len(ra), np.einsum("kji,kj->i", rb, mid - db) / len(rb)
     ])
-    lhs = np.concatenate([ra, -rb], axis=2).reshape(-1, 6)
-    rhs = (db - da).reshape(-1)
     step = np.linalg.lstsq(lhs, rhs - lhs @ prior, rcond=RCOND)[0]
     centre = prior + step
     ca, cb = centre[:3], centre[3:]
     trajectory, error, terms = centre_trajectory(a, b, ca, cb, positions)
     return JointFit(ca, cb, trajectory, error, float(np.sqrt(error / max(terms, 1))))
+
+
+def joint_system(a: SegmentFit, b: SegmentFit) -> tuple[Array, Array]:
+    """``(3K, 6)`` [R_a(k)  -R_b(k)] and ``(3K,)`` d_b(k) - d_a(k) over the K frames posing both.
+
+    Raises:
+        ValueError: fewer than 3 such frames.
+    """
+    both = a.valid & b.valid
+    if both.sum() < 3:
+        raise ValueError("the two segments share fewer than 3 frames")
+    lhs = np.concatenate([a.rotation[both], -b.rotation[both]], axis=2).reshape(-1, 6)
+    return lhs, (b.origin[both] - a.origin[both]).reshape(-1)
 
 
 def centre_trajectory(
