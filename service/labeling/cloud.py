@@ -17,6 +17,7 @@ from formulations.markers.cloud_candidates import CloudGating, CloudWindow, clou
 from formulations.markers.exchange import repair_exchanges
 from formulations.markers.guide import assign_nearest
 from formulations.markers.mirror import repair_mirrors
+from formulations.markers.pair_evidence import repair_pair_evidence
 from formulations.markers.state import MarkerState
 from formulations.markers.turns import repair_turns, rigid_triples
 from formulations.relaxation.components import coupled_components
@@ -28,6 +29,7 @@ from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.loop import WindowLabels
 from service.labeling.outcome import WindowOutcome
+from service.labeling.stats import DOUBTFUL_BELOW
 
 # Jiang's weighted costs for markers: the per-camera chain prices its arcs with them. Cloud
 # candidates carry negative log-likelihoods (``formulations.markers.likelihood``), which
@@ -45,6 +47,7 @@ class CloudInverse:
     frames: list[np.ndarray]
     gated: CloudWindow
     node_candidate: np.ndarray
+    doubtful: np.ndarray
 
 
 @dataclass
@@ -83,12 +86,14 @@ class CloudChain:
         problem, node_candidate = build_window(gated.candidates, self.weights)
         if self.layout_weight > 0:
             problem = _with_layout(problem, state, self.layout_neighbours, self.layout_weight)
-        return problem, CloudInverse(state, frames, gated, node_candidate)
+        doubtful = np.zeros(len(state.position), bool) if confidence is None else confidence < DOUBTFUL_BELOW
+        return problem, CloudInverse(state, frames, gated, node_candidate, doubtful)
 
     def invert(self, solution: WindowSolution, inverse: CloudInverse) -> WindowLabels:
         taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N, M), -1 occluded
         triples, symmetric = rigid_triples(inverse.state)
         taken, _, plates = repair_turns(inverse.state, inverse.frames, taken, triples, symmetric)
+        taken, _ = repair_pair_evidence(inverse.state, inverse.frames, taken, inverse.doubtful)
         state, filled = _advance(inverse.state, inverse.frames, taken)
         state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
