@@ -14,6 +14,7 @@ from formulations.markers.pair_evidence import (
     FIT_Z2,
     LEARNED_FRAMES,
     _exchange_ratio,
+    _judged_pairs,
     _positions,
     repair_pair_evidence,
 )
@@ -203,3 +204,11 @@ def test_the_less_bad_of_two_misfits_is_no_exchange():
     assert side > 0  # the exchange fits better ...
     kept, pairs = repair_pair_evidence(stale_state, frames, taken, DOUBTFUL)
     assert pairs == 0 and np.array_equal(kept, taken)  # ... but not well enough
+
+
+def test_only_pairs_on_one_rigid_segment_are_judged():
+    """Markers on two segments (a wrist marker and the upper-arm one swinging about the elbow,
+    or the trunk) are told apart by their motion, not by witnesses rigid with one of them."""
+    pairs = {tuple(p) for p in _judged_pairs(_learned(noise=2.0), np.ones(5, bool)).tolist()}
+    assert (LAT, MED) in pairs and (0, LAT) in pairs
+    assert (LAT, 3) not in pairs and (MED, 4) not in pairs

@@ -43,21 +43,28 @@ exchanged from f0 on where
 best pairs first, each marker in one pair at most. Only pairs with a doubtful label are judged
 (below the service's 0.9 confidence at the template): the window's margins and the shape check
 have already flagged an exchange that a re-acquisition made, and a label trusted by both is
-left alone. Frames are not independent evidence (skin motion is slow), so the bar is high:
-e^20, where a single frame's noise gives a few nats.
+left alone. And only pairs on one rigid segment (rigid with each other, as a witness is): two
+segments' markers are told apart by their motion, and what one's witnesses say of the other's
+point is weak (CMU 135_02 under the hard preset: the left and right toes, side by side, were
+exchanged on the say of a shin and a knee learned rigid with the toes while the ankles kept
+still). Frames are not independent evidence (skin motion is slow), so the bar is high: e^20, where a single
+frame's noise gives a few nats.
 
 Measured (lp-l1, 600 frames): seed-0 accuracy matrix 97.016 -> 97.104 %, swaps 1,721 ->
 1,711, 8 of 85 rows higher and none lower (Vicon at 4 mm 88.73 -> 91.41 %, tennis with 30 %
 deletions 94.10 -> 95.65 %); seeds 1-2 screen 98.753 -> 98.857 %, 11 of 80 rows higher, none
-lower; the real takes unchanged; 0.05-0.2 ms a frame on ``bench/markers_realtime.py``. The
-wrist case above is not reached: exchanged at frame 83, before its distances are learned.
+lower; the real takes unchanged; the hard preset (seeds 0-2, 400 frames, four takes) 92.08 ->
+92.17 %, with one wrong exchange left (CMU 135_02 seed 0, 90.38 -> 89.50 %: a still subject's
+toes, side by side, look rigid with each other); 0.05-0.2 ms a frame on
+``bench/markers_realtime.py``. The wrist case above is not reached: exchanged at frame 83,
+before its distances are learned.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from formulations.markers.mirror import RIGID_SD_MM
+from formulations.markers.mirror import RIGID_SD_MM, LearnedPairs
 from formulations.markers.state import MarkerState
 
 CAP = 3.0  # z beyond 3 sd counts as 3: a slipped neighbour or a foreign point, not more evidence
@@ -100,10 +107,13 @@ def repair_pair_evidence(
 
 
 def _judged_pairs(state: MarkerState, doubtful: np.ndarray) -> np.ndarray:
-    """``(P, 2)`` each doubtful marker with each of its neighbours, once per pair."""
+    """``(P, 2)`` each doubtful marker with each neighbour rigid with it (learned, as a
+    witness is: ``_log_shape``), once per pair."""
     rows = np.flatnonzero(doubtful)
     pairs = np.column_stack([np.repeat(rows, state.neighbours.shape[1]), state.neighbours[rows].ravel()])
     pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    learned = np.minimum(state.motion_samples[pairs[:, 0]], state.motion_samples[pairs[:, 1]]) >= LEARNED_FRAMES
+    pairs = pairs[learned & (LearnedPairs.of(state).var[pairs[:, 0], pairs[:, 1]] < RIGID_SD_MM**2)]
     return np.unique(np.sort(pairs, axis=1), axis=0) if len(pairs) else pairs.reshape(0, 2)
 
 
