@@ -4,6 +4,7 @@ from dataclasses import replace
 from itertools import permutations
 
 import numpy as np
+from rigid_scenes import SwingingSegment
 from scipy.spatial.transform import Rotation
 
 from formulations.markers.exchange import repair_exchanges
@@ -17,12 +18,12 @@ FOOT = np.array([[0, 0, 0], [30, 0, 80], [200, 30, 10], [200, -30, 10]], float)
 TOE, MT5 = 2, 3
 
 
+WALK = SwingingSegment(turn=(0.3, 0.2, 0.5), periods=(9, 13, 17), speed=3.0, sway=40.0, hinge=1, swing=0.6, swing_period=7)
+
+
 def _frame(t: int, foot: np.ndarray = FOOT) -> np.ndarray:
     """The foot turned and moved rigidly, the shank swung about the ankle."""
-    turn = Rotation.from_rotvec([0.3 * np.sin(t / 9), 0.2 * np.cos(t / 13), 0.5 * np.sin(t / 17)])
-    foot = turn.apply(foot) + [3.0 * t, 40 * np.sin(t / 11), 0.0]
-    shank = foot[1] + Rotation.from_rotvec([0.6 * np.sin(t / 7), 0, 0]).apply([0.0, 0.0, 150.0])
-    return np.vstack([foot, shank, [900.0, 0.0, 1000.0]])
+    return WALK.frame(t, foot)
 
 
 def _learned(noise: float, frames: int = 200, foot: np.ndarray = FOOT) -> MarkerState:

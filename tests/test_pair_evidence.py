@@ -4,7 +4,7 @@ frames tells, where one frame's does not."""
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+from rigid_scenes import SwingingSegment
 
 from formulations.markers.exchange import repair_exchanges
 from formulations.markers.mirror import RIGID_SD_MM
@@ -27,11 +27,11 @@ FOREARM = np.array([[0, 0, 0], [268, 40, 0], [258, -23, 0]], float)
 LAT, MED = 1, 2
 
 
+RUN = SwingingSegment(turn=(0.8, 0.3, 1.2), periods=(9, 13, 7), speed=5.0, sway=60.0, hinge=0, swing=0.9, swing_period=6)
+
+
 def _frame(t: int, forearm: np.ndarray = FOREARM) -> np.ndarray:
-    turn = Rotation.from_rotvec([0.8 * np.sin(t / 9), 0.3 * np.cos(t / 13), 1.2 * np.sin(t / 7)])
-    arm = turn.apply(forearm) + [5.0 * t, 60 * np.sin(t / 11), 0.0]
-    bicep = arm[0] + Rotation.from_rotvec([0.9 * np.sin(t / 6), 0, 0]).apply([0.0, 0.0, 150.0])
-    return np.vstack([arm, bicep, [900.0, 0.0, 1000.0]])
+    return RUN.frame(t, forearm)
 
 
 def _take(noise: float, frames: int, start: int = 0, forearm: np.ndarray = FOREARM, seed: int = 1) -> np.ndarray:
