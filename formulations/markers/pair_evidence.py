@@ -55,8 +55,11 @@ Measured (lp-l1, 600 frames): seed-0 accuracy matrix 97.016 -> 97.104 %, swaps 1
 deletions 94.10 -> 95.65 %); seeds 1-2 screen 98.753 -> 98.857 %, 11 of 80 rows higher, none
 lower; the real takes unchanged; the hard preset (seeds 0-2, 400 frames, four takes) 92.08 ->
 92.17 %, with one wrong exchange left (CMU 135_02 seed 0, 90.38 -> 89.50 %: a still subject's
-toes, side by side, look rigid with each other); 0.05-0.2 ms a frame on
-``bench/markers_realtime.py``. The wrist case above is not reached: exchanged at frame 83,
+toes, side by side, look rigid with each other); whole-length takes (seeds 0-1, default and
+2 mm) HDM05 98.33 -> 99.73 % and 97.07 -> 98.84 % (a forefoot pair exchanged from frame 1646
+to the end given back at 1691), CMU 135_02 97.09 -> 97.09 % and 95.08 -> 92.71 % (back-of-head
+markers exchanged on the say of trunk markers a still subject made look rigid with the head);
+0.05-0.2 ms a frame on ``bench/markers_realtime.py``. The wrist case above is not reached: exchanged at frame 83,
 before its distances are learned.
 """
 
