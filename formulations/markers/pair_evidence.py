@@ -59,8 +59,8 @@ toes, side by side, look rigid with each other); whole-length takes (seeds 0-1, 
 2 mm) HDM05 98.33 -> 99.73 % and 97.07 -> 98.84 % (a forefoot pair exchanged from frame 1646
 to the end given back at 1691), CMU 135_02 97.09 -> 97.09 % and 95.08 -> 92.71 % (back-of-head
 markers exchanged on the say of trunk markers a still subject made look rigid with the head);
-0.05-0.2 ms a frame on ``bench/markers_realtime.py``. The wrist case above is not reached: exchanged at frame 83,
-before its distances are learned.
+0.05-0.2 ms a frame on ``bench/markers_realtime.py``. The wrist case above is not reached:
+exchanged at frame 83, before its distances are learned.
 """
 
 from __future__ import annotations
@@ -115,8 +115,7 @@ def _judged_pairs(state: MarkerState, doubtful: np.ndarray) -> np.ndarray:
     rows = np.flatnonzero(doubtful)
     pairs = np.column_stack([np.repeat(rows, state.neighbours.shape[1]), state.neighbours[rows].ravel()])
     pairs = pairs[pairs[:, 0] != pairs[:, 1]]
-    learned = np.minimum(state.motion_samples[pairs[:, 0]], state.motion_samples[pairs[:, 1]]) >= LEARNED_FRAMES
-    pairs = pairs[learned & (LearnedPairs.of(state).var[pairs[:, 0], pairs[:, 1]] < RIGID_SD_MM**2)]
+    pairs = pairs[_rigid(state, pairs[:, 0], pairs[:, 1], LearnedPairs.of(state).var[pairs[:, 0], pairs[:, 1]])]
     return np.unique(np.sort(pairs, axis=1), axis=0) if len(pairs) else pairs.reshape(0, 2)
 
 
@@ -179,8 +178,15 @@ def _log_shape(
     neighbours = state.neighbours[m]  # (P, K)
     distance = np.linalg.norm(x[:, :, None] - witnesses[:, neighbours], axis=3)  # (M, P, K)
     z = (distance - state.distance_mean[m]) / np.sqrt(np.maximum(state.distance_var[m], 1.0))
-    learned = np.minimum(state.motion_samples[m][:, None], state.motion_samples[neighbours]) >= LEARNED_FRAMES
-    rigid = learned & (state.distance_var[m] < RIGID_SD_MM**2)  # (P, K)
+    rigid = _rigid(state, m[:, None], neighbours, state.distance_var[m])  # (P, K)
     counted = np.isfinite(z) & (neighbours != partner[:, None]) & rigid
     log_f: np.ndarray = -0.5 * np.where(counted, np.minimum(z**2, CAP**2), 0.0).sum(axis=2)
     return log_f, counted.sum(axis=2)
+
+
+def _rigid(state: MarkerState, m: np.ndarray, j: np.ndarray, var: np.ndarray) -> np.ndarray:
+    """Markers ``m`` and ``j`` (broadcast) rigid with each other: their distance variance
+    ``var`` under ``RIGID_SD_MM``^2, learned over ``LEARNED_FRAMES`` of both."""
+    learned = np.minimum(state.motion_samples[m], state.motion_samples[j]) >= LEARNED_FRAMES
+    rigid: np.ndarray = learned & (var < RIGID_SD_MM**2)
+    return rigid
