@@ -69,6 +69,7 @@ import numpy as np
 
 from formulations.markers.mirror import RIGID_SD_MM, LearnedPairs
 from formulations.markers.state import MarkerState
+from formulations.markers.turns import taken_positions
 
 CAP = 3.0  # z beyond 3 sd counts as 3: a slipped neighbour or a foreign point, not more evidence
 # A pair's distance variance starts at a 100 mm^2 prior that decays by 0.97 a frame it is
@@ -121,11 +122,7 @@ def _judged_pairs(state: MarkerState, doubtful: np.ndarray) -> np.ndarray:
 
 def _positions(frames: list[np.ndarray], taken: np.ndarray) -> np.ndarray:
     """``(M, N, 3)`` each marker's labeled point per frame, NaN where it has none."""
-    where = np.full((taken.shape[1], taken.shape[0], 3), np.nan)
-    for f, points in enumerate(frames):
-        seen = taken[:, f] >= 0
-        where[f, seen] = points[taken[seen, f]]
-    return where
+    return np.stack([taken_positions(points, taken[:, f]) for f, points in enumerate(frames)])
 
 
 def _exchange_ratio(

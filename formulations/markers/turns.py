@@ -113,7 +113,7 @@ def repair_turns(
     sighting = _Sightings.at_template(template, triples)
     repairs = 0
     for m, points in enumerate(frames):
-        current = _positions(points, taken[:, m])
+        current = taken_positions(points, taken[:, m])
         sighting.gap[sighting.gap >= 0] += 1
         full = ~np.isnan(current[triples]).any(axis=(1, 2))
         again = np.flatnonzero(full & (sighting.gap > 0))
@@ -210,8 +210,9 @@ def _turn_rate(state: MarkerState, triples: np.ndarray) -> np.ndarray:
     return np.where(state.velocity_known[triples].all(axis=1), rate, np.nan)
 
 
-def _positions(points: np.ndarray, took: np.ndarray) -> np.ndarray:
-    """``(N, 3)`` the point each marker took, NaN where none."""
+def taken_positions(points: np.ndarray, took: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` the point each marker took in one frame (``took``: point index, -1 none),
+    NaN where none."""
     result = np.full((len(took), 3), np.nan)
     result[took >= 0] = points[took[took >= 0]]
     return result
