@@ -78,10 +78,14 @@ class SolverBackend(ABC):
         """
 
     @abstractmethod
-    def set_interior_point(self) -> None:
+    def set_interior_point(self, tolerance: float = 1e-8) -> None:
         """Solve LPs by an interior-point method without crossover, cold each time: the duals
         are central in the optimal dual face rather than a vertex of it (column generation
         then needs far fewer rounds), the primal is not a vertex. ``set_primal_simplex`` undoes it.
+
+        Args:
+            tolerance: Relative optimality (duality gap and infeasibility) the iterations
+                stop at.
         """
 
     @abstractmethod

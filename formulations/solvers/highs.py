@@ -52,8 +52,9 @@ class HighsBackend(SolverBackend):
         self._set("presolve", "choose")
         self._set("simplex_strategy", PRIMAL_SIMPLEX)
 
-    def set_interior_point(self) -> None:
+    def set_interior_point(self, tolerance: float = 1e-8) -> None:
         self._set("solver", "ipm")
+        self._set("ipm_optimality_tolerance", float(tolerance))
         self._set("run_crossover", "off")
         # Without crossover, duals carried back through presolve are not the loaded model's
         # (columns already in it price negative): solve the model as given.
