@@ -56,7 +56,10 @@ SHAPE_CAP_MM = 50.0  # c, as the shape term of ``cloud_candidates``
 EXCHANGE_GAIN_MM = 20.0  # a change must explain the shape by this much per marker (weighted mean mm) ...
 EXCHANGE_RATIO = 0.5  # ... and halve the deviation of the markers it moves
 NONE_MM = 40.0  # holding no track: worse than any fitting track, better than a wrong one
-_TRACK_FIELDS = ("position", "velocity", "velocity_known", "unseen", "streak", "anchor", "anchor_neighbours", "anchor_valid")
+_TRACK_FIELDS = (
+    "position", "velocity", "velocity_known", "unseen", "streak", "anchor", "anchor_neighbours", "anchor_valid",
+    "anchor_carried",
+)
 
 
 def shape_deviations(state: MarkerState, positions: np.ndarray) -> np.ndarray:
@@ -166,6 +169,7 @@ def reassigned(state: MarkerState, visible: np.ndarray, tracks: np.ndarray, trac
             fields["unseen"][m], fields["streak"][m] = 0, 1
             fields["anchor_neighbours"][m] = state.position[state.neighbours[m]]
             fields["anchor_valid"][m] = state.visible[state.neighbours[m]]
+            fields["anchor_carried"][m] = False
     dropped = np.flatnonzero((track < 0) & state.visible)
     fields["unseen"][dropped], fields["streak"][dropped] = 1, 0
     return replace(state, **fields)

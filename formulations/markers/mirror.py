@@ -38,9 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from formulations.markers.exchange import reassigned
+from formulations.markers.state import RIGID_SD_MM as RIGID_SD_MM
 from formulations.markers.state import MarkerState
 
-RIGID_SD_MM = 10.0  # as ShapeReacquisition.max_sd_mm: one segment's skin markers keep their distances
 TOLERANCE_MM = 5.0  # a mirrored pair's learned distances to the rest agree within a few mm of skin motion
 SURE_SD = 3.0  # a sign this many sd from 0 is the segment's, not the noise's
 # A flatter quadruple flips through flat when one marker moves out of its plane by a few
