@@ -48,4 +48,6 @@ def follow_segments(geometry: ModelGeometry, state: MarkerState) -> MarkerState:
         anchor=np.where(carried[:, None], placed, state.anchor),
         anchor_neighbours=np.where(carried[:, None, None], now[neighbours], state.anchor_neighbours),
         anchor_valid=np.where(carried[:, None], mate | seen[neighbours], state.anchor_valid),
+        # Anchored anew, on the pose: what was carried at the old anchor says nothing of this one.
+        anchor_carried=np.where(carried[:, None], False, state.anchor_carried),
     )

@@ -33,4 +33,7 @@ def advance_state(state: MarkerState, located: LocatedMarkers) -> MarkerState:
     position[single] = anchor[single] = located.point[single]
     anchor_neighbours[single] = after.position[state.neighbours[single]]
     anchor_valid[single] = seen[state.neighbours[single]]
-    return replace(after, position=position, anchor=anchor, anchor_neighbours=anchor_neighbours, anchor_valid=anchor_valid)
+    anchor_carried = after.anchor_carried.copy()
+    anchor_carried[single] = False  # a new anchor: what was carried at the old one says nothing of it
+    return replace(after, position=position, anchor=anchor, anchor_neighbours=anchor_neighbours, anchor_valid=anchor_valid,
+                   anchor_carried=anchor_carried)
