@@ -33,6 +33,7 @@ from formulations.markers.guide import Gate, GuideTrack, guide_track
 from formulations.markers.likelihood import marker_likelihood
 from formulations.markers.state import MarkerState
 from formulations.markers.step_motion import HALF_WIDTH, expected_steps
+from formulations.markers.unnamed import WindowSurround, unnamed_chains
 from formulations.window.candidates import WindowCandidates
 
 SHAPE_CAP_MM = 50.0  # c
@@ -56,6 +57,8 @@ class CloudGating:
         step_median_frames: h of the expected step, the median of the guide's steps
             h frames each side (``markers.step_motion``); 0: the guide's last step, which
             looks at no later frame (the frame-by-frame baseline).
+        unnamed_tracks: Points no marker holds that persist are objects of the window
+            (``markers.unnamed``; with ``likelihood`` only), not clutter each frame.
     """
 
     gate: Gate = field(default_factory=Gate)
@@ -66,6 +69,7 @@ class CloudGating:
     shape_weight: float = 0.5
     likelihood: bool = True
     step_median_frames: int = HALF_WIDTH
+    unnamed_tracks: bool = True
 
 
 @dataclass(frozen=True)
@@ -80,7 +84,7 @@ class CloudWindow:
 
 def cloud_candidates(
     state: MarkerState, frames: list[np.ndarray], gating: CloudGating = CloudGating(),
-    point_resources: list[sp.csr_matrix] | None = None,
+    point_resources: list[sp.csr_matrix] | None = None, around: WindowSurround | None = None,
 ) -> CloudWindow:
     """Gate every frame's points around the guide track's predictions.
 
@@ -91,8 +95,14 @@ def cloud_candidates(
         point_resources: Per frame, ``(points, R_f)`` 0/1: what each point consumes when
             points are not independent (triangulated points sharing a camera detection).
             None: each point is its own resource.
+        around: The points next to the window: with them (and ``gating.likelihood``) its
+            unnamed tracks (``markers.unnamed``) are objects N.., each with its own chain's
+            points as candidates.
     """
     guide = guide_track(state, frames, gating.gate)
+    unnamed = None
+    if around is not None and gating.likelihood and gating.unnamed_tracks:
+        unnamed = unnamed_chains(state, around, frames, gating.gate, guide)
     objects, frame_of, points = [], [], []
     for f, cloud in enumerate(frames):
         if len(cloud) == 0:
@@ -103,22 +113,37 @@ def cloud_candidates(
         points.append(np.fromiter((p for i in inside for p in i), dtype=int, count=counts.sum()))
         frame_of.append(np.full(counts.sum(), f + 1))
     obj, frame, point = (np.concatenate(a) if a else np.zeros(0, int) for a in (objects, frame_of, points))
+    named = len(obj)
+    if unnamed is not None and unnamed.n_objects:
+        u, f_u = np.nonzero(unnamed.point >= 0)
+        obj, frame, point = np.r_[obj, len(state.position) + u], np.r_[frame, f_u + 1], np.r_[point, unnamed.point[u, f_u]]
     offsets = np.cumsum([0] + [len(c) for c in frames])
     location = np.concatenate(frames)[offsets[frame - 1] + point] if len(point) else np.zeros((0, 3))
-    template_cost = gating.shape_weight * _shape_deviation(state, guide, obj, frame, location)
-    likelihood = marker_likelihood(state, guide, frames, obj, frame, location) if gating.likelihood else None
+    template_cost = np.zeros(len(obj))
+    template_cost[:named] = gating.shape_weight * _shape_deviation(state, guide, obj[:named], frame[:named], location[:named])
+    if unnamed is not None:
+        template_cost[named:] = _typical_shape(template_cost[:named], obj[:named], frame[:named], guide)
+    likelihood = (marker_likelihood(state, guide, frames, obj[:named], frame[:named], location[:named], unnamed)
+                  if gating.likelihood else None)
     if likelihood is None:
         off_prediction = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1)
         sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[frame - 1, obj]
         template_cost += gating.prediction_weight * np.minimum(off_prediction / sigma, gating.prediction_cap_sigmas)
+    template_location, template_occluded = state.position, ~state.visible
+    occlusion_location = guide.predicted.transpose(1, 0, 2)
+    motion = expected_steps(guide, gating.step_median_frames).transpose(1, 0, 2)
+    if unnamed is not None and unnamed.n_objects:
+        template_location = np.vstack([template_location, unnamed.template_location])
+        template_occluded = np.r_[template_occluded, ~unnamed.seeded]
+        occlusion_location = np.concatenate([occlusion_location, np.repeat(
+            unnamed.template_location[:, None], len(frames), axis=1)])
+        motion = np.concatenate([motion, unnamed.motion])
     candidates = WindowCandidates(
-        template_location=state.position, template_occluded=~state.visible, n_frames=len(frames),
+        template_location=template_location, template_occluded=template_occluded, n_frames=len(frames),
         object=obj, frame=frame, location=location,
         template_cost=template_cost,
         resources=_window_resources(frames, point_resources)[offsets[frame - 1] + point],
-        occlusion_location=guide.predicted.transpose(1, 0, 2),
-        motion=expected_steps(guide, gating.step_median_frames).transpose(1, 0, 2),
-        likelihood=likelihood,
+        occlusion_location=occlusion_location, motion=motion, likelihood=likelihood,
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)
 
@@ -134,6 +159,18 @@ def _shape_deviation(
     deviation = np.minimum(np.abs(distance - state.distance_mean[obj]), SHAPE_CAP_MM)
     mean_deviation: np.ndarray = (weight * deviation).sum(axis=1) / np.maximum(weight.sum(axis=1), SHAPE_WEIGHT_FLOOR)
     return mean_deviation
+
+
+def _typical_shape(template_cost: np.ndarray, obj: np.ndarray, frame: np.ndarray, guide: GuideTrack) -> float:
+    """What a right label pays for its shape: over the markers seen the frame before, the
+    median of each one's cheapest candidate per frame."""
+    seen = guide.unseen[frame - 1, obj] == 0
+    if not seen.any():
+        return 0.0
+    key = obj[seen] * (guide.unseen.shape[0] + 1) + frame[seen]
+    order = np.lexsort((template_cost[seen], key))
+    first = np.r_[True, np.diff(key[order]) != 0]
+    return float(np.median(template_cost[seen][order][first]))
 
 
 def _window_resources(frames: list[np.ndarray], point_resources: list[sp.csr_matrix] | None) -> sp.csr_matrix:

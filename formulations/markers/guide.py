@@ -83,6 +83,16 @@ class GuideTrack:
     tracked: np.ndarray  # (M, N) seen in the frames before m, long enough to trust its prediction
     unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
     burst_var: np.ndarray  # (M, N) the guide's burst variance before frame m (``MarkerState.burst_var``)
+    point: np.ndarray | None = None  # (M, N) the point it took in frame m, -1 none
+
+    def continued(self, f: int, n_points: int) -> np.ndarray:
+        """``(K,)`` the points of window frame f (1..M) the guide gave a marker seen the frame
+        before: the ends of tracks, not something appearing. None known without ``point``."""
+        held = np.zeros(n_points, bool)
+        if self.point is not None:
+            on = (self.point[f - 1] >= 0) & (self.unseen[f - 1] == 0)
+            held[self.point[f - 1][on]] = True
+        return held
 
 
 def guide_track(
@@ -101,6 +111,7 @@ def guide_track(
     radius, tracked = np.empty((m, n)), np.empty((m, n), bool)
     unseen = np.empty((m, n), dtype=int)
     burst_var = np.empty((m, n))
+    point = np.full((m, n), -1)
     state = _moving_start(state, frames, gate)
     for f, points in enumerate(frames):
         lost = state.stranded(reacquisition.lost_after)
@@ -122,12 +133,13 @@ def guide_track(
             predicted[f] += shared
             velocity[f] += shared
             assigned = assign_nearest(predicted[f], points, radius[f], miss)
-        seen = assigned >= 0
+        seen, point[f] = assigned >= 0, assigned
         taken = np.zeros((n, 3))
         taken[seen] = points[assigned[seen]]
         state = state.advance(taken, seen)
     return GuideTrack(
         predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen, burst_var=burst_var,
+        point=point,
     )
 
 

@@ -27,6 +27,7 @@ import numpy as np
 from formulations.markers.guide import GuideTrack
 from formulations.markers.motion import MOTION_VAR_PRIOR_MM2
 from formulations.markers.state import MarkerState
+from formulations.markers.unnamed import UnnamedChains
 from formulations.window.likelihood import CandidateLikelihood, step_loss
 
 LOG_2PI_3D = 1.5 * np.log(2 * np.pi)
@@ -37,13 +38,15 @@ CLUTTER_MARGIN_MM = 100.0
 
 def marker_likelihood(
     state: MarkerState, guide: GuideTrack, frames: list[np.ndarray],
-    obj: np.ndarray, frame: np.ndarray, location: np.ndarray,
+    obj: np.ndarray, frame: np.ndarray, location: np.ndarray, unnamed: UnnamedChains | None = None,
 ) -> CandidateLikelihood:
-    """The likelihood terms of every candidate (object ``obj``, window frame ``frame``, at ``location``)."""
+    """The likelihood terms of every candidate (object ``obj``, window frame ``frame``, at
+    ``location``); with ``unnamed``, its objects' candidates follow (objects N.., module
+    ``unnamed``: the step sd of a typical marker, no prediction, entry b, a free miss)."""
     n, m = len(state.position), len(frames)
     detection = _detection_probability(guide, n)
-    log_clutter = np.log(_clutter_density(guide, frames))
-    base = LOG_2PI_3D - np.log(detection) + log_clutter
+    spare, volume = _clutter(guide, frames)
+    base = LOG_2PI_3D - np.log(detection) + np.log(spare / volume)
     step_var = np.maximum(state.motion_var[obj], guide.burst_var[frame - 1, obj])
     step_var = np.where(state.velocity_known[obj], step_var, np.maximum(step_var, MOTION_VAR_PRIOR_MM2))
     step_sigma = np.sqrt(step_var)
@@ -51,9 +54,19 @@ def marker_likelihood(
     off = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1) / predicted_sigma
     reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
     offset = 3 * np.log(step_sigma) + base
+    miss = np.full((n, m), -np.log1p(-detection))
+    if unnamed is not None and unnamed.n_objects:
+        taken = unnamed.point >= 0
+        typical = np.full(int(taken.sum()), np.sqrt(np.median(state.motion_var)))
+        step_sigma = np.r_[step_sigma, typical]
+        offset = np.r_[offset, 3 * np.log(typical) + base]
+        entry = np.log(spare / unnamed.births_per_frame())
+        reappear = np.r_[reappear, np.full(len(typical), entry)]
+        off = np.r_[off, np.zeros(len(typical))]
+        miss = np.vstack([miss, np.zeros((unnamed.n_objects, m))])
     # K: the lowest cost an observation can have (its residual 0) is lifted to 0.
     shift = -float(min(offset.min(initial=0.0), (reappear - step_loss(off)).min(initial=0.0)))
-    miss = np.full((n, m), -np.log1p(-detection) + shift)
+    miss = miss + shift
     return CandidateLikelihood(
         step_sigma=step_sigma, step_offset=offset + shift, reappear_cost=reappear + shift, miss_cost=miss,
     )
@@ -66,12 +79,12 @@ def _detection_probability(guide: GuideTrack, n: int) -> float:
     return float(np.clip((seen + PRIOR_HITS) / (total + PRIOR_HITS + PRIOR_MISSES), 0.5, 0.99))
 
 
-def _clutter_density(guide: GuideTrack, frames: list[np.ndarray]) -> float:
-    """False alarms per mm^3: points the guide did not take, per frame, over the padded volume."""
+def _clutter(guide: GuideTrack, frames: list[np.ndarray]) -> tuple[float, float]:
+    """False alarms per frame (points the guide did not take), and the padded volume they fall in (mm^3)."""
     counts = np.array([len(f) for f in frames], float)
     taken = (guide.unseen[1:] == 0).sum(axis=1) if len(guide.unseen) > 1 else np.zeros(0)
     spare = counts[: len(taken)] - taken
     per_frame = max(float(spare.mean()) if len(spare) else 0.0, MIN_CLUTTER)
     points = np.concatenate([f for f in frames if len(f)]) if any(len(f) for f in frames) else np.zeros((1, 3))
     extent = points.max(axis=0) - points.min(axis=0) + 2 * CLUTTER_MARGIN_MM
-    return per_frame / float(np.prod(extent))
+    return per_frame, float(np.prod(extent))

@@ -64,6 +64,8 @@ class Capture:
         detections: Camera mode: ``detections[f][c]`` is a ``(D, 2)`` array of pixels.
         model: A subject model in place of the labeled first frame: ``names`` are then the
             model's markers, ``first_frame`` is ignored (NaN), and frame 0 is identified.
+        unnamed_markers: Markers the take has that ``names`` leaves out (absent from the
+            labeled frame): their points are in the frames, unnamed, from the start.
     """
 
     names: list[str]
@@ -73,6 +75,7 @@ class Capture:
     cameras: list[Camera] | None = None
     detections: list[list[np.ndarray]] | None = field(default=None, repr=False)
     model: SubjectModel | None = field(default=None, repr=False)
+    unnamed_markers: int = 0
 
     def __post_init__(self) -> None:
         if (self.points is None) == (self.detections is None):

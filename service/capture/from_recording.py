@@ -51,7 +51,7 @@ def capture_from_span(
                                   shuffle, seed)
     names = [n for n, p in zip(recording.names, present) if p]
     absent = [n for n, p in zip(recording.names, present) if not p]
-    return replace(span, names=names, first_frame=span.first_frame[present]), absent
+    return replace(span, names=names, first_frame=span.first_frame[present], unnamed_markers=len(absent)), absent
 
 
 def require_complete_first_frame(recording: Recording, source: str) -> None:

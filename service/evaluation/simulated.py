@@ -31,6 +31,9 @@ class SimulatedCapture:
     scenario: Scenario
 
     def capture(self) -> Capture:
-        """What a user would hand markerflow: the points and the labeled first frame."""
+        """What a user would hand markerflow: the points and the labeled first frame (which
+        leaves the scenario's ``unnamed_markers`` out, as ``track --start`` leaves markers
+        absent there)."""
         first = self.first_frame
-        return Capture(list(first.names), first.positions[0], self.cloud.rate, points=self.cloud.points)
+        return Capture(list(first.names), first.positions[0], self.cloud.rate, points=self.cloud.points,
+                       unnamed_markers=self.scenario.unnamed_markers)

@@ -198,7 +198,8 @@ def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -
     gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0)
     if capture.points is not None:
         cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
-        return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight)
+        return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight,
+                          unnamed_markers=capture.unnamed_markers)
     cameras, detections = capture.camera_frames()
     if options.association == "per-camera":
         return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)

@@ -20,6 +20,7 @@ from formulations.markers.mirror import repair_mirrors
 from formulations.markers.pair_evidence import repair_pair_evidence
 from formulations.markers.state import MarkerState
 from formulations.markers.turns import repair_turns, rigid_triples
+from formulations.markers.unnamed import MIN_BIRTH_POINTS, WindowSurround
 from formulations.relaxation.components import coupled_components
 from formulations.window.build import build_window, taken_candidates
 from formulations.window.costs import ArcCostWeights
@@ -65,6 +66,8 @@ class CloudChain:
             neighbours (lowest distance variance), and only where the two markers are
             already coupled by shared candidates: the term then breaks ties between
             markers that compete for points without merging independent components.
+        unnamed_markers: Markers of the take not named (absent from the labeled frame): an
+            unnamed track may be born before any is seen (``markers.unnamed``).
     """
 
     cloud: UnlabeledCloud
@@ -74,6 +77,7 @@ class CloudChain:
     weights: ArcCostWeights = MARKER_COSTS
     layout_weight: float = 0.0
     layout_neighbours: int = 2
+    unnamed_markers: int = 0
 
     def pose(
         self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
@@ -82,7 +86,7 @@ class CloudChain:
         state, _ = repair_mirrors(state, np.asarray(self.first_frame, dtype=float))
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
-        gated = cloud_candidates(state, frames, self.gating, resources)
+        gated = cloud_candidates(state, frames, self.gating, resources, self._around(template, last))
         problem, node_candidate = build_window(gated.candidates, self.weights)
         if self.layout_weight > 0:
             problem = _with_layout(problem, state, self.layout_neighbours, self.layout_weight)
@@ -90,13 +94,20 @@ class CloudChain:
         return problem, CloudInverse(state, frames, gated, node_candidate, doubtful)
 
     def invert(self, solution: WindowSolution, inverse: CloudInverse) -> WindowLabels:
-        taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N, M), -1 occluded
+        taken = taken_candidates(inverse.node_candidate, solution.path, inverse.gated.point)  # (N + U, M), -1 occluded
+        taken = taken[: len(inverse.state.position)]  # the unnamed tracks' points stay unlabeled
         triples, symmetric = rigid_triples(inverse.state)
         taken, _, plates = repair_turns(inverse.state, inverse.frames, taken, triples, symmetric)
         taken, _ = repair_pair_evidence(inverse.state, inverse.frames, taken, inverse.doubtful)
         state, filled = _advance(inverse.state, inverse.frames, taken)
         state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
+
+    def _around(self, template: int, last: int) -> WindowSurround:
+        """The points next to the window, for its unnamed tracks (``markers.unnamed``)."""
+        before = self.cloud.points[template - 1] if template > 0 else np.zeros((0, 3))
+        after = self.cloud.points[last + 1 : last + MIN_BIRTH_POINTS]
+        return WindowSurround(self.cloud.points[template], before, after, self.unnamed_markers)
 
     def assemble(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The labeled trajectories from every window's outcome, in order."""

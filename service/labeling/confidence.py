@@ -78,8 +78,8 @@ def marker_confidence(
     ``views``: per-camera only, ``(M, N, C)`` the detection each marker kept per camera, -1 for none.
     """
     probability = label_confidence(problem, solution.path).probability  # (objects, M)
-    if probability.shape[0] == markers:
-        return probability.T.copy()
+    if views is None or probability.shape[0] == markers:  # 3D points: unnamed tracks follow the markers
+        return probability[:markers].T.copy()
     cameras = probability.shape[0] // markers
     per_view = probability.reshape(cameras, markers, -1).transpose(2, 1, 0)  # (M, N, C)
     kept = views >= 0 if views is not None else np.zeros(per_view.shape, dtype=bool)
