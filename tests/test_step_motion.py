@@ -94,14 +94,16 @@ def test_the_frame_by_frame_baseline_sees_no_later_frame(
     monkeypatch: pytest.MonkeyPatch, formulation: str, half_width: int,
 ) -> None:
     """nn-hungarian assigns each frame from the frames before it: its expected steps must not
-    be medians over the frames after (the guide's last step instead)."""
-    seen: list[int] = []
+    be medians over the frames after (the guide's last step instead), nor its unnamed tracks
+    be born from them."""
+    seen: list[tuple[int, bool]] = []
     original = cloud_module.cloud_candidates
 
-    def recording(state, frames, gating, resources=None):
-        seen.append(gating.step_median_frames)
-        return original(state, frames, gating, resources)
+    def recording(state, frames, gating, resources=None, around=None):
+        seen.append((gating.step_median_frames, gating.unnamed_tracks))
+        return original(state, frames, gating, resources, around)
 
     monkeypatch.setattr(cloud_module, "cloud_candidates", recording)
-    CaptureLabeling(generated_capture(25), LabelingOptions(formulation=formulation, second_pass=False)).label()
-    assert seen and set(seen) == {half_width}
+    capture = replace(generated_capture(25), unnamed_markers=1)
+    CaptureLabeling(capture, LabelingOptions(formulation=formulation, second_pass=False)).label()
+    assert seen and set(seen) == {(half_width, half_width > 0)}

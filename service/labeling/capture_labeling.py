@@ -195,7 +195,9 @@ def _confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.
 def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -> Association:
     """The chain of the capture's input mode and the chosen association; ``look_ahead``
     False (a frame-by-frame baseline) keeps later frames out of the expected steps."""
-    gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0)
+    # A frame-by-frame baseline sees no later frame: no median step over them, no unnamed
+    # track told from them (a birth is followed three frames).
+    gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0, unnamed_tracks=False)
     if capture.points is not None:
         cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
         return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight,
