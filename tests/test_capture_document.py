@@ -44,6 +44,16 @@ def test_points_in_metres_are_read_in_millimetres():
     assert all(np.allclose(a, b) for a, b in zip(back.points, capture.points))
 
 
+def test_unnamed_markers_round_trip_and_must_not_be_negative():
+    capture = points_capture(frames=3)
+    capture.unnamed_markers = 2
+    document = json.loads(CaptureDocument.of(capture).model_dump_json())
+    assert read_capture_document(json.dumps(document), "u.json").capture().unnamed_markers == 2
+    document["unnamed_markers"] = -1
+    with pytest.raises(InputError, match="unnamed_markers"):
+        read_capture_document(json.dumps(document), "u.json")
+
+
 def _outside(d: dict) -> None:
     d["detections"][d["cameras"][1]["name"]][2].append([1e5, 10.0])
 

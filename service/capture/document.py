@@ -14,7 +14,8 @@
       "formulation": "lp-l1" or {"name": "ilp", "time_limit": 10},
       "window": 20,
       "association": "joint-3d",
-      "second_pass": true                  # 3D points: label again from the take's spreads, keep the pass closer to frame 0
+      "second_pass": true,                 # 3D points: label again from the take's spreads, keep the pass closer to frame 0
+      "unnamed_markers": 0                 # 3D points: markers in the points that "markers" leaves out (unnamed tracks)
     }
 
 Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only)
@@ -95,6 +96,7 @@ class CaptureDocument(BaseModel):
     window: int = Field(default=20, ge=2)
     association: Literal[ASSOCIATIONS] = "joint-3d"  # type: ignore[valid-type]
     second_pass: bool = True
+    unnamed_markers: int = Field(default=0, ge=0)
 
     @field_validator("rate")
     @classmethod
@@ -177,7 +179,8 @@ class CaptureDocument(BaseModel):
         first_frame = np.asarray(self.first_frame, dtype=float).reshape(-1, 3) * scale
         if self.points is not None:
             points = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
-            return Capture(list(self.markers or []), first_frame, self.rate, points=points)
+            return Capture(list(self.markers or []), first_frame, self.rate, points=points,
+                           unnamed_markers=self.unnamed_markers)
         documents, found = self.cameras or [], self.detections or {}  # both there: _consistent checked it
         cameras = [camera.camera(scale) for camera in documents]
         empty: list[list[Pixel]] = [[] for _ in range(self.n_frames)]
@@ -195,7 +198,8 @@ class CaptureDocument(BaseModel):
                   "formulation": options.formulation, "window": options.window, "association": options.association,
                   "second_pass": options.second_pass}
         if capture.points is not None:
-            return cls(points=[frame.tolist() for frame in capture.points], **fields)
+            return cls(points=[frame.tolist() for frame in capture.points], unnamed_markers=capture.unnamed_markers,
+                       **fields)
         cameras, found = capture.camera_frames()
         documents = [
             {"name": c.name, "K": c.K.tolist(), "distortion": c.distortion.tolist(), "R": c.R.tolist(),
