@@ -33,7 +33,7 @@ from formulations.markers.guide import Gate, GuideTrack, guide_track
 from formulations.markers.likelihood import marker_likelihood
 from formulations.markers.state import MarkerState
 from formulations.markers.step_motion import HALF_WIDTH, expected_steps
-from formulations.markers.unnamed import WindowSurround, unnamed_chains
+from formulations.markers.unnamed import UnnamedChains, WindowSurround, unnamed_chains
 from formulations.window.candidates import WindowCandidates
 
 SHAPE_CAP_MM = 50.0  # c
@@ -100,7 +100,7 @@ def cloud_candidates(
             points as candidates.
     """
     guide = guide_track(state, frames, gating.gate)
-    unnamed = None
+    unnamed = UnnamedChains.empty(len(frames))
     if around is not None and gating.likelihood and gating.unnamed_tracks:
         unnamed = unnamed_chains(state, around, frames, gating.gate, guide)
     objects, frame_of, points = [], [], []
@@ -114,14 +114,13 @@ def cloud_candidates(
         frame_of.append(np.full(counts.sum(), f + 1))
     obj, frame, point = (np.concatenate(a) if a else np.zeros(0, int) for a in (objects, frame_of, points))
     named = len(obj)
-    if unnamed is not None and unnamed.n_objects:
-        u, f_u = np.nonzero(unnamed.point >= 0)
-        obj, frame, point = np.r_[obj, len(state.position) + u], np.r_[frame, f_u + 1], np.r_[point, unnamed.point[u, f_u]]
+    u, f_u = np.nonzero(unnamed.point >= 0)
+    obj, frame, point = np.r_[obj, len(state.position) + u], np.r_[frame, f_u + 1], np.r_[point, unnamed.point[u, f_u]]
     offsets = np.cumsum([0] + [len(c) for c in frames])
     location = np.concatenate(frames)[offsets[frame - 1] + point] if len(point) else np.zeros((0, 3))
     template_cost = np.zeros(len(obj))
     template_cost[:named] = gating.shape_weight * _shape_deviation(state, guide, obj[:named], frame[:named], location[:named])
-    if unnamed is not None:
+    if unnamed.n_objects:
         template_cost[named:] = _typical_shape(template_cost[:named], obj[:named], frame[:named], guide)
     likelihood = (marker_likelihood(state, guide, frames, obj[:named], frame[:named], location[:named], unnamed)
                   if gating.likelihood else None)
@@ -129,21 +128,16 @@ def cloud_candidates(
         off_prediction = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1)
         sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[frame - 1, obj]
         template_cost += gating.prediction_weight * np.minimum(off_prediction / sigma, gating.prediction_cap_sigmas)
-    template_location, template_occluded = state.position, ~state.visible
-    occlusion_location = guide.predicted.transpose(1, 0, 2)
-    motion = expected_steps(guide, gating.step_median_frames).transpose(1, 0, 2)
-    if unnamed is not None and unnamed.n_objects:
-        template_location = np.vstack([template_location, unnamed.template_location])
-        template_occluded = np.r_[template_occluded, ~unnamed.seeded]
-        occlusion_location = np.concatenate([occlusion_location, np.repeat(
-            unnamed.template_location[:, None], len(frames), axis=1)])
-        motion = np.concatenate([motion, unnamed.motion])
     candidates = WindowCandidates(
-        template_location=template_location, template_occluded=template_occluded, n_frames=len(frames),
+        template_location=np.vstack([state.position, unnamed.template_location]),
+        template_occluded=np.r_[~state.visible, ~unnamed.seeded], n_frames=len(frames),
         object=obj, frame=frame, location=location,
         template_cost=template_cost,
         resources=_window_resources(frames, point_resources)[offsets[frame - 1] + point],
-        occlusion_location=occlusion_location, motion=motion, likelihood=likelihood,
+        occlusion_location=np.concatenate([guide.predicted.transpose(1, 0, 2),
+                                           np.repeat(unnamed.template_location[:, None], len(frames), axis=1)]),
+        motion=np.concatenate([expected_steps(guide, gating.step_median_frames).transpose(1, 0, 2), unnamed.motion]),
+        likelihood=likelihood,
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)
 

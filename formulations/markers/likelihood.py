@@ -38,11 +38,11 @@ CLUTTER_MARGIN_MM = 100.0
 
 def marker_likelihood(
     state: MarkerState, guide: GuideTrack, frames: list[np.ndarray],
-    obj: np.ndarray, frame: np.ndarray, location: np.ndarray, unnamed: UnnamedChains | None = None,
+    obj: np.ndarray, frame: np.ndarray, location: np.ndarray, unnamed: UnnamedChains,
 ) -> CandidateLikelihood:
-    """The likelihood terms of every candidate (object ``obj``, window frame ``frame``, at
-    ``location``); with ``unnamed``, its objects' candidates follow (objects N.., module
-    ``unnamed``: the step sd of a typical marker, no prediction, entry b, a free miss)."""
+    """The likelihood terms of every named candidate (object ``obj``, window frame ``frame``,
+    at ``location``), then of every ``unnamed`` object's (objects N.., module ``unnamed``: the
+    step sd of a typical marker, no prediction, entry b, a free miss)."""
     n, m = len(state.position), len(frames)
     detection = _detection_probability(guide, n)
     spare, volume = _clutter(guide, frames)
@@ -54,16 +54,11 @@ def marker_likelihood(
     off = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1) / predicted_sigma
     reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
     offset = 3 * np.log(step_sigma) + base
-    miss = np.full((n, m), -np.log1p(-detection))
-    if unnamed is not None and unnamed.n_objects:
-        taken = unnamed.point >= 0
-        typical = np.full(int(taken.sum()), np.sqrt(np.median(state.motion_var)))
-        step_sigma = np.r_[step_sigma, typical]
-        offset = np.r_[offset, 3 * np.log(typical) + base]
-        entry = np.log(spare / unnamed.births_per_frame())
-        reappear = np.r_[reappear, np.full(len(typical), entry)]
-        off = np.r_[off, np.zeros(len(typical))]
-        miss = np.vstack([miss, np.zeros((unnamed.n_objects, m))])
+    typical = np.full(int(np.count_nonzero(unnamed.point >= 0)), np.sqrt(np.median(state.motion_var)))
+    step_sigma, offset = np.r_[step_sigma, typical], np.r_[offset, 3 * np.log(typical) + base]
+    reappear = np.r_[reappear, np.full(len(typical), np.log(spare / unnamed.births_per_frame()))]
+    off = np.r_[off, np.zeros(len(typical))]
+    miss = np.vstack([np.full((n, m), -np.log1p(-detection)), np.zeros((unnamed.n_objects, m))])
     # K: the lowest cost an observation can have (its residual 0) is lifted to 0.
     shift = -float(min(offset.min(initial=0.0), (reappear - step_loss(off)).min(initial=0.0)))
     miss = miss + shift

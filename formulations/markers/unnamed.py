@@ -72,6 +72,11 @@ class UnnamedChains:
     point: np.ndarray
     motion: np.ndarray
 
+    @classmethod
+    def empty(cls, m: int) -> UnnamedChains:
+        """No unnamed object in a window of ``m`` frames."""
+        return cls(np.zeros((0, 3)), np.zeros(0, bool), np.full((0, m), -1), np.zeros((0, m, 3)))
+
     @property
     def n_objects(self) -> int:
         return len(self.seeded)
@@ -115,10 +120,9 @@ def unnamed_chains(
             before continues that marker's track and is no unnamed track's.
     """
     if not around.known:
-        return _assembled([], len(frames))
+        return UnnamedChains.empty(len(frames))
     reach, link_radius = _radii(state, gate)
-    held = state.position[state.visible]
-    free = around.template[_farther(around.template, held, HELD_MM)] if len(around.template) else np.zeros((0, 3))
+    free = around.template[_farther(around.template, state.position[state.visible], HELD_MM)]
     tracked, step = _predecessors(free, around.before, reach)
     chains = [_Chain(p, v, 0, True) for p, v in zip(free[tracked], step[tracked])]
     chains += [_Chain(p, None, 0, False) for p in free[~tracked]]  # appeared at the template: born there
@@ -160,6 +164,8 @@ class _Chain:
     seeded: bool
     taken: dict[int, int] = field(default_factory=dict)
     steps: dict[int, np.ndarray] = field(default_factory=dict)
+    first: np.ndarray = field(init=False)
+    born: int = field(init=False)
 
     def __post_init__(self) -> None:
         self.first, self.born = self.last.copy(), self.last_frame
