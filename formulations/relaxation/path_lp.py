@@ -23,7 +23,10 @@ Whatever the round, Lagrangian duality on the conflict rows gives a proven bound
 
 and the restricted optimum is proven when it meets L(pi). The master has N + G rows
 against the arc LP's one per node, which on large windows (long-occluded markers gating
-many points, e.g. 03_rolling) makes it several times faster.
+many points, e.g. 03_rolling) makes it several times faster. Of the G rows it holds only
+those of groups some column crosses (``_GroupRows``): a group no column crosses is slack
+(its dual 0 at every optimum), and most of a large window's 800-1,000 groups are never
+crossed.
 
 The master is solved by interior point until pricing finds nothing new: its duals are
 central in the optimal dual face, where a simplex vertex's are extreme and swing from
@@ -35,6 +38,8 @@ rare case they still price a column in.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -82,9 +87,11 @@ def solve_path_lp(
     backend = create_backend("highs")
     backend.set_timeout(time_limit)
     backend.set_interior_point(PRICING_TOLERANCE)
+    rows = _GroupRows(np.full(groups.shape[0], -1))
+    matrix = _columns(problem, node_groups, objects, paths, rows)
     backend.set_model(LinearModel(
-        cost=problem.arc_cost[paths].sum(axis=1), matrix=_columns(problem, node_groups, objects, paths),
-        row_lower=np.r_[np.ones(n), np.full(groups.shape[0], -np.inf)], row_upper=np.ones(n + groups.shape[0]),
+        cost=problem.arc_cost[paths].sum(axis=1), matrix=matrix,
+        row_lower=np.r_[np.ones(n), np.full(rows.count, -np.inf)], row_upper=np.ones(n + rows.count),
         col_lower=np.zeros(2 * n), col_upper=np.full(2 * n, np.inf),
     ))
     seen = {(o, p.tobytes()) for o, p in zip(objects, paths)}
@@ -93,7 +100,7 @@ def solve_path_lp(
     for _ in range(max_rounds):
         entering: list[int] = []
         if result.optimal:
-            sigma, pi = result.row_dual[:n], np.minimum(result.row_dual[n:], 0.0)
+            sigma, pi = result.row_dual[:n], rows.group_duals(np.minimum(result.row_dual[n:], 0.0))
             priced = problem.arc_cost - (groups.T @ pi)[problem.arc_head] if len(pi) else problem.arc_cost
             best, distance = shortest_path_arcs(problem, priced, layers)
             bound = max(bound, float(distance.sum() + pi.sum()))
@@ -108,8 +115,10 @@ def solve_path_lp(
             break
         seen.update((o, best[o].tobytes()) for o in entering)
         new = best[entering]
-        backend.add_columns(problem.arc_cost[new].sum(axis=1), np.zeros(len(new)), np.full(len(new), np.inf),
-                            _columns(problem, node_groups, np.asarray(entering), new))
+        held = rows.count
+        matrix = _columns(problem, node_groups, np.asarray(entering), new, rows)
+        backend.add_rows(np.full(rows.count - held, -np.inf), np.ones(rows.count - held))  # groups first crossed
+        backend.add_columns(problem.arc_cost[new].sum(axis=1), np.zeros(len(new)), np.full(len(new), np.inf), matrix)
         objects, paths = np.r_[objects, entering], np.vstack([paths, new])
         result = backend.solve()
     xi = np.zeros(problem.n_arcs)
@@ -133,8 +142,39 @@ def _arcs_through(problem: WindowProblem, objects: np.ndarray, nodes: np.ndarray
     return arc_index(problem, full[:, :-1].ravel(), full[:, 1:].ravel()).reshape(len(nodes), -1)
 
 
-def _columns(problem: WindowProblem, node_groups: sp.csc_matrix, objects: np.ndarray, paths: np.ndarray) -> sp.csc_matrix:
-    """The master columns of paths (their arcs ``(K, M+1)``): the object's row, then a_gp per group.
+@dataclass
+class _GroupRows:
+    """Which conflict groups the master holds a row for: those some column crosses, in the
+    order they were first crossed, after the N object rows.
+
+    Attributes:
+        row: ``(G,)`` each group's row among the master's group rows, -1 while none.
+        count: Group rows in the master.
+    """
+
+    row: np.ndarray
+    count: int = 0
+
+    def of(self, groups: np.ndarray) -> np.ndarray:
+        """The group rows of ``groups`` (counted after the object rows), new ones appended."""
+        new = np.unique(groups[self.row[groups] < 0])
+        self.row[new] = self.count + np.arange(len(new))
+        self.count += len(new)
+        return self.row[groups]
+
+    def group_duals(self, dual: np.ndarray) -> np.ndarray:
+        """``(G,)`` the duals of every group from the master's group rows' ``dual``: 0 for a group
+        no column crosses (its row would be slack)."""
+        full = np.zeros(len(self.row))
+        held = self.row >= 0
+        full[held] = dual[self.row[held]]
+        return full
+
+
+def _columns(problem: WindowProblem, node_groups: sp.csc_matrix, objects: np.ndarray, paths: np.ndarray,
+             rows: _GroupRows) -> sp.csc_matrix:
+    """The master columns of paths (their arcs ``(K, M+1)``): the object's row, then a_gp per group
+    (``rows`` gives each group its master row, adding those first crossed).
 
     ``node_groups`` is the ``(G, V)`` conflict matrix in CSC: a node's groups are one slice.
     Built from index arithmetic, as a scipy product per round costs more than the solve.
@@ -145,8 +185,8 @@ def _columns(problem: WindowProblem, node_groups: sp.csc_matrix, objects: np.nda
     per_column = counts.sum(axis=1)
     first = np.repeat(node_groups.indptr[nodes.ravel()], counts.ravel())
     within = np.arange(len(first)) - np.repeat(np.cumsum(counts.ravel()) - counts.ravel(), counts.ravel())
-    group_rows = n + node_groups.indices[first + within]
+    group_rows = n + rows.of(node_groups.indices[first + within])
     column_of = np.repeat(np.arange(k), per_column)
-    rows = np.r_[objects, group_rows]
+    entries = np.r_[objects, group_rows]
     columns = np.r_[np.arange(k), column_of]
-    return sp.csc_matrix((np.ones(len(rows)), (rows, columns)), shape=(n + node_groups.shape[0], k))
+    return sp.csc_matrix((np.ones(len(entries)), (entries, columns)), shape=(n + rows.count, k))

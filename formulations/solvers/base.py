@@ -97,5 +97,9 @@ class SolverBackend(ABC):
         """Append columns to the loaded model, keeping the current basis for a warm start."""
 
     @abstractmethod
+    def add_rows(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Append empty rows (no coefficients yet) with these bounds; later columns may use them."""
+
+    @abstractmethod
     def solve(self) -> SolveResult:
         """Solve the loaded model."""

@@ -95,6 +95,11 @@ class HighsBackend(SolverBackend):
             cols.nnz, cols.indptr[:-1].astype(np.int32), cols.indices.astype(np.int32), cols.data.astype(float),
         )
 
+    def add_rows(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        k = len(lower)
+        self._highs.addRows(k, np.asarray(lower, float), np.asarray(upper, float), 0, np.zeros(k, np.int32),
+                            np.zeros(0, np.int32), np.zeros(0))
+
     def solve(self) -> SolveResult:
         start = time.perf_counter()
         self._highs.run()
