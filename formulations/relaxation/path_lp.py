@@ -160,7 +160,8 @@ class _GroupRows:
         new = np.unique(groups[self.row[groups] < 0])
         self.row[new] = self.count + np.arange(len(new))
         self.count += len(new)
-        return self.row[groups]
+        rows: np.ndarray = self.row[groups]
+        return rows
 
     def group_duals(self, dual: np.ndarray) -> np.ndarray:
         """``(G,)`` the duals of every group from the master's group rows' ``dual``: 0 for a group
