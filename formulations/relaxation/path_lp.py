@@ -32,22 +32,28 @@ The master is solved by interior point until pricing finds nothing new: its dual
 central in the optimal dual face, where a simplex vertex's are extreme and swing from
 round to round (on 03_rolling's largest windows the primal optimum is reached in a
 quarter of the rounds, the rest only raise L(pi); central duals end in about a sixth of
-the rounds with a tenth of the columns). One primal simplex solve of the last master then
-gives the vertex optimum the rounding expects, and pricing goes on with its duals in the
-rare case they still price a column in.
+the rounds with a tenth of the columns). The interior point is Clarabel's
+(``solvers.clarabel_lp``: on masters this small HiGHS' IPX spent most of its time in a
+fixed cost per solve). One primal simplex solve of the last master by HiGHS then gives the
+vertex optimum the rounding expects, and pricing goes on with its duals, warm, in the rare
+case they still price a column in.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import scipy.sparse as sp
 
 from formulations.relaxation.viterbi import ArcLayers, shortest_path_arcs
-from formulations.solvers import LinearModel, SolveResult, create_backend
+from formulations.solvers import LinearModel, SolverBackend, SolveResult, create_backend
 from formulations.window.objective import arc_index
 from formulations.window.problem import WindowProblem
+
+if TYPE_CHECKING:  # imported with its solver, when a master is first solved
+    from formulations.solvers.clarabel_lp import ClarabelBackend
 
 MAX_ROUNDS = 1000  # a stall guard for a caller that sets none
 STALLED = "path pricing stopped at its round limit"
@@ -56,7 +62,8 @@ PROVEN = 1e-9  # relative gap between the restricted optimum and L(pi) that prov
 # L(pi), and the optimum reported is the simplex vertex's, so they need not be exact. At 1e-6
 # (HiGHS' default 1e-8) the window LPs of a first pass took 43.7 -> 35.7 s on 03_rolling,
 # 16.4 -> 14.4 s on racing and 0.46 -> 0.51 s (noise) on tennis, every window proven with
-# the same objective (``bench/path_lp.py``, medians of 3 interleaved).
+# the same objective (``bench/path_lp.py``, medians of 3 interleaved; measured with HiGHS'
+# interior point, kept for Clarabel's).
 PRICING_TOLERANCE = 1e-6
 
 
@@ -84,7 +91,8 @@ def solve_path_lp(
     first, _ = shortest_path_arcs(problem, layers=layers)
     paths = np.vstack([first, _arcs_through(problem, np.arange(n), occluded)])
     objects = np.r_[np.arange(n), np.arange(n)]
-    backend = create_backend("highs")
+    interior = cast("ClarabelBackend", create_backend("clarabel"))
+    backend: SolverBackend = interior
     backend.set_timeout(time_limit)
     backend.set_interior_point(PRICING_TOLERANCE)
     rows = _GroupRows(np.full(groups.shape[0], -1))
@@ -108,7 +116,10 @@ def solve_path_lp(
                 entering = [int(o) for o in np.flatnonzero(distance - sigma < 0) if (o, best[o].tobytes()) not in seen]
         if central and not entering:  # done (or the interior point failed): a vertex, warm from here on
             central = False
+            backend = create_backend("highs")
+            backend.set_timeout(time_limit)
             backend.set_primal_simplex()  # added columns keep its basis primal feasible
+            backend.set_model(interior.model)
             result = backend.solve()
             continue
         if not entering:

@@ -10,7 +10,10 @@ from importlib import import_module
 
 from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 
-_BACKENDS = {"highs": "formulations.solvers.highs:HighsBackend"}
+_BACKENDS = {
+    "highs": "formulations.solvers.highs:HighsBackend",
+    "clarabel": "formulations.solvers.clarabel_lp:ClarabelBackend",  # interior point only: central duals
+}
 
 
 def create_backend(name: str = "highs") -> SolverBackend:
