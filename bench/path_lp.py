@@ -1,10 +1,12 @@
-"""How long the window LPs of real takes take, at two interior-point pricing tolerances.
+"""How long the window LPs of real takes take, with each interior-point backend giving the
+path LP's central duals (``path_lp.INTERIOR_POINT``: HiGHS' IPX or Clarabel).
 
 Every window a first pass of `markerflow track` solves by path pricing (``relaxation.path_lp``,
 large windows without a layout term) is kept, then each is solved again by
-``solve_window_lp`` (so a path LP that stalls at its round limit pays its arc-LP fallback) at
-each tolerance, interleaved, ``--repeats`` times. Prints per take: windows, seconds (median
-over the repeats), master solves, windows proven optimal, windows whose objective differs.
+``solve_window_lp`` (so a path LP that stalls at its round limit pays its arc-LP fallback) with
+each backend, interleaved, ``--repeats`` times. Prints per take: windows, seconds (median
+over the repeats), master solves, windows proven optimal, windows whose objective differs
+from HiGHS'.
 
     .venv/bin/python bench/path_lp.py [--takes numediart-rolling ktk-racing ktk-tennis] [--repeats 3]
 """
@@ -15,7 +17,9 @@ import argparse
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 from unittest.mock import patch
 
 import numpy as np
@@ -25,7 +29,8 @@ sys.path.insert(0, str(ROOT))
 
 from formulations.relaxation import path_lp, solve_lp  # noqa: E402
 from formulations.relaxation.certify import Relaxation  # noqa: E402
-from formulations.solvers import SolveResult, highs  # noqa: E402
+from formulations.solvers import SolverBackend, SolveResult, highs  # noqa: E402
+from formulations.solvers.clarabel_lp import ClarabelBackend  # noqa: E402
 from formulations.window.problem import WindowProblem  # noqa: E402
 from service.capture.capture import LabelingOptions  # noqa: E402
 from service.capture.from_recording import capture_from_span  # noqa: E402
@@ -33,7 +38,7 @@ from service.evaluation.matrix import DATA, recording_named  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
 from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 
-TOLERANCES = (1e-8, path_lp.PRICING_TOLERANCE)
+BACKENDS = ("highs", "clarabel")
 
 
 def windows_of(name: str) -> list[WindowProblem]:
@@ -53,18 +58,20 @@ def windows_of(name: str) -> list[WindowProblem]:
     return kept
 
 
-def timed(problems: list[WindowProblem], tolerance: float) -> tuple[float, int, list[Relaxation]]:
-    """Seconds to solve every window, HiGHS solves made, and the relaxations."""
-    path_lp.PRICING_TOLERANCE = tolerance
+def timed(problems: list[WindowProblem], backend: str) -> tuple[float, int, list[Relaxation]]:
+    """Seconds to solve every window, master solves made (either backend), and the relaxations."""
     solves = 0
-    run = highs.HighsBackend.solve
 
-    def counted(self: highs.HighsBackend) -> SolveResult:
-        nonlocal solves
-        solves += 1
-        return run(self)
+    def counted(run: Callable[[Any], SolveResult]) -> Callable[[Any], SolveResult]:
+        def solve(self: SolverBackend) -> SolveResult:
+            nonlocal solves
+            solves += 1
+            return run(self)
+        return solve
 
-    with patch.object(highs.HighsBackend, "solve", counted):
+    with (patch.object(path_lp, "INTERIOR_POINT", backend),
+          patch.object(highs.HighsBackend, "solve", counted(highs.HighsBackend.solve)),
+          patch.object(ClarabelBackend, "solve", counted(ClarabelBackend.solve))):
         began = time.perf_counter()
         results = [solve_lp.solve_window_lp(p) for p in problems]
         return time.perf_counter() - began, solves, results
@@ -75,24 +82,24 @@ def main() -> None:
     parser.add_argument("--takes", nargs="*", default=["numediart-rolling", "ktk-racing", "ktk-tennis"])
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    print("| take | windows | tolerance | seconds (median) | master solves | proven | objective differs |")
+    print("| take | windows | interior point | seconds (median) | master solves | proven | objective differs |")
     print("|---|---|---|---|---|---|---|")
     for name in args.takes:
         problems = windows_of(name)
-        seconds: dict[float, list[float]] = {t: [] for t in TOLERANCES}
-        outcome: dict[float, tuple[int, list[Relaxation]]] = {}
+        seconds: dict[str, list[float]] = {b: [] for b in BACKENDS}
+        outcome: dict[str, tuple[int, list[Relaxation]]] = {}
         for _ in range(args.repeats):
-            for tolerance in TOLERANCES:
-                took, solves, results = timed(problems, tolerance)
-                seconds[tolerance].append(took)
-                outcome[tolerance] = (solves, results)
-        reference = [r.xi for r in outcome[TOLERANCES[0]][1]]
-        for tolerance in TOLERANCES:
-            solves, results = outcome[tolerance]
+            for backend in BACKENDS:
+                took, solves, results = timed(problems, backend)
+                seconds[backend].append(took)
+                outcome[backend] = (solves, results)
+        reference = [r.xi for r in outcome[BACKENDS[0]][1]]
+        for backend in BACKENDS:
+            solves, results = outcome[backend]
             value = [float(p.arc_cost @ r.xi) for p, r in zip(problems, results)]
-            differs = sum(not np.isclose(v, float(p.arc_cost @ x), rtol=1e-9)
+            differs = sum(not np.isclose(v, float(p.arc_cost @ x), rtol=path_lp.PROVEN)
                           for v, p, x in zip(value, problems, reference))
-            print(f"| {name} | {len(problems)} | {tolerance:g} | {statistics.median(seconds[tolerance]):.2f} | "
+            print(f"| {name} | {len(problems)} | {backend} | {statistics.median(seconds[backend]):.2f} | "
                   f"{solves} | {sum(r.optimal for r in results)} | {differs} |", flush=True)
 
 

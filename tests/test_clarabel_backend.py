@@ -29,7 +29,7 @@ def solved(name: str, model: LinearModel, grow: bool):
     if not grow:
         backend.set_model(model)
         return backend.solve()
-    # the same model, its last row and last three columns added after loading
+    # the model, its last row (empty but for the last three columns) and columns added after loading
     a = sp.csc_matrix(model.matrix)
     backend.set_model(LinearModel(model.cost[:-3], a[:-1, :-3], model.row_lower[:-1], model.row_upper[:-1],
                                   model.col_lower[:-3], model.col_upper[:-3]))
@@ -56,3 +56,21 @@ def test_refuses_what_it_cannot_do():
     model.integer = np.ones(len(model.cost), bool)
     with pytest.raises(ValueError, match="no MIP"):
         backend.set_model(model)
+
+
+def test_a_grown_model_carries_from_one_backend_to_the_other():
+    model = random_lp(3)
+    a = sp.csc_matrix(model.matrix)
+    highs = create_backend("highs")
+    highs.set_model(LinearModel(model.cost[:-3], a[:-1, :-3], model.row_lower[:-1], model.row_upper[:-1],
+                                model.col_lower[:-3], model.col_upper[:-3]))
+    highs.add_rows(model.row_lower[-1:], model.row_upper[-1:])
+    highs.add_columns(model.cost[-3:], model.col_lower[-3:], model.col_upper[-3:], a[:, -3:])
+    carried = highs.model
+    grown = a.tolil()
+    grown[-1, :-3] = 0  # the added row was empty until the columns came
+    assert (carried.matrix != grown.tocsc()).nnz == 0
+    assert np.array_equal(carried.row_lower, model.row_lower) and np.array_equal(carried.cost, model.cost)
+    interior = create_backend("clarabel")
+    interior.set_model(carried)
+    assert interior.solve().objective == pytest.approx(highs.solve().objective, abs=1e-6)

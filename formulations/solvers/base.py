@@ -92,6 +92,11 @@ class SolverBackend(ABC):
     def set_model(self, model: LinearModel) -> None:
         """Load the model (replacing any previous one)."""
 
+    @property
+    @abstractmethod
+    def model(self) -> LinearModel:
+        """The loaded model with every row and column added since (e.g. to load into another backend)."""
+
     @abstractmethod
     def add_columns(self, cost: np.ndarray, lower: np.ndarray, upper: np.ndarray, columns: sp.csc_matrix) -> None:
         """Append columns to the loaded model, keeping the current basis for a warm start."""

@@ -87,6 +87,15 @@ class HighsBackend(SolverBackend):
         self._highs.clearModel()
         self._highs.passModel(lp)
 
+    @property
+    def model(self) -> LinearModel:
+        lp = self._highs.getLp()
+        matrix = sp.csc_matrix((np.asarray(lp.a_matrix_.value_), np.asarray(lp.a_matrix_.index_),
+                                np.asarray(lp.a_matrix_.start_)), shape=(lp.num_row_, lp.num_col_))
+        integer = np.asarray([t == highspy.HighsVarType.kInteger for t in lp.integrality_], bool) if self._is_mip else None
+        return LinearModel(np.asarray(lp.col_cost_), matrix, np.asarray(lp.row_lower_), np.asarray(lp.row_upper_),
+                           np.asarray(lp.col_lower_), np.asarray(lp.col_upper_), integer)
+
     def add_columns(self, cost: np.ndarray, lower: np.ndarray, upper: np.ndarray, columns: sp.csc_matrix) -> None:
         cols = sp.csc_matrix(columns)
         cols.sort_indices()
