@@ -8,7 +8,8 @@ whole paths (``path_lp``) when it has no layout term, else over arcs
 every feasible set of paths is an integral point of the LP with value E.
 
 Path pricing wins where a window is large and converges in few rounds (03_rolling: 87-106k
-arcs, under 80 rounds; the arc LP took the take 31 -> 104 s), and loses where noise leaves
+arcs, under 80 rounds, under 14 since its duals come from Clarabel; the arc LP took the take
+31 -> 104 s), and loses where noise leaves
 many near-equal paths and it needs many (Vicon's 51 markers at 4 mm: 12-34k arcs, 100-190
 rounds, each window 5-40x slower than the arc LP). It therefore gets one round per
 ``ARCS_PER_ROUND`` arcs (at least ``MIN_ROUNDS``), about what the arc LP would cost, and
@@ -30,7 +31,10 @@ from formulations.window.problem import WindowProblem
 
 # Chosen on the two takes above (03_rolling 31.0 -> 31.7 s, Vicon at 4 mm 6x faster); over the
 # seed-0 accuracy matrix's 85 rows the labels are the same and the median time per frame 1.02x.
-ARCS_PER_ROUND = 1000
+# Since the duals come from Clarabel 03_rolling's windows converge in 13 rounds at most (median
+# 5), and racing's window LPs take about as long at 1000 or 3000 (2.6-3.4 s, noise); at 3000
+# the Vicon 4 mm matrix row falls back after 10 rounds, 160 -> 85 s (same labels).
+ARCS_PER_ROUND = 3000
 MIN_ROUNDS = 10
 
 
