@@ -149,8 +149,8 @@ def test_real_take_from_a_frame_with_absent_markers(tmp_path: Path) -> None:
     span = slice(start, end)
     same = np.linalg.norm(points[:, kept, span] - truth[:, kept, span], axis=0) < 1e-3
     # The absent markers' points stay in the frames, unnamed: a kept marker may take one when it
-    # reappears near it. At 169 MEDH vanishes as STYLu appears 33 mm from it, closer than a step
-    # may reach, so no unnamed track is born there; MEDH keeps STYLu's track to the end and LASTC
+    # reappears near it. At 169 MEDH vanishes as STYLu appears 33 mm from it; an unnamed track is
+    # born there, but the window still gives it to MEDH, which keeps it to the end, and LASTC
     # takes MEDH's point when it is back at 189 (2.1 % of labels; before unnamed tracks MEDH let
     # go at 188 and the two were wrong 23 frames, 1.4 %: README, "Unnamed tracks").
     assert same[labeled[kept, span]].mean() >= 0.975

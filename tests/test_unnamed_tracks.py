@@ -68,6 +68,35 @@ def test_a_point_the_guide_gave_a_marker_seen_the_frame_before_is_not_unnamed():
     assert _chains(points, m=5, known=1, point=took).n_objects == 0
 
 
+def _handover(appear_offset: float) -> list[np.ndarray]:
+    """WALK seen to frame 3, then gone as another point appears ``appear_offset`` mm off its
+    last point, square to its motion, and walks on."""
+    other = WALK + [-2.0 * 4 + 6.0, appear_offset, 0.0]
+    return [np.vstack([NAMED, (WALK if f < 4 else other)[f:f + 1]]) for f in range(12)]
+
+
+def test_a_point_that_appears_within_reach_but_off_every_tracks_motion_is_born():
+    # 120 mm from the walker's last point (the reach of a still take's prior is 147 mm) but
+    # 120 mm off where its 2 mm step puts it: something appeared (Vicon's MEDH and STYLu).
+    chains = _chains(_handover(120.0), m=5, known=1)
+    assert chains.n_objects == 2 and chains.seeded.tolist() == [True, False]
+    assert np.array_equal(chains.point[1] >= 0, [False, False, True, True, True])
+    # Where the walker's own motion explains the point, it is the walker's.
+    assert _chains(_handover(5.0), m=5, known=1).n_objects == 1
+
+
+def test_a_guide_that_jumped_onto_an_appearing_point_does_not_hold_it():
+    # 160 mm off the walker (beyond reach: it appeared by either test) and 111 mm from named
+    # marker 2, which stood still at (0, 300, 0) and which the guide followed onto it.
+    points = _handover(160.0)
+    took = np.full((5, len(NAMED)), -1)
+    took[:, 2] = 2
+    took[2:, 2] = 3
+    chains = _chains(points, m=5, known=1, point=took)
+    assert chains.n_objects == 2 and not chains.seeded[1]
+    assert np.array_equal(chains.point[1] >= 0, [False, False, True, True, True])
+
+
 # A moving segment with one marker the labeled frame does not name (UNNAMED), 62 mm from LOST.
 SEGMENT = np.array([[0, 0, 0], [-60, -30, -60], [150, 20, -70], [110, -40, -60], [120, 50, -60], [40, 30, -40],
                     [60, 45, -75]], float)

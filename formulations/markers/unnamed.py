@@ -13,11 +13,17 @@ what a right label pays in that window, the median of the seen markers' best sha
 
 - a **seed**: a point at the template that no seen marker holds, with a point of the frame
   before within ``reach`` of it (a track, not a one-frame ghost), moving at that step;
-- a **birth**: a point of a window frame (or of the template, not a seed) with no point of
-  the frame before within ``reach`` (something appeared), followed for at least
-  ``MIN_BIRTH_POINTS`` frames, the frames after the window included;
+- a **birth**: a point of a window frame that no point of the frame before continues
+  (``_unexplained``: within ``link_radius`` of where that point's last step puts it, or
+  within ``reach`` of a point with no step), or a point of the template no point before
+  it is within ``reach`` of (not a seed): something appeared. It must be followed for at
+  least ``MIN_BIRTH_POINTS`` frames, the frames after the window included;
 - points the window's nearest-neighbour guide gave a marker seen the frame before are
-  left out: they continue that marker's track.
+  left out: they continue that marker's track, unless the guide's track of that marker
+  made a step in the window its own motion does not explain (``_guide_holds``): it then
+  took something that appeared as the marker vanished (03_rolling's LRUA1, lost, onto the
+  back of the head as that point came back at frame 708; Vicon's MEDH onto STYLu's point
+  33 mm away, a step ten times its own).
 
 Each is followed frame to frame at constant velocity, linked by an optimal assignment
 inside ``link_radius`` of its prediction (``reach`` while its velocity is unknown), and
@@ -126,16 +132,46 @@ def unnamed_chains(
     tracked, step = _predecessors(free, around.before, reach)
     chains = [_Chain(p, v, 0, True) for p, v in zip(free[tracked], step[tracked])]
     chains += [_Chain(p, None, 0, False) for p in free[~tracked]]  # appeared at the template: born there
-    previous = around.template
+    earlier, previous = around.before, around.template
+    holds = _guide_holds(guide, state, frames, reach, link_radius)
     for f, points in enumerate([*frames, *around.after], start=1):
-        held_now = guide.continued(f, len(points)) if f <= len(frames) else np.zeros(len(points), bool)
+        held_now = holds[f - 1] if f <= len(frames) else np.zeros(len(points), bool)
         linked = _link(chains, points, ~held_now, f, link_radius, reach)
         if f <= len(frames):
-            appeared = _farther(points, previous, reach) & ~linked & ~held_now
+            appeared = _unexplained(points, previous, earlier, reach, link_radius) & ~linked & ~held_now
             chains += [_Chain(points[k], None, f, False, {f: int(k)}) for k in np.flatnonzero(appeared)]
-        previous = points
+        earlier, previous = previous, points
     kept = [c for c in chains if c.seeded or len(c.taken) + (c.born == 0) >= MIN_BIRTH_POINTS]
     return _assembled([c for c in kept if c.taken], len(frames))
+
+
+def _guide_holds(guide: GuideTrack, state: MarkerState, frames: list[np.ndarray], reach: float, link_radius: float,
+                 ) -> list[np.ndarray]:
+    """Per window frame, the points the guide gave a marker seen the frame before
+    (``GuideTrack.continued``), less those of a marker whose guided track has made a step
+    its own motion does not explain (``_unexplained``) in the window: the guide then took
+    something that appeared as the marker vanished."""
+    held_all = [guide.continued(f, len(points)) for f, points in enumerate(frames, start=1)]
+    if guide.point is None:
+        return held_all
+    n = len(state.position)
+    last = np.where(state.visible[:, None], state.position, np.nan)
+    step = np.where((state.visible & state.velocity_known)[:, None], state.velocity, np.nan)
+    broken = np.zeros(n, bool)
+    holds = []
+    for f, points in enumerate(frames, start=1):
+        took = guide.point[f - 1]
+        now = np.full((n, 3), np.nan)
+        now[took >= 0] = points[took[took >= 0]]
+        stepped = np.asarray(np.isfinite(step).all(axis=1))
+        explained = _continues(np.linalg.norm(now - np.where(stepped[:, None], last + step, last), axis=1),
+                               np.linalg.norm(now - last, axis=1), stepped, reach, link_radius)
+        broken |= ~explained & np.isfinite(now).all(axis=1) & np.isfinite(last).all(axis=1)
+        held = held_all[f - 1].copy()
+        held[took[(took >= 0) & broken]] = False
+        holds.append(held)
+        step, last = now - last, now
+    return holds
 
 
 def _radii(state: MarkerState, gate: Gate) -> tuple[float, float]:
@@ -207,6 +243,31 @@ def _assembled(chains: list[_Chain], m: int) -> UnnamedChains:
                 motion[u, f - 1] = step
     location = np.array([c.first for c in chains]).reshape(-1, 3)
     return UnnamedChains(location, np.array([c.seeded for c in chains], bool), point, motion)
+
+
+def _unexplained(points: np.ndarray, previous: np.ndarray, earlier: np.ndarray, reach: float, link_radius: float,
+                 ) -> np.ndarray:
+    """True for the points no point of the frame before continues: within ``link_radius`` of
+    where that point's own last step (from its nearest point of the frame before it, within
+    ``reach``) puts it, or within ``reach`` of it where it has no such step. A marker moving
+    3 mm a frame does not reach a point 33 mm away (Vicon: MEDH vanishes as STYLu appears
+    there)."""
+    if not len(previous) or not len(points):
+        return np.ones(len(points), bool)
+    stepped = ~_farther(previous, earlier, reach)
+    predicted = previous.copy()
+    if stepped.any():
+        near = earlier[cdist(previous[stepped], earlier).argmin(axis=1)]
+        predicted[stepped] += previous[stepped] - near
+    continued = _continues(cdist(points, predicted), cdist(points, previous), stepped[None, :], reach, link_radius)
+    return np.asarray(~continued.any(axis=1))
+
+
+def _continues(to_predicted: np.ndarray, to_last: np.ndarray, stepped: np.ndarray, reach: float, link_radius: float,
+               ) -> np.ndarray:
+    """Whether a point continues a track: within ``link_radius`` of where the track's last step
+    puts it, or, for a track with no step yet (``stepped`` False), within ``reach`` of its last point."""
+    return np.asarray(np.where(stepped, to_predicted <= link_radius, to_last <= reach))
 
 
 def _farther(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
