@@ -126,7 +126,8 @@ def solve_path_lp(
         new = best[entering]
         held = rows.count
         matrix = _columns(problem, node_groups, np.asarray(entering), new, rows)
-        backend.add_rows(np.full(rows.count - held, -np.inf), np.ones(rows.count - held))  # groups first crossed
+        if rows.count > held:  # groups first crossed
+            backend.add_rows(np.full(rows.count - held, -np.inf), np.ones(rows.count - held))
         backend.add_columns(problem.arc_cost[new].sum(axis=1), np.zeros(len(new)), np.full(len(new), np.inf), matrix)
         objects, paths = np.r_[objects, entering], np.vstack([paths, new])
         result = backend.solve()
