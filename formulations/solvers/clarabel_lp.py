@@ -76,11 +76,10 @@ class ClarabelBackend(SolverBackend):
         start = time.perf_counter()
         m = self.model
         k = m.matrix.shape[1]
-        rows = sp.vstack([m.matrix, sp.identity(k, format="csc")], format="csr")
         lower, upper = np.r_[m.row_lower, m.col_lower], np.r_[m.row_upper, m.col_upper]
         equal = lower == upper
         below, above = ~equal & np.isfinite(upper), ~equal & np.isfinite(lower)
-        a = sp.vstack([rows[equal], rows[below], -rows[above]], format="csc")
+        a = _cone_rows(m.matrix, equal, below, above)
         b = np.r_[upper[equal], upper[below], -lower[above]]
         cones = [clarabel.ZeroConeT(int(equal.sum())), clarabel.NonnegativeConeT(int(below.sum() + above.sum()))]
         solution = clarabel.DefaultSolver(sp.csc_matrix((k, k)), np.asarray(m.cost, float), a, b, cones,
@@ -98,3 +97,19 @@ class ClarabelBackend(SolverBackend):
             x=np.asarray(solution.x) if optimal else np.zeros(0), row_dual=dual[:len(m.row_lower)] if optimal else np.zeros(0),
             bound=objective, seconds=time.perf_counter() - start,
         )
+
+
+def _cone_rows(matrix: sp.spmatrix, equal: np.ndarray, below: np.ndarray, above: np.ndarray) -> sp.csc_matrix:
+    """The cone rows of ``[matrix; I]`` (a row per column bound after the model's rows): the
+    ``equal`` rows, then the ``below`` rows, then the ``above`` rows negated; built from the
+    entries at once (stacking and slicing sparse matrices cost as much as the solve)."""
+    entries = sp.coo_matrix(matrix)
+    k = entries.shape[1]
+    row = np.r_[entries.row, entries.shape[0] + np.arange(k)]
+    col, value = np.r_[entries.col, np.arange(k)], np.r_[entries.data, np.ones(k)]
+    n_equal, n_below = int(equal.sum()), int(below.sum())
+    parts = [(equal, np.cumsum(equal) - 1, 1.0), (below, n_equal + np.cumsum(below) - 1, 1.0),
+             (above, n_equal + n_below + np.cumsum(above) - 1, -1.0)]
+    picked = [(at[row[side[row]]], col[side[row]], sign * value[side[row]]) for side, at, sign in parts]
+    rows, cols, values = (np.concatenate(part) for part in zip(*picked))
+    return sp.csc_matrix((values, (rows, cols)), shape=(n_equal + n_below + int(above.sum()), k))
