@@ -164,8 +164,8 @@ def _guide_holds(guide: GuideTrack, state: MarkerState, frames: list[np.ndarray]
         now = np.full((n, 3), np.nan)
         now[took >= 0] = points[took[took >= 0]]
         stepped = np.asarray(np.isfinite(step).all(axis=1))
-        explained = _continues(np.linalg.norm(now - np.where(stepped[:, None], last + step, last), axis=1),
-                               np.linalg.norm(now - last, axis=1), stepped, reach, link_radius)
+        explained = _continues(np.linalg.norm(now - (last + step), axis=1), np.linalg.norm(now - last, axis=1),
+                               stepped, reach, link_radius)
         broken |= ~explained & np.isfinite(now).all(axis=1) & np.isfinite(last).all(axis=1)
         held = held_all[f - 1].copy()
         held[took[(took >= 0) & broken]] = False
@@ -183,7 +183,8 @@ def _radii(state: MarkerState, gate: Gate) -> tuple[float, float]:
 
 
 def _predecessors(free: np.ndarray, before: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
-    """For each free template point, whether the frame before has a point within ``reach``, and the step from it."""
+    """For each of the points ``free``, whether the frame ``before`` has a point within
+    ``reach``, and the step from its nearest one."""
     if not len(before) or not len(free):
         return np.zeros(len(free), bool), np.zeros((len(free), 3))
     near = before[cdist(free, before).argmin(axis=1)]
@@ -215,9 +216,9 @@ def _link(chains: list[_Chain], points: np.ndarray, free: np.ndarray, f: int, li
     if not alive or not len(points):
         return linked
     predicted = np.array([c.last + (c.velocity if c.velocity is not None else 0.0) for c in alive])
-    radius = np.array([link_radius if c.velocity is not None else reach for c in alive])
-    distance = cdist(predicted, points)
-    inside = (distance <= radius[:, None]) & free[None, :]
+    stepped = np.array([c.velocity is not None for c in alive])
+    distance = cdist(predicted, points)  # from the last point where there is no step
+    inside = _continues(distance, distance, stepped[:, None], reach, link_radius) & free[None, :]
     rows, cols = linear_sum_assignment(np.where(inside, distance, 1e9))
     for r, k in zip(rows, cols):
         if not inside[r, k]:
@@ -254,12 +255,8 @@ def _unexplained(points: np.ndarray, previous: np.ndarray, earlier: np.ndarray, 
     there)."""
     if not len(previous) or not len(points):
         return np.ones(len(points), bool)
-    stepped = ~_farther(previous, earlier, reach)
-    predicted = previous.copy()
-    if stepped.any():
-        near = earlier[cdist(previous[stepped], earlier).argmin(axis=1)]
-        predicted[stepped] += previous[stepped] - near
-    continued = _continues(cdist(points, predicted), cdist(points, previous), stepped[None, :], reach, link_radius)
+    stepped, step = _predecessors(previous, earlier, reach)
+    continued = _continues(cdist(points, previous + step), cdist(points, previous), stepped[None, :], reach, link_radius)
     return np.asarray(~continued.any(axis=1))
 
 

@@ -33,7 +33,8 @@ from formulations.window.problem import WindowProblem
 # seed-0 accuracy matrix's 85 rows the labels are the same and the median time per frame 1.02x.
 # Since the duals come from Clarabel 03_rolling's windows converge in 13 rounds at most (median
 # 5), and racing's window LPs take about as long at 1000 or 3000 (2.6-3.4 s, noise); at 3000
-# the Vicon 4 mm matrix row falls back after 10 rounds, 160 -> 85 s (same labels).
+# the Vicon 4 mm matrix row falls back after 10 rounds, 160 -> 85 s; over the seed-0 matrix's
+# 85 rows the labels are the same and the summed s/frame 1.38 -> 1.12 (one run each, two jobs).
 ARCS_PER_ROUND = 3000
 MIN_ROUNDS = 10
 
