@@ -4,9 +4,10 @@ Path pricing (``relaxation.path_lp``) wants each restricted master's duals centr
 optimal dual face, which an interior point without crossover gives. HiGHS' IPX has a fixed
 cost per solve that dominates on masters of a few hundred rows and columns, solved tens of
 times per window; Clarabel solves the same masters several times faster, to the same
-optima (03_rolling's first-pass window LPs 11.4-12.1 -> 2.6-3.1 s, wheelchair racing's
-10.4 -> 3.5 s, every objective the same: ``bench/path_lp.py``), and its duals price in
-fewer columns. It has no simplex and no warm start: a vertex is HiGHS' job
+optima (``bench/path_lp.py``, every path-LP window of a first pass, medians of 3:
+03_rolling 16.98 -> 3.73 s, wheelchair racing 8.60 -> 3.32 s, tennis 0.48 -> 0.34 s, every
+objective the same), and its duals price in fewer columns (master solves 1,533 -> 524 on
+03_rolling). It has no simplex and no warm start: a vertex is HiGHS' job
 (``set_primal_simplex`` refuses), and each ``solve`` starts cold from the loaded model.
 
 Clarabel solves min c.x s.t. A x + s = b, s in K; a row l <= a.x <= u is a zero-cone row
