@@ -60,8 +60,6 @@ def main() -> None:
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
     parser.add_argument("--returns-compete", action="store_true", help="weigh a lost object's return against a newcomer")
-    parser.add_argument("--newcomers-in-window", action="store_true",
-                        help="with --returns-compete, settle it in the window LP (formulations.boxes.hypotheses)")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
     print("|---|---|---|---|---|---|---|")
@@ -70,8 +68,7 @@ def main() -> None:
             detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
             for formulation in args.formulations.split(","):
                 run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
-                                  lifecycle=Lifecycle(returns_compete=args.returns_compete,
-                                                    newcomers_in_window=args.newcomers_in_window))
+                                  lifecycle=Lifecycle(returns_compete=args.returns_compete))
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

@@ -7,9 +7,7 @@ candidates. Every detection inside an object's gate around its Kalman forecast
 (``conflicts.conflict_resources``): a detection is never taken twice, nor two boxes that
 are one spatial location. An object not seen at t0 starts from its prediction with an
 occluded template, so its first arc costs like leaving an occlusion. A detection a
-newcomer has won from an object (``returns``) is barred from that object's candidates. A
-newcomer hypothesis (``hypotheses``) has fixed candidates, its chain's boxes at given costs,
-in place of a gate.
+newcomer has won from an object (``returns``) is barred from that object's candidates.
 """
 
 from __future__ import annotations
@@ -56,7 +54,7 @@ class BoxWindow:
 def box_window(
     objects: BoxObjects, template_frame: int, n_frames: int, frame: Ints, boxes: Array, histograms: Array | None,
     model: BoxCostModel, rule: ConflictRule, rates: DetectionRates | None = None, image: Array | None = None,
-    barred: NDArray[np.bool_] | None = None, fixed: tuple[Ints, Ints, Array] | None = None,
+    barred: NDArray[np.bool_] | None = None,
 ) -> BoxWindow:
     """Pose frames ``template_frame+1 .. template_frame+n_frames`` for ``objects``.
 
@@ -76,8 +74,6 @@ def box_window(
             or None for Jiang's weighted costs.
         image: ``(4,)`` the image rectangle (x1, y1, x2, y2), where false alarms fall; needed with ``rates``.
         barred: ``(N, K)`` True where object n may not take detection k (of those handed in).
-        fixed: (object rows, detections of those handed in, costs): these objects' only
-            candidates, each at its cost in place of g's prediction part.
     """
     frames = template_frame + np.arange(1, n_frames + 1)
     predicted, spread = objects.forecast(n_frames)  # (N, M, 4), (N, M, 4, 4)
@@ -88,17 +84,10 @@ def box_window(
         inside &= (f > objects.last_seen)[:, None]  # a newborn takes nothing before its first box
         if barred is not None:
             inside &= ~barred[:, index]
-        if fixed is not None:
-            inside[fixed[0]] = False
         n, b = np.nonzero(inside)
         objs.append(n)
         dets.append(index[b])
         costs.append(cost[n, b])
-    given = 0 if fixed is None else len(fixed[0])
-    if fixed is not None:
-        objs.append(fixed[0])
-        dets.append(fixed[1])
-        costs.append(np.zeros(given))
     obj, det = np.concatenate(objs).astype(int), np.concatenate(dets).astype(int)
     template_cost = np.concatenate(costs)
     likelihood = None
@@ -109,8 +98,6 @@ def box_window(
         likelihood = box_likelihood(objects, rates, log_clutter, predicted, spread, obj, frame[det] - template_frame,
                                     kalman.measurement(boxes[det]))
         template_cost = np.zeros(len(det))  # the forecast is in the reappear cost
-    if fixed is not None:  # last, so that likelihood costs keep a hypothesis's price too
-        template_cost[len(det) - given:] += model.prediction * fixed[2]
     hist_dist = None
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])

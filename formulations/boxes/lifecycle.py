@@ -62,9 +62,6 @@ class Lifecycle:
         border_occluded: Frames unseen after which an object predicted across the image border leaves.
         returns_compete: Test the chains a lost object took after a miss against a newcomer
             (module docstring).
-        newcomers_in_window: With ``returns_compete``, offer each such chain to the window
-            as a newcomer hypothesis and let the window's optimum decide (``hypotheses``),
-            in place of the test and the bar.
     """
 
     min_hits: int = 3
@@ -72,7 +69,6 @@ class Lifecycle:
     max_occluded: int = 30
     border_occluded: int = 5
     returns_compete: bool = False
-    newcomers_in_window: bool = False
 
     def __post_init__(self) -> None:
         if self.min_hits < 1 or not 0 < self.link_iou <= 1 or self.border_occluded < 0 or self.max_occluded < 0:

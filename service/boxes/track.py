@@ -41,7 +41,6 @@ from formulations.boxes.candidates import box_window
 from formulations.boxes.conflicts import ConflictRule, conflict_resources
 from formulations.boxes.costs import BoxCostModel
 from formulations.boxes.geometry import corners
-from formulations.boxes.hypotheses import newcomers, split_held
 from formulations.boxes.lifecycle import Lifecycle, born, reentries
 from formulations.boxes.likelihood import DetectionRates, clutter_volume
 from formulations.boxes.objects import BoxObjects, advance
@@ -131,26 +130,17 @@ def track_boxes(
         chains = lifecycle.window_chains(frame, boxes, ~_explained(unclaimed, conflicting), returned, t0, m,
                                          detections.n_frames)
         barred: list[tuple[int, np.ndarray]] = []
-        held: list[np.ndarray] = []
-        if lifecycle.returns_compete and lifecycle.newcomers_in_window:
-            chains, held = split_held(chains, owner, before.ident)
-        elif lifecycle.returns_compete:
+        if lifecycle.returns_compete:
             chains, barred = tested_chains(chains, before, owner, frame, boxes, t0, volume, births.newcomer_cost)
-        if chains or held:
+        if chains:
             new = born(chains, frame, boxes, histograms, next_ident, t0)
-            hypo = newcomers(held, before, frame, boxes, histograms, next_ident + len(chains), t0, m, volume,
-                             births.newcomer_cost)
-            starts = np.array([frame[c[0]] for c in chains + held], dtype=int)
-            owner[[c[0] for c in chains if frame[c[0]] == t0]] = new.ident[starts[:len(chains)] == t0]
+            starts = np.array([frame[c[0]] for c in chains])
+            owner[[c[0] for c in chains if frame[c[0]] == t0]] = new.ident[starts == t0]
             owner[inside] = 0  # the window again, with the new objects competing from their first box
-            before = before.joined(new).joined(hypo.objects)
-            fixed = (old + len(chains) + hypo.row, hypo.detection, hypo.cost)
-            objects, taken, certified = _solve(solver, before, posing, owner, barred, fixed)
+            before = before.joined(new)
+            objects, taken, certified = _solve(solver, before, posing, owner, barred)
             windows, integral = windows + 1, integral + certified
-            took = np.asarray((taken[old:] >= 0).any(axis=1), dtype=bool)
-            kept = np.r_[starts[:len(chains)] == t0, np.zeros(len(held), bool)] | took
-            at_template = took[len(chains):] & (starts[len(chains):] == t0)  # a kept hypothesis's template box
-            owner[hypo.first[at_template]] = hypo.objects.ident[at_template]
+            kept = (starts == t0) | (taken[old:] >= 0).any(axis=1)
             keep = np.r_[np.ones(old, bool), kept]
             objects, next_ident = _named(objects.subset(keep), old, owner, next_ident)
             before, taken = before.subset(keep), taken[keep]
@@ -184,12 +174,11 @@ class _Posing:
 
 def _solve(
     solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray,
-    barred: list[tuple[int, np.ndarray]] | None = None, fixed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    barred: list[tuple[int, np.ndarray]] | None = None,
 ) -> tuple[BoxObjects, np.ndarray, bool]:
     """Solve one window; write each taken detection's owner; return the objects moved on, the
     ``(N, M)`` detection each took (-1 occluded) and the certificate. ``barred``: (object row,
-    detections) it may not take (``returns.tested_chains``); ``fixed``: (object rows, detections,
-    costs), those objects' only candidates (``hypotheses``)."""
+    detections) it may not take (``returns.tested_chains``)."""
     p = posing
     index = np.flatnonzero((p.frame > p.t0) & (p.frame <= p.t0 + p.m))
     hist = None if p.histograms is None else p.histograms[index]
@@ -198,9 +187,8 @@ def _solve(
         mask = np.zeros((objects.n_objects, len(index)), bool)
         for row, c in barred:
             mask[row, np.searchsorted(index, c[np.isin(c, index)])] = True
-    given = None if fixed is None else (fixed[0], np.searchsorted(index, fixed[1]), fixed[2])
     posed = box_window(objects, p.t0, p.m, p.frame[index], p.boxes[index], hist, p.model, p.rule, p.rates, p.image,
-                       mask, given)
+                       mask)
     problem, node_candidate = build_window(posed.candidates, posed.weights, posed.layout_pairs, posed.layout_weight)
     solution = solver.solve(problem)
     taken = taken_candidates(node_candidate, solution.path, index[posed.detection])  # (N, M), -1 occluded
