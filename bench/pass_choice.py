@@ -5,8 +5,9 @@ the second from the first's take spreads) and scored. A row prints each pass's a
 doubtful share and its disagreement with the first frame's rigid pairs
 (``formulations.markers.first_frame_shape``). The summary gives the mean accuracy over the
 runs where a second pass runs (first pass between 2 % and 75 % doubtful) when the pass kept
-is the less doubtful one (the old judge), the one closer to the first frame (the judge
-``track`` uses), and the better one each time (what no judge can beat).
+is the less doubtful one (the old judge), the one closer to the first frame, the better
+one each time (what no judge of whole passes can beat), and the two merged group by group
+(``formulations.markers.pass_merge``: what ``track`` keeps).
 
     .venv/bin/python bench/pass_choice.py [--recordings cmu-135_02 ...] [--conditions default noise-4 ...]
         [--scenario configs/scenarios/hard.toml] [--seeds 0 1 2] [--frames 600] [--formulation lp-l1] [--jobs 2]
@@ -27,6 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from formulations.markers.first_frame_shape import first_frame_disagreement  # noqa: E402
+from formulations.markers.pass_merge import pass_per_marker  # noqa: E402
 from formulations.markers.take_spread import with_take_spread  # noqa: E402
 from service.capture.capture import LabelingOptions  # noqa: E402
 from service.evaluation.matrix import CONDITIONS, RECORDINGS, prepare, recording_named  # noqa: E402
@@ -35,6 +37,7 @@ from service.evaluation.scores import label_scores  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 from service.labeling.loop import label_windows  # noqa: E402
+from service.labeling.merged_windows import merged_windows  # noqa: E402
 from service.labeling.second_pass import MOSTLY_DOUBTFUL, doubtful_share  # noqa: E402
 from service.labeling.stats import DOUBTFUL_WARNING  # noqa: E402
 
@@ -54,19 +57,19 @@ def main() -> None:
     conditions = [args.scenario.stem] if args.scenario else args.conditions
     scenario = str(args.scenario) if args.scenario else None
     runs = [(r, c, s, args.frames, args.formulation, scenario) for r in args.recordings for c in conditions for s in args.seeds]
-    print(f"{'recording':18s} {'condition':10s} seed {'acc 1':>7s} {'acc 2':>7s} {'doubt 1':>7s} {'doubt 2':>7s} "
-          f"{'off 1':>6s} {'off 2':>6s}")
+    print(f"{'recording':18s} {'condition':10s} seed {'acc 1':>7s} {'acc 2':>7s} {'merged':>7s} {'doubt 1':>7s} "
+          f"{'doubt 2':>7s} {'off 1':>6s} {'off 2':>6s}")
     rows = []
     with Pool(args.jobs) if args.jobs > 1 else nullcontext() as pool:
         for row in pool.imap(_both_passes, runs) if pool else map(_both_passes, runs):
             rows.append(row)
             run, acc, doubt, off = row
-            print(f"{run[0]:18s} {run[1]:10s} {run[2]:4d} {100 * acc[0]:7.2f} {100 * acc[1]:7.2f} {doubt[0]:7.1%} "
-                  f"{doubt[1]:7.1%} {off[0]:6.2f} {off[1]:6.2f}", flush=True)
+            print(f"{run[0]:18s} {run[1]:10s} {run[2]:4d} {100 * acc[0]:7.2f} {100 * acc[1]:7.2f} {100 * acc[2]:7.2f} "
+                  f"{doubt[0]:7.1%} {doubt[1]:7.1%} {off[0]:6.2f} {off[1]:6.2f}", flush=True)
     _summary(rows)
 
 
-def _both_passes(run: Run) -> tuple[Run, tuple[float, float], tuple[float, float], np.ndarray]:
+def _both_passes(run: Run) -> tuple[Run, tuple[float, float, float], tuple[float, float], np.ndarray]:
     recording, condition, seed, frames, formulation, scenario_file = run
     scenario = Scenario.from_toml(Path(scenario_file)) if scenario_file else CONDITIONS[condition]
     take = prepare(recording_named(recording))
@@ -80,8 +83,14 @@ def _both_passes(run: Run) -> tuple[Run, tuple[float, float], tuple[float, float
     second = list(label_windows(chain, labeling.formulation, spread, simulated.cloud.n_frames, scenario.window))
     passes = (first, second)
     first_score, second_score = (label_scores(simulated, labeling.result(p)).label_accuracy for p in passes)
-    off = first_frame_disagreement([labeled(p).positions for p in passes], start.position, start.neighbours)
-    return run, (first_score, second_score), (doubtful_share(first), doubtful_share(second)), off
+    one, two = (labeled(p) for p in passes)
+    off = first_frame_disagreement([one.positions, two.positions], start.position, start.neighbours)
+    kept, other = (second, first) if off[1] < off[0] else (first, second)
+    own, theirs = (two, one) if off[1] < off[0] else (one, two)
+    taken = pass_per_marker((own.point_index, theirs.point_index), (own.positions, theirs.positions),
+                            start.position, start.neighbours) == 1
+    merged = label_scores(simulated, labeling.result(merged_windows(kept, other, taken))).label_accuracy
+    return run, (first_score, second_score, merged), (doubtful_share(first), doubtful_share(second)), off
 
 
 def _summary(rows: list) -> None:
@@ -91,10 +100,12 @@ def _summary(rows: list) -> None:
         return
     by_doubt = np.mean([acc[1] if doubt[1] < doubt[0] else acc[0] for acc, doubt, _ in judged])
     by_shape = np.mean([acc[1] if off[1] < off[0] else acc[0] for acc, _, off in judged])
-    best = np.mean([max(acc) for acc, _, _ in judged])
+    best = np.mean([max(acc[:2]) for acc, _, _ in judged])
+    merged = np.mean([acc[2] for acc, _, _ in judged])
     first = np.mean([acc[0] for acc, _, _ in judged])
     print(f"\n{len(judged)} of {len(rows)} runs run a second pass; mean accuracy kept by: doubt {100 * by_doubt:.2f} %, "
-          f"first frame {100 * by_shape:.2f} %, the better pass {100 * best:.2f} %, first pass only {100 * first:.2f} %")
+          f"first frame {100 * by_shape:.2f} %, the better pass {100 * best:.2f} %, merged by group {100 * merged:.2f} %, "
+          f"first pass only {100 * first:.2f} %")
 
 
 if __name__ == "__main__":

@@ -94,9 +94,9 @@ def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, 
 
     monkeypatch.setattr(second_pass_module, "label_windows", counted)
     monkeypatch.setattr(second_pass_module, "first_frame_disagreement", disagreement)
+    monkeypatch.setattr(second_pass_module, "pass_per_marker", lambda points, *_: np.zeros(points[0].shape[1], int))
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001  (the pass as refine runs it)
-    assemble = lambda labeled: labeling.result(labeled).positions  # noqa: E731
-    kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, assemble)  # noqa: SLF001
+    kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, labeling.result)  # noqa: SLF001
     assert choice.kept == kept
     assert bool(ran) == bool(judged) == (2 < first <= 75)
     if not ran:
@@ -111,6 +111,39 @@ def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, 
             assert mine.stats.doubtful == int((~(mine.point_index < 0) & (agreed < 0.9)).sum())
         expected = [None if np.isnan(v) else v for v in off]
         assert (choice.first_off_mm, choice.second_off_mm, choice.second_doubtful) == (*expected, 0.9)
+
+
+@pytest.mark.parametrize("kept", [1, 2])
+def test_markers_the_other_pass_labels_better_come_from_it(monkeypatch, kept: int) -> None:
+    """The kept pass's windows, but the markers ``pass_merge`` gives the other pass carry the
+    other pass's labels, fills, confidences and state rows; the summary counts them."""
+    capture = generated_capture(frames=40, seed=3)
+    labeling = CaptureLabeling(capture, LabelingOptions(window=10))
+    outcomes = _stats_doubt(list(labeling.windows()), 10)
+    ran = []
+    real = second_pass_module.label_windows
+
+    def shifted(*args, **kwargs):  # a second pass that differs visibly in every column
+        ran.append([replace(o, point_index=o.point_index + 1000, state=replace(o.state, position=o.state.position + 1.0))
+                    for o in real(*args, **kwargs)])
+        return ran[-1]
+
+    monkeypatch.setattr(second_pass_module, "label_windows", shifted)
+    off = [5.0, 3.0] if kept == 2 else [3.0, 5.0]
+    monkeypatch.setattr(second_pass_module, "first_frame_disagreement", lambda *_: np.array(off))
+    first_two = lambda points, *_: (np.arange(points[0].shape[1]) < 2).astype(int)  # noqa: E731
+    monkeypatch.setattr(second_pass_module, "pass_per_marker", first_two)
+    first_labels = labeling.result(outcomes)  # what the judges read is stubbed above
+    chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001
+    merged, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, lambda _: first_labels)  # noqa: SLF001
+    own, other = (ran[0], outcomes) if kept == 2 else (outcomes, ran[0])
+    assert choice.kept == kept and choice.taken_from_other == 2
+    for window, mine, theirs in zip(merged, own, other, strict=True):
+        assert np.array_equal(window.point_index[:, :2], theirs.point_index[:, :2])
+        assert np.array_equal(window.point_index[:, 2:], mine.point_index[:, 2:])
+        assert np.array_equal(window.state.position[:2], theirs.state.position[:2])
+        assert np.array_equal(window.state.position[2:], mine.state.position[2:])
+        assert window.stats.template == mine.stats.template
 
 
 def test_a_stop_abandons_the_second_pass(monkeypatch) -> None:

@@ -49,9 +49,7 @@ def first_frame_disagreement(
         first: ``(N, 3)`` the labeled first frame (NaN for a marker it lacks).
         neighbours: ``(N, K)`` each marker's neighbours (``MarkerState.neighbours``).
     """
-    rigidity = np.fmin.reduce([take_spread(positions, neighbours) for positions in labelings])
-    order = np.argsort(np.where(np.isfinite(rigidity), rigidity, np.inf), axis=1)[:, :partners]
-    mates = np.take_along_axis(neighbours, order, axis=1)  # (N, R)
+    mates = rigid_mates(labelings, neighbours, partners)
     rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
     off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
                     for positions in labelings])  # (P, F, N, R), NaN where a pair is not labeled together
@@ -59,3 +57,11 @@ def first_frame_disagreement(
     if not judged.any():
         return np.full(len(labelings), np.nan)
     return np.array([np.where(np.isfinite(each), np.minimum(each, cap_mm), cap_mm)[judged].mean() for each in off])
+
+
+def rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners: int = PARTNERS) -> NDArray[np.int64]:
+    """``(N, partners)`` each marker's neighbours of least spread r_mj in any labeling (module doc)."""
+    rigidity = np.fmin.reduce([take_spread(positions, neighbours) for positions in labelings])
+    order = np.argsort(np.where(np.isfinite(rigidity), rigidity, np.inf), axis=1)[:, :partners]
+    mates: NDArray[np.int64] = np.take_along_axis(neighbours, order, axis=1)
+    return mates

@@ -144,7 +144,8 @@ def _second_pass_note(choice: PassChoice | None) -> str:
     kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
     off = "" if choice.first_off_mm is None or choice.second_off_mm is None else (
         f"rigid pairs {choice.first_off_mm:.1f} -> {choice.second_off_mm:.1f} mm off the first frame; ")
-    return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful)"
+    other = "" if not choice.taken_from_other else f", {choice.taken_from_other} markers' labels from the other pass"
+    return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
 
 
 def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | None:

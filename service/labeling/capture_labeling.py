@@ -112,7 +112,7 @@ class CaptureLabeling:
             return outcomes
         kept = second_pass(
             self._association, self.formulation, self._first, self._frames, self._window, outcomes,
-            lambda labeled: self._labeled(labeled).positions, progress, stop,
+            self._labeled, progress, stop,
         )
         if kept is None:
             return None

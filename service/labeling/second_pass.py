@@ -19,6 +19,11 @@ takes under four matrix conditions (seed 0, 600 frames) where a second pass runs
 accuracy kept is 96.69 % by the doubt, 96.92 % by the first frame, 96.96 % keeping the better
 pass each time; over the hard preset's 9 runs (3 takes, seeds 0-2) 88.65 %, 89.98 % and 89.98 %.
 
+Where the passes disagree, each is often right somewhere the other is not, so the pass kept
+is kept whole only where the other does no better: the markers they label differently fall
+into groups that share no point, and each group takes the labels of the pass that bends its
+rigid pairs less off the first frame (``formulations.markers.pass_merge``).
+
 The kept windows' confidences are then judged with the other pass's labels
 (``formulations.confidence.two_readings``): a label both give keeps the surer confidence, a
 label the other pass reads otherwise gets at most one minus the other's.
@@ -40,17 +45,20 @@ import numpy as np
 
 from formulations.confidence.two_readings import agreed_confidence
 from formulations.markers.first_frame_shape import first_frame_disagreement
+from formulations.markers.pass_merge import pass_per_marker
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import with_take_spread
 from formulations.methods.formulation import Formulation
+from service.io.recording import LabeledTrajectories
 from service.labeling.loop import Progress, WindowChain, label_windows
+from service.labeling.merged_windows import merged_windows
 from service.labeling.outcome import WindowOutcome
 from service.labeling.stats import DOUBTFUL_WARNING, doubtful_labels
 
 MOSTLY_DOUBTFUL = 0.75  # three labels in four doubtful: the spreads are mostly wrong ones (module docstring)
 
 Stop = Callable[[], bool]  # asked between windows: True abandons the pass
-Positions = Callable[[list[WindowOutcome]], np.ndarray]  # a pass's (F, N, 3) labeled positions, NaN unlabeled
+Labels = Callable[[list[WindowOutcome]], LabeledTrajectories]  # a pass's labels, tracks extended
 
 
 @dataclass(frozen=True)
@@ -62,7 +70,10 @@ class PassChoice:
             for a second pass not run.
         first_off_mm, second_off_mm: Each pass's disagreement with the first frame's rigid
             pairs (``first_frame_disagreement``, mm); None for a second pass not run.
-        kept: 1 or 2.
+        kept: 1 or 2: the pass whose windows (and certificates) are kept.
+        taken_from_other: Markers whose labels come from the other pass instead, where the
+            passes disagree and the other bends those markers' rigid pairs less
+            (``formulations.markers.pass_merge``).
     """
 
     first_doubtful: float
@@ -70,10 +81,12 @@ class PassChoice:
     kept: int
     first_off_mm: float | None = None
     second_off_mm: float | None = None
+    taken_from_other: int = 0
 
     def to_dict(self) -> dict:
         return {"first_doubtful": self.first_doubtful, "second_doubtful": self.second_doubtful, "kept": self.kept,
-                "first_off_mm": self.first_off_mm, "second_off_mm": self.second_off_mm}
+                "first_off_mm": self.first_off_mm, "second_off_mm": self.second_off_mm,
+                "taken_from_other": self.taken_from_other}
 
 
 def doubtful_share(outcomes: list[WindowOutcome]) -> float:
@@ -84,34 +97,40 @@ def doubtful_share(outcomes: list[WindowOutcome]) -> float:
 
 def second_pass(
     chain: WindowChain, formulation: Formulation, first: MarkerState, frames: int, window: int,
-    outcomes: list[WindowOutcome], positions: Positions, progress: Progress | None = None,
+    outcomes: list[WindowOutcome], labels: Labels, progress: Progress | None = None,
     stop: Stop | None = None,
 ) -> tuple[list[WindowOutcome], PassChoice] | None:
     """The windows to keep (``outcomes`` itself when no second pass runs, else the kept
-    pass's with each confidence judged with the other's: ``with_other_reading``) and the
-    choice; None when ``stop`` asked to abandon the pass.
+    pass's, with the markers the other pass labels better taken from it: ``pass_merge``;
+    each confidence judged with the other pass's: ``with_other_reading``) and the choice;
+    None when ``stop`` asked to abandon the pass.
 
     Args:
         chain, formulation, frames, window: As the first pass was labeled.
         first: The first pass's first marker state (its positions: the labeled first frame).
         outcomes: The first pass's windows.
-        positions: Gives a pass's labeled positions; asked only when a second pass runs (a
-            clean take is not assembled twice).
+        labels: Gives a pass's labels, tracks extended; asked only when a second pass runs
+            (a clean take is not assembled twice).
     """
     before = doubtful_share(outcomes)
     if not DOUBTFUL_WARNING < before <= MOSTLY_DOUBTFUL:
         return outcomes, PassChoice(before, None, 1)
-    labeled = positions(outcomes)
+    labeled = labels(outcomes)
     second: list[WindowOutcome] = []
-    for outcome in label_windows(chain, formulation, with_take_spread(first, labeled), frames, window, None, progress):
+    for outcome in label_windows(chain, formulation, with_take_spread(first, labeled.positions), frames, window, None, progress):
         second.append(outcome)
         if stop is not None and stop():
             return None
-    off = first_frame_disagreement([labeled, positions(second)], first.position, first.neighbours)
+    relabeled = labels(second)
+    off = first_frame_disagreement([labeled.positions, relabeled.positions], first.position, first.neighbours)
     # NaN (no rigid pair labeled together) compares False: the first pass stays.
     kept = 2 if off[1] < off[0] else 1
-    choice = PassChoice(before, doubtful_share(second), kept, *(None if np.isnan(v) else float(v) for v in off))
-    return (with_other_reading(second, outcomes) if kept == 2 else with_other_reading(outcomes, second)), choice
+    mine, theirs, own, other = (second, outcomes, relabeled, labeled) if kept == 2 else (outcomes, second, labeled, relabeled)
+    taken = pass_per_marker((own.point_index, other.point_index), (own.positions, other.positions),
+                            first.position, first.neighbours) == 1
+    first_off, second_off = (None if np.isnan(v) else float(v) for v in off)
+    choice = PassChoice(before, doubtful_share(second), kept, first_off, second_off, int(taken.sum()))
+    return merged_windows(with_other_reading(mine, theirs), with_other_reading(theirs, mine), taken), choice
 
 
 def with_other_reading(kept: list[WindowOutcome], other: list[WindowOutcome]) -> list[WindowOutcome]:
