@@ -32,6 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import motmetrics  # noqa: E402
 
+from formulations.boxes.costs import BoxCostModel  # noqa: E402
 from formulations.boxes.lifecycle import Lifecycle  # noqa: E402
 from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks  # noqa: E402
 from service.boxes.scores import mot_scores  # noqa: E402
@@ -59,6 +60,7 @@ def main() -> None:
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
+    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): re-entry from the path's last box")
     parser.add_argument("--returns-compete", action="store_true", help="weigh a lost object's return against a newcomer")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
@@ -68,7 +70,8 @@ def main() -> None:
             detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
             for formulation in args.formulations.split(","):
                 run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
-                                  lifecycle=Lifecycle(returns_compete=args.returns_compete))
+                                  lifecycle=Lifecycle(returns_compete=args.returns_compete),
+                                  model=BoxCostModel(skip_arcs=args.skip_arcs))
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

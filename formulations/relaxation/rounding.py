@@ -4,7 +4,11 @@ In each frame, repeatedly take the node with the largest y among those not yet v
 set it to 1, and mark as visited the other nodes of its object in that frame and every
 node sharing a conflict group with it. Occlusion nodes conflict with nothing, so every
 object ends with exactly one node per frame and no conflict group is used twice: the
-result is always feasible.
+result is always feasible. Where the layers are not fully connected (skip arcs'
+gap nodes, ``formulations.window.skips``), each chosen occlusion node is then replaced by
+the one its predecessor on the path has an arc into: the same "unseen" for the same
+frames, consuming nothing either, so feasibility holds; an integral solution's own paths
+are left as they are.
 """
 
 from __future__ import annotations
@@ -38,4 +42,14 @@ def round_greedy(problem: WindowProblem, y: np.ndarray) -> np.ndarray:
             continue
         path[n, m] = v
         visited[rivals.indices[rivals.indptr[v]:rivals.indptr[v + 1]]] = True
+    return _connected_gaps(problem, path)
+
+
+def _connected_gaps(problem: WindowProblem, path: np.ndarray) -> np.ndarray:
+    """``path`` with each occlusion node replaced by the one its predecessor has an arc into."""
+    previous = problem.source_nodes()
+    for m in range(problem.n_frames):
+        gap = problem.node_kind[path[:, m]] == OCCLUSION
+        path[gap, m] = problem.gap_successor[previous[gap]]
+        previous = path[:, m]
     return path
