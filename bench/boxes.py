@@ -27,7 +27,8 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--window", type=int, default=5)
-    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): re-entry from the path's last box")
+    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): returns from the last box")
+    parser.add_argument("--returned-steps", action="store_true", help="with --skip-arcs: steps after a return from the last box")
     parser.add_argument("--returns-compete", action="store_true", help="Lifecycle(returns_compete=True)")
     args = parser.parse_args()
     detections = read_detections(SEQUENCE / "trackers" / "MPNTrack.txt", read_seqinfo(SEQUENCE / "seqinfo.ini"))
@@ -35,7 +36,7 @@ def main() -> None:
           f"window {args.window}")
     for formulation in ("lp-l1", "ilp", "nn-hungarian"):
         lifecycle = Lifecycle(returns_compete=args.returns_compete)
-        model = BoxCostModel(skip_arcs=args.skip_arcs)
+        model = BoxCostModel(skip_arcs=args.skip_arcs, returned_steps=args.returned_steps)
         seconds = [track_boxes(detections, formulation, window=args.window, lifecycle=lifecycle, model=model).seconds
                    for _ in range(args.repeats)]
         median = statistics.median(seconds)

@@ -60,7 +60,8 @@ def main() -> None:
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
-    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): re-entry from the path's last box")
+    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): returns from the last box")
+    parser.add_argument("--returned-steps", action="store_true", help="with --skip-arcs: steps after a return from the last box")
     parser.add_argument("--returns-compete", action="store_true", help="weigh a lost object's return against a newcomer")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
@@ -71,7 +72,7 @@ def main() -> None:
             for formulation in args.formulations.split(","):
                 run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
                                   lifecycle=Lifecycle(returns_compete=args.returns_compete),
-                                  model=BoxCostModel(skip_arcs=args.skip_arcs))
+                                  model=BoxCostModel(skip_arcs=args.skip_arcs, returned_steps=args.returned_steps))
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

@@ -122,6 +122,7 @@ def box_window(
         template_cost=template_cost, resources=resources, occlusion_location=box_corners(predicted) / unit[:, None, None],
         motion=velocity, appearance=None if hist_dist is None or histograms is None else histograms[det],
         template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood, skip=skip,
+        returned_steps=model.returned_steps and skip is not None,
     )
     weights = ArcCostWeights(  # floats: integer weights would make the arc cost array integer
         appearance_change=float(model.histogram_change) if hist_dist is not None else 0.0,

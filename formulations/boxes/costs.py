@@ -53,6 +53,8 @@ class BoxCostModel:
             0 keeps it only where a box follows an occlusion, see ``formulations.window.costs``).
         skip_arcs: Price a box after a gap inside the window from the path's own last box
             (skip arcs, ``formulations.boxes.reentry``) instead of the template's forecast.
+        returned_steps: With ``skip_arcs``: once a path has re-entered, price each next box
+            from the path's previous box, not the template's forecast.
     """
 
     gate: float = 30.0
@@ -66,6 +68,7 @@ class BoxCostModel:
     layout_reach: float = 1.5
     template_on_track: float = 1.0
     skip_arcs: bool = False
+    returned_steps: bool = False
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():

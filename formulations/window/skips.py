@@ -37,33 +37,41 @@ import numpy as np
 from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE
 
 SkipPricing = Callable[[np.ndarray, np.ndarray], np.ndarray]
-"""``s(tail candidates, head candidates)`` for pairs of one object, head at least two frames
+"""``s(tail candidates, head candidates)`` for pairs of one object, head at least one frame
 after tail: the re-entry term in the units of g(s_n, j) (inf: no arc)."""
 
 
 @dataclass(frozen=True)
-class GapNodes:
-    """The gap nodes of every candidate: one per frame after it, to the window's end.
+class PathNodes:
+    """The nodes the skip network adds to Jiang's: gap nodes, and with ``returned_steps`` a
+    returned copy of every candidate (module doc).
 
     Attributes:
-        anchor: ``(K,)`` candidate each gap node remembers.
-        object: ``(K,)`` its object.
-        frame: ``(K,)`` its frame, after the anchor's.
+        candidate: ``(K,)`` the candidate a returned copy is, -1 for gap nodes.
+        anchor: ``(K,)`` the candidate a gap node remembers, and a returned copy is.
+        object: ``(K,)`` object of each node.
+        frame: ``(K,)`` frame of each node.
     """
 
+    candidate: np.ndarray
     anchor: np.ndarray
     object: np.ndarray
     frame: np.ndarray
 
     @classmethod
-    def of(cls, candidate_object: np.ndarray, candidate_frame: np.ndarray, n_frames: int) -> GapNodes:
-        after = n_frames - candidate_frame  # frames left after each candidate
-        anchor = np.repeat(np.arange(len(candidate_frame)), after)
+    def of(cls, candidate_object: np.ndarray, candidate_frame: np.ndarray, n_frames: int,
+           returned_steps: bool) -> PathNodes:
+        after = n_frames - candidate_frame  # frames left after each candidate: one gap node each
+        gap_anchor = np.repeat(np.arange(len(candidate_frame)), after)
         step = np.arange(after.sum()) - np.repeat(np.cumsum(after) - after, after) + 1
-        return cls(anchor, candidate_object[anchor], candidate_frame[anchor] + step)
+        copies = np.arange(len(candidate_frame)) if returned_steps else np.zeros(0, int)
+        anchor = np.r_[copies, gap_anchor]
+        frame = np.r_[candidate_frame[copies], candidate_frame[gap_anchor] + step]
+        return cls(np.r_[copies, np.full(len(gap_anchor), -1)], anchor, candidate_object[anchor], frame)
 
 
-def allowed_arcs(tail: np.ndarray, head: np.ndarray, kind: np.ndarray, anchor: np.ndarray) -> np.ndarray:
+def allowed_arcs(tail: np.ndarray, head: np.ndarray, kind: np.ndarray, anchor: np.ndarray,
+                 returned: np.ndarray | None) -> np.ndarray:
     """Which of the fully connected layer arcs the skip network keeps.
 
     Args:
@@ -71,30 +79,45 @@ def allowed_arcs(tail: np.ndarray, head: np.ndarray, kind: np.ndarray, anchor: n
         kind: ``(V,)`` node kinds.
         anchor: ``(V,)`` the candidate an observation is, or a gap node remembers; -1 for
             sources, plain occlusion nodes and sinks.
+        returned: ``(V,)`` True where the path has been unseen since the template or after
+            one of its boxes (occluded sources, gap and plain occlusion nodes, returned
+            copies), or None without returned copies.
 
     A gap node is entered only from its anchor or its own previous gap node; a plain
-    occlusion node only from the source or the previous plain occlusion node; observations
-    and sinks from every node.
+    occlusion node only from the source or the previous plain occlusion node; sinks from
+    every node; observations from every node, or, with returned copies, a returned copy
+    only from a returned node and a tracked one only from a tracked one.
     """
     head_kind = kind[head]
-    into_gap = (head_kind == OCCLUSION) & (anchor[head] >= 0)
-    into_plain = (head_kind == OCCLUSION) & (anchor[head] < 0)
-    keep = (head_kind == OBSERVATION) | (head_kind == SINK)
-    keep |= into_gap & (anchor[tail] == anchor[head])
-    keep |= into_plain & ((kind[tail] == SOURCE) | ((kind[tail] == OCCLUSION) & (anchor[tail] < 0)))
+    gap = (kind == OCCLUSION) & (anchor >= 0)
+    plain = (kind == OCCLUSION) & (anchor < 0)
+    into_observation = head_kind == OBSERVATION
+    if returned is not None:
+        into_observation &= returned[tail] == returned[head]
+    keep = into_observation | (head_kind == SINK)
+    keep |= gap[head] & (anchor[tail] == anchor[head])
+    keep |= plain[head] & ((kind[tail] == SOURCE) | plain[tail])
     result: np.ndarray = keep
     return result
 
 
-def skip_reentry(
-    pricing: SkipPricing, reappear: float, tail: np.ndarray, head: np.ndarray, kind: np.ndarray, anchor: np.ndarray,
-    candidate_of: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The arcs from a gap node into an observation, and their cost c_a + s(anchor, head).
+def path_costs(
+    pricing: SkipPricing, reappear: float, template_on_track: float, tail: np.ndarray, head: np.ndarray,
+    kind: np.ndarray, anchor: np.ndarray, returned: np.ndarray | None, template_cost: np.ndarray, cost: np.ndarray,
+) -> np.ndarray:
+    """``cost`` (Jiang's, per arc) with the re-entries and returned steps priced from the path's own box.
 
-    Their chain's earlier arcs already cost c_a + c_b per skipped frame (they enter gap
-    nodes, which ``costs`` prices as occlusion), so the whole skip pays the module doc's c(i, j).
+    An arc from a gap node into an observation costs c_a + s(anchor, head): the chain's
+    earlier arcs already cost c_a + c_b per skipped frame (they enter gap nodes, which
+    ``costs`` prices as occlusion), so the whole skip pays the module doc's c(i, j). A step
+    between returned copies pays t s(tail, head) in place of t g(s_n, head).
     """
-    arcs = np.flatnonzero((kind[tail] == OCCLUSION) & (anchor[tail] >= 0) & (kind[head] == OBSERVATION))
-    cost: np.ndarray = reappear + pricing(anchor[tail[arcs]], candidate_of[head[arcs]])
-    return arcs, cost
+    priced = cost.copy()
+    gap_tail = (kind[tail] == OCCLUSION) & (anchor[tail] >= 0)
+    arcs = np.flatnonzero(gap_tail & (kind[head] == OBSERVATION))
+    priced[arcs] = reappear + pricing(anchor[tail[arcs]], anchor[head[arcs]])
+    if returned is not None:
+        steps = np.flatnonzero((kind[tail] == OBSERVATION) & (kind[head] == OBSERVATION) & returned[head])
+        own = pricing(anchor[tail[steps]], anchor[head[steps]])
+        priced[steps] += template_on_track * (own - template_cost[head[steps]])
+    return priced
