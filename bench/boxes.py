@@ -3,7 +3,7 @@
 Input: MPNTrack's published boxes with their ids dropped. Prints the median over repeats
 per formulation, and the boxes per frame.
 
-    .venv/bin/python bench/boxes.py [--repeats 3] [--window 5] [--returns-compete]
+    .venv/bin/python bench/boxes.py [--repeats 3] [--window 5] [--returns-compete] [--skip-arcs [--returned-steps]]
 """
 
 from __future__ import annotations

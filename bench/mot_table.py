@@ -18,7 +18,12 @@ With ``--returns-compete`` a chain a lost object took after a miss is weighed as
 against a newcomer (``Lifecycle(returns_compete=True)``, ``formulations.boxes.returns``), for
 every formulation.
 
-    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--returns-compete]
+With ``--skip-arcs`` a box after a gap inside the window is priced from the path's own last
+box (``BoxCostModel(skip_arcs=True)``, ``formulations.window.skips``), and with
+``--returned-steps`` as well every box after such a return from the box before it.
+
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood]
+        [--returns-compete] [--skip-arcs [--returned-steps]]
 """
 
 from __future__ import annotations
