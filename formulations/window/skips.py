@@ -16,15 +16,27 @@ consecutive frames only) by drawing each skip arc as a chain of *gap nodes* g(i,
 g(i, m+k-1), one per skipped frame, that remember i: i -> g(i, m+1) -> ... -> g(i, m+k-1)
 -> j. Only i enters g(i, m+1), so the flows on the chains of i are exactly the flows on its
 skip arcs (and on its arcs to the sink, the chain's end), and the LP over this network is
-the LP over the skip arcs; every formulation, the rounding and the certificate read it
-unchanged. The plain occlusion node of a frame (last in its block) then means "unseen
-since the template": only the source and the previous plain occlusion node enter it, and
-it re-enters by the template term as before. Gap nodes are OCCLUSION nodes placed before
-it: they consume no resource, as occlusion nodes never do, so a skip arc belongs to no
-conflict set in the frames it skips (an unseen object takes no box there), exactly as the
-occlusion nodes it replaces.
+the LP over the skip arcs; every formulation and the certificate read it unchanged (the
+greedy rounding of a fractional optimum reconnects its choices, ``relaxation.rounding``).
+The plain occlusion node of a frame (last in its block) then means "unseen since the
+template": only the source and the previous plain occlusion node enter it, and it
+re-enters by the template term as before. Gap nodes are OCCLUSION nodes placed before it:
+they consume no resource, as occlusion nodes never do, so a skip arc belongs to no conflict
+set in the frames it skips (an unseen object takes no box there), exactly as the occlusion
+nodes it replaces.
 
-A skip the pricing returns as inf is not an arc (outside the generator's gate from i).
+Returned steps (``returned_steps``, on top): once a path has re-entered (after a gap, or
+unseen at the template), the template's forecast no longer says where its next box is; its
+own last box does. Every observation gets a *returned copy*, entered only from returned
+nodes (an occluded source, gap and plain occlusion nodes, returned copies), and a step
+between returned copies pays t s(i, j) (k = 1) in place of t g(s_n, j); the original
+("tracked") copies are entered only from a seen source and tracked copies, and cost as in
+Jiang's network. The two copies of a box hold the same resources, so they are one box to
+every conflict set. A lost object that takes a chain then pays its jump once (the template
+term on the first box) and each later box against the box before it.
+
+A skip the pricing returns as inf is not an arc (outside the generator's gate from i); nor
+is a returned step it prices inf.
 """
 
 from __future__ import annotations
