@@ -3,7 +3,7 @@
 Input: MPNTrack's published boxes with their ids dropped. Prints the median over repeats
 per formulation, and the boxes per frame.
 
-    .venv/bin/python bench/boxes.py [--repeats 3] [--window 5] [--returns-compete] [--skip-arcs [--returned-steps]]
+    .venv/bin/python bench/boxes.py [--repeats 3] [--window 5] [--returns-compete]
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from formulations.boxes.costs import BoxCostModel  # noqa: E402
 from formulations.boxes.lifecycle import Lifecycle  # noqa: E402
 from service.boxes.mot_files import read_detections, read_seqinfo  # noqa: E402
 from service.boxes.track import track_boxes  # noqa: E402
@@ -27,8 +26,6 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--window", type=int, default=5)
-    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): returns from the last box")
-    parser.add_argument("--returned-steps", action="store_true", help="with --skip-arcs: steps after a return from the last box")
     parser.add_argument("--returns-compete", action="store_true", help="Lifecycle(returns_compete=True)")
     args = parser.parse_args()
     detections = read_detections(SEQUENCE / "trackers" / "MPNTrack.txt", read_seqinfo(SEQUENCE / "seqinfo.ini"))
@@ -36,8 +33,7 @@ def main() -> None:
           f"window {args.window}")
     for formulation in ("lp-l1", "ilp", "nn-hungarian"):
         lifecycle = Lifecycle(returns_compete=args.returns_compete)
-        model = BoxCostModel(skip_arcs=args.skip_arcs, returned_steps=args.returned_steps)
-        seconds = [track_boxes(detections, formulation, window=args.window, lifecycle=lifecycle, model=model).seconds
+        seconds = [track_boxes(detections, formulation, window=args.window, lifecycle=lifecycle).seconds
                    for _ in range(args.repeats)]
         median = statistics.median(seconds)
         print(f"{formulation:>13}: {detections.n_frames / median:7.1f} frames/s (median of {args.repeats}: {median:.2f} s)")

@@ -18,12 +18,7 @@ With ``--returns-compete`` a chain a lost object took after a miss is weighed as
 against a newcomer (``Lifecycle(returns_compete=True)``, ``formulations.boxes.returns``), for
 every formulation.
 
-With ``--skip-arcs`` a box after a gap inside the window is priced from the path's own last
-box (``BoxCostModel(skip_arcs=True)``, ``formulations.window.skips``), and with
-``--returned-steps`` as well every box after such a return from the box before it.
-
-    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood]
-        [--returns-compete] [--skip-arcs [--returned-steps]]
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--returns-compete]
 """
 
 from __future__ import annotations
@@ -37,7 +32,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import motmetrics  # noqa: E402
 
-from formulations.boxes.costs import BoxCostModel  # noqa: E402
 from formulations.boxes.lifecycle import Lifecycle  # noqa: E402
 from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks  # noqa: E402
 from service.boxes.scores import mot_scores  # noqa: E402
@@ -65,8 +59,6 @@ def main() -> None:
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
-    parser.add_argument("--skip-arcs", action="store_true", help="BoxCostModel(skip_arcs=True): returns from the last box")
-    parser.add_argument("--returned-steps", action="store_true", help="with --skip-arcs: steps after a return from the last box")
     parser.add_argument("--returns-compete", action="store_true", help="weigh a lost object's return against a newcomer")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
@@ -76,8 +68,7 @@ def main() -> None:
             detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
             for formulation in args.formulations.split(","):
                 run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
-                                  lifecycle=Lifecycle(returns_compete=args.returns_compete),
-                                  model=BoxCostModel(skip_arcs=args.skip_arcs, returned_steps=args.returned_steps))
+                                  lifecycle=Lifecycle(returns_compete=args.returns_compete))
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

@@ -17,19 +17,16 @@ from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights
 from formulations.window.likelihood import CandidateLikelihood
 from formulations.window.problem import WindowProblem
-from formulations.window.skips import SkipPricing
 
 
 def random_window(
     seed: int, n_objects: int = 3, n_frames: int = 3, n_points: int = 4, per_object: int = 2,
-    mu: float = 0.0, dim: int = 2, likelihood: bool = False, skip: bool = False, returned_steps: bool = False,
+    mu: float = 0.0, dim: int = 2, likelihood: bool = False,
 ) -> WindowProblem:
     """Objects drawing ``per_object`` candidates each frame from ``n_points`` shared points.
 
     ``likelihood``: price arcs by random negative log-likelihood terms
-    (``formulations.window.likelihood``) instead of Jiang's weights. ``skip``: add skip arcs
-    (``formulations.window.skips``) priced by a random table, a quarter of them inf (gated
-    away); ``returned_steps``: and returned copies priced by the same table.
+    (``formulations.window.likelihood``) instead of Jiang's weights.
     """
     rng = np.random.default_rng(seed)
     points = rng.uniform(0, 10, size=(n_frames, n_points, dim))
@@ -54,22 +51,10 @@ def random_window(
             step_sigma=rng.uniform(0.5, 3, len(ids)), step_offset=rng.uniform(0, 2, len(ids)),
             reappear_cost=rng.uniform(0, 6, len(ids)), miss_cost=rng.uniform(1, 4, (n_objects, n_frames)),
         ) if likelihood else None,
-        skip=_random_skip_pricing(rng, len(ids)) if skip else None, returned_steps=returned_steps,
     )
     pairs = np.array(list(itertools.combinations(range(n_objects), 2))) if mu > 0 else None
     weights = ArcCostWeights(displacement=1.0, reappear=3.0, disappear=3.0)
     return build_window(candidates, weights, pairs, mu)[0]
-
-
-def _random_skip_pricing(rng: np.random.Generator, n_candidates: int) -> SkipPricing:
-    table = rng.uniform(0, 4, (n_candidates, n_candidates))
-    table[rng.random(table.shape) < 0.25] = np.inf
-
-    def price(tail: np.ndarray, head: np.ndarray) -> np.ndarray:
-        result: np.ndarray = table[tail, head]
-        return result
-
-    return price
 
 
 # The shared tiny windows of the formulation contract: label -> random_window arguments.
@@ -134,8 +119,7 @@ def objective(problem: WindowProblem, path: np.ndarray, table: dict[tuple[int, i
 def brute_force(problem: WindowProblem) -> tuple[float, np.ndarray]:
     """Optimum and optimal paths by enumerating every feasible joint assignment.
 
-    Each object's paths are enumerated with their arc costs (looked up in ``arc_table``;
-    a node sequence with a step that is no arc, as skip arcs' gap nodes make, is no path);
+    Each object's paths are enumerated with their arc costs (looked up in ``arc_table``);
     the joint assignments are their Cartesian product, checked against ``contested`` and
     priced with numpy in one go.
     """
@@ -147,8 +131,6 @@ def brute_force(problem: WindowProblem) -> tuple[float, np.ndarray]:
         options = [range(first[n, m], first[n, m] + sizes[n, m]) for m in range(problem.n_frames)]
         own = np.array(list(itertools.product(*options)))
         steps = [[sources[n], *p, sinks[n]] for p in own.tolist()]
-        joined = np.array([all(step in table for step in zip(s, s[1:])) for s in steps])
-        own, steps = own[joined], [s for s, ok in zip(steps, joined) if ok]
         paths.append(own)
         costs.append(np.array([sum(table[step] for step in zip(s, s[1:])) for s in steps]))
         usage.append(groups[own].sum(axis=1))  # (paths, contested resources)

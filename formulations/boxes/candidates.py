@@ -6,9 +6,7 @@ candidates. Every detection inside an object's gate around its Kalman forecast
 (Jiang's 4-vector p) in the object's heights, template cost g(s_n, v) and, as resources, the conflict sets it belongs to
 (``conflicts.conflict_resources``): a detection is never taken twice, nor two boxes that
 are one spatial location. An object not seen at t0 starts from its prediction with an
-occluded template, so its first arc costs like leaving an occlusion. With
-``BoxCostModel.skip_arcs`` a box after a gap inside the window is priced from the path's
-own last box (``reentry``). A detection a
+occluded template, so its first arc costs like leaving an occlusion. A detection a
 newcomer has won from an object (``returns``) is barred from that object's candidates.
 """
 
@@ -27,7 +25,6 @@ from formulations.boxes.geometry import centre, height
 from formulations.boxes.kalman import box_corners, corner_rates
 from formulations.boxes.likelihood import DetectionRates, box_likelihood, clutter_volume
 from formulations.boxes.objects import BoxObjects
-from formulations.boxes.reentry import reentry_pricing
 from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights
 
@@ -102,15 +99,9 @@ def box_window(
                                     kalman.measurement(boxes[det]))
         template_cost = np.zeros(len(det))  # the forecast is in the reappear cost
     hist_dist = None
-    appearance_cost = np.zeros(len(det))
     if histograms is not None and objects.histogram is not None:
         hist_dist = histogram_distance(histograms[det], objects.histogram[obj])
-        appearance_cost = model.histogram * hist_dist
-        template_cost = template_cost + appearance_cost
-    skip = None
-    if model.skip_arcs:
-        skip = reentry_pricing(objects.mean, objects.covariance, obj, frame[det] - template_frame, boxes[det],
-                               appearance_cost, model)
+        template_cost = template_cost + model.histogram * hist_dist
     unit = np.maximum(objects.mean[:, 3], 1.0)  # each object's height at t0
     resources = sp.csr_matrix(conflict_resources(rule, frame, boxes)[det])
     start = objects.box
@@ -121,8 +112,7 @@ def box_window(
         n_frames=n_frames, object=obj, frame=frame[det] - template_frame, location=boxes[det] / unit[obj, None],
         template_cost=template_cost, resources=resources, occlusion_location=box_corners(predicted) / unit[:, None, None],
         motion=velocity, appearance=None if hist_dist is None or histograms is None else histograms[det],
-        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood, skip=skip,
-        returned_steps=model.returned_steps and skip is not None,
+        template_appearance=None if hist_dist is None else objects.histogram, likelihood=likelihood,
     )
     weights = ArcCostWeights(  # floats: integer weights would make the arc cost array integer
         appearance_change=float(model.histogram_change) if hist_dist is not None else 0.0,

@@ -51,10 +51,6 @@ class BoxCostModel:
         layout_reach: Template centre distance, in heights, under which two objects are neighbours.
         template_on_track: t, the factor of g(s_n, v) on arcs between two boxes (Jiang: 1;
             0 keeps it only where a box follows an occlusion, see ``formulations.window.costs``).
-        skip_arcs: Price a box after a gap inside the window from the path's own last box
-            (skip arcs, ``formulations.boxes.reentry``) instead of the template's forecast.
-        returned_steps: With ``skip_arcs``: once a path has re-entered, price each next box
-            from the path's previous box, not the template's forecast.
     """
 
     gate: float = 30.0
@@ -67,8 +63,6 @@ class BoxCostModel:
     layout: float = 0.0
     layout_reach: float = 1.5
     template_on_track: float = 1.0
-    skip_arcs: bool = False
-    returned_steps: bool = False
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():

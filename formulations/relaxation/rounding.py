@@ -4,14 +4,7 @@ In each frame, repeatedly take the node with the largest y among those not yet v
 set it to 1, and mark as visited the other nodes of its object in that frame and every
 node sharing a conflict group with it. Occlusion nodes conflict with nothing, so every
 object ends with exactly one node per frame and no conflict group is used twice: the
-result is always feasible. Where the layers are not fully connected (skip arcs,
-``formulations.window.skips``: gap nodes remember the path's last box, and returned copies
-of a box are entered only by paths that re-entered), each chosen node its predecessor on
-the path has no arc into is replaced by the node of its block standing for the same thing
-(same kind and location: the other copy of the box, or the gap node of the path's own last
-box) that it has an arc into, else by the one occlusion node it enters. Either consumes the
-same resources or none, so feasibility holds; an integral solution's own paths are left as
-they are.
+result is always feasible.
 """
 
 from __future__ import annotations
@@ -45,25 +38,4 @@ def round_greedy(problem: WindowProblem, y: np.ndarray) -> np.ndarray:
             continue
         path[n, m] = v
         visited[rivals.indices[rivals.indptr[v]:rivals.indptr[v + 1]]] = True
-    return _connected(problem, path)
-
-
-def _connected(problem: WindowProblem, path: np.ndarray) -> np.ndarray:
-    """``path`` with each node its predecessor has no arc into replaced (module doc). The
-    check is one lookup per frame; only the nodes it finds unconnected are looped over (none
-    in Jiang's fully connected layers)."""
-    keys = np.sort(problem.arc_tail.astype(np.int64) * problem.n_nodes + problem.arc_head)
-    by_tail = np.argsort(problem.arc_tail, kind="stable")
-    start = np.searchsorted(problem.arc_tail[by_tail], np.arange(problem.n_nodes + 1))
-    previous = problem.source_nodes()
-    for m in range(problem.n_frames):
-        wanted = previous.astype(np.int64) * problem.n_nodes + path[:, m]
-        found = keys[np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)] == wanted
-        for n in np.flatnonzero(~found):
-            heads = problem.arc_head[by_tail[start[previous[n]]:start[previous[n] + 1]]]
-            v = path[n, m]
-            same = heads[(problem.node_kind[heads] == problem.node_kind[v])
-                         & (problem.node_location[heads] == problem.node_location[v]).all(axis=1)]
-            path[n, m] = same[0] if len(same) else problem.gap_successor[previous[n]]
-        previous = path[:, m]
     return path

@@ -1,7 +1,4 @@
-"""Build the window network (nodes, fully connected layers, arc costs) from candidates.
-
-With skip pricing (``skips``) the layers gain gap nodes and lose the arcs ``skips`` forbids.
-"""
+"""Build the window network (nodes, fully connected layers, arc costs) from candidates."""
 
 from __future__ import annotations
 
@@ -13,7 +10,6 @@ from formulations.window.candidates import WindowCandidates
 from formulations.window.costs import ArcCostWeights, arc_costs
 from formulations.window.likelihood import likelihood_arc_costs
 from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE, WindowProblem
-from formulations.window.skips import PathNodes, allowed_arcs, path_costs
 
 
 def build_window(
@@ -35,33 +31,24 @@ def build_window(
         occlusion and sink nodes): what the caller needs to map a solution back.
     """
     n, m, c = candidates.n_objects, candidates.n_frames, len(candidates.object)
-    extra = None
-    if candidates.skip is not None:
-        extra = PathNodes.of(candidates.object, candidates.frame, m, candidates.returned_steps)
-    e = 0 if extra is None else len(extra.anchor)
     objects = np.arange(n)
     obj_frames = (np.repeat(objects, m), np.tile(np.arange(1, m + 1), n))
-    extra_object, extra_frame, extra_candidate = (np.zeros(0, int),) * 3 if extra is None else (
-        extra.object, extra.frame, extra.candidate)
-    node_object = np.concatenate([objects, candidates.object, obj_frames[0], objects, extra_object])
-    node_frame = np.concatenate([np.zeros(n, int), candidates.frame, obj_frames[1], np.full(n, m + 1), extra_frame])
-    node_kind = np.concatenate([np.full(n, SOURCE), np.full(c, OBSERVATION), np.full(n * m, OCCLUSION), np.full(n, SINK),
-                                np.where(extra_candidate >= 0, OBSERVATION, OCCLUSION)])
-    plain = np.r_[np.zeros(n + c, bool), np.ones(n * m, bool), np.zeros(n + e, bool)]
-    # Occlusion last in its frame: the paper's "largest state number"; gap nodes just before it.
-    order = np.lexsort((plain, node_kind == OCCLUSION, node_frame, node_object))
+    node_object = np.concatenate([objects, candidates.object, obj_frames[0], objects])
+    node_frame = np.concatenate([np.zeros(n, int), candidates.frame, obj_frames[1], np.full(n, m + 1)])
+    node_kind = np.concatenate(
+        [np.full(n, SOURCE), np.full(c, OBSERVATION), np.full(n * m, OCCLUSION), np.full(n, SINK)]
+    )
+    # Occlusion last in its frame: the paper's "largest state number".
+    order = np.lexsort((node_kind == OCCLUSION, node_frame, node_object))
     node_object, node_frame, node_kind = node_object[order], node_frame[order], node_kind[order]
 
     dim = candidates.location.shape[1]
-    extra_location = np.where(
-        (extra_candidate >= 0)[:, None], candidates.location[np.maximum(extra_candidate, 0)].reshape(e, dim),
-        candidates.occlusion_location[extra_object, extra_frame - 1].reshape(e, dim))
     location = np.concatenate(
         [candidates.template_location, candidates.location,
-         candidates.occlusion_location.reshape(n * m, dim), np.zeros((n, dim)), extra_location]
+         candidates.occlusion_location.reshape(n * m, dim), np.zeros((n, dim))]
     )[order]
-    source_of = np.concatenate([np.arange(n), np.full(c + n * m + n + e, -1)])[order]
-    candidate_of = np.concatenate([np.full(n, -1), np.arange(c), np.full(n * m + n, -1), extra_candidate])[order]
+    source_of = np.concatenate([np.arange(n), np.full(c + n * m + n, -1)])[order]
+    candidate_of = np.concatenate([np.full(n, -1), np.arange(c), np.full(n * m + n, -1)])[order]
     template_cost = np.zeros(len(order))
     is_candidate = candidate_of >= 0
     template_cost[is_candidate] = candidates.template_cost[candidate_of[is_candidate]]
@@ -75,23 +62,13 @@ def build_window(
     if candidates.likelihood is None:
         cost = arc_costs(
             weights, tail, head, node_kind, location, template_cost, motion,
-            _appearance_change(_node_appearance(candidates, order, extra_candidate), block_pairs), source_occluded,
+            _appearance_change(_node_appearance(candidates, order), block_pairs), source_occluded,
         )
     else:
         cost = likelihood_arc_costs(
             weights.template_on_track, _node_likelihood(candidates, candidate_of, node_object, node_frame, node_kind),
             tail, head, node_kind, location, template_cost, motion, source_occluded,
         )
-    if extra is not None and candidates.skip is not None:  # both or neither
-        anchor = np.concatenate([np.full(n, -1), np.arange(c), np.full(n * m + n, -1), extra.anchor])[order]
-        returned = None
-        if candidates.returned_steps:  # unseen since the template or a box of the path, or a box after that
-            returned = (source_occluded | (node_kind == OCCLUSION)
-                        | np.r_[np.zeros(n + c + n * m + n, bool), extra_candidate >= 0][order])
-        cost = path_costs(candidates.skip, weights.reappear, weights.template_on_track, tail, head, node_kind, anchor,
-                          returned, template_cost, cost)
-        keep = allowed_arcs(tail, head, node_kind, anchor, returned) & np.isfinite(cost)
-        tail, head, cost = tail[keep], head[keep], cost[keep]
     problem = WindowProblem(
         n_objects=n, n_frames=m, node_kind=node_kind, node_object=node_object,
         node_frame=node_frame, node_location=location,
@@ -176,16 +153,13 @@ def _appearance_change(appearance: np.ndarray | None, block_pairs: np.ndarray) -
     return 0.5 * np.concatenate(blocks) if blocks else np.zeros(0)
 
 
-def _node_appearance(candidates: WindowCandidates, order: np.ndarray, extra_candidate: np.ndarray) -> np.ndarray | None:
-    """Histogram per node: the template's at sources, the candidate's at observations (returned
-    copies too), zeros elsewhere."""
+def _node_appearance(candidates: WindowCandidates, order: np.ndarray) -> np.ndarray | None:
     if candidates.appearance is None or candidates.template_appearance is None:
         return None
     n, m = candidates.n_objects, candidates.n_frames
     h = candidates.appearance.shape[1]
     filler = np.zeros((n * m + n, h))
-    extra = np.where((extra_candidate >= 0)[:, None], candidates.appearance[np.maximum(extra_candidate, 0)], 0.0)
-    stacked = np.concatenate([candidates.template_appearance, candidates.appearance, filler, extra.reshape(-1, h)])
+    stacked = np.concatenate([candidates.template_appearance, candidates.appearance, filler])
     node_appearance: np.ndarray = stacked[order]
     return node_appearance
 

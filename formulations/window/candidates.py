@@ -8,7 +8,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from formulations.window.likelihood import CandidateLikelihood
-from formulations.window.skips import SkipPricing
 
 
 @dataclass(frozen=True)
@@ -35,10 +34,6 @@ class WindowCandidates:
         template_appearance: ``(N, H)`` histograms of the templates, or None.
         likelihood: Negative log-likelihood costs that replace the weights' constants
             (``likelihood``), or None for Jiang's weighted costs.
-        skip: Re-entry priced from the path's own last observation (``skips``), or None:
-            re-entry priced by the template term alone. Only with Jiang's weighted costs.
-        returned_steps: With ``skip``: a box that follows a box of a path that re-entered
-            (after a gap, or unseen at the template) is priced from that box, not the template.
     """
 
     template_location: np.ndarray
@@ -54,8 +49,6 @@ class WindowCandidates:
     appearance: np.ndarray | None = None
     template_appearance: np.ndarray | None = None
     likelihood: CandidateLikelihood | None = None
-    skip: SkipPricing | None = None
-    returned_steps: bool = False
 
     @property
     def n_objects(self) -> int:
@@ -77,7 +70,3 @@ class WindowCandidates:
             raise ValueError("occlusion_location and motion must be (objects, frames, D)")
         if not np.isfinite(self.location).all() or not np.isfinite(self.template_cost).all():
             raise ValueError("candidate locations and template costs must be finite")
-        if self.skip is not None and self.likelihood is not None:
-            raise ValueError("skip arcs are priced in the units of Jiang's weighted costs, not the likelihood costs")
-        if self.returned_steps and self.skip is None:
-            raise ValueError("returned steps are priced by the skip pricing: give one")

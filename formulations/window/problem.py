@@ -77,19 +77,6 @@ class WindowProblem:
         objects_per_resource = _distinct_objects_per_row(used, self.node_object)
         return used[objects_per_resource >= 2]
 
-    @cached_property
-    def gap_successor(self) -> np.ndarray:
-        """``(V,)`` the one occlusion node each node has an arc into (-1: none).
-
-        In Jiang's fully connected layers that is the next frame's occlusion node; with skip
-        arcs (``skips``) it depends on what the path last saw: an observation's own gap node,
-        a gap node's next one, the source's or a plain occlusion node's next plain one.
-        """
-        successor = np.full(self.n_nodes, -1)
-        into = self.node_kind[self.arc_head] == OCCLUSION
-        successor[self.arc_tail[into]] = self.arc_head[into]
-        return successor
-
     def blocks(self) -> tuple[np.ndarray, np.ndarray]:
         """``(N, M+2)`` first node and node count of every (object, frame) block, frames 0..M+1."""
         starts = np.flatnonzero(_block_starts(self.node_object, self.node_frame))
