@@ -27,8 +27,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from formulations.markers.first_frame_shape import first_frame_disagreement  # noqa: E402
-from formulations.markers.pass_merge import pass_per_marker  # noqa: E402
 from formulations.markers.take_spread import with_take_spread  # noqa: E402
 from service.capture.capture import LabelingOptions  # noqa: E402
 from service.evaluation.matrix import CONDITIONS, RECORDINGS, prepare, recording_named  # noqa: E402
@@ -38,7 +36,7 @@ from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 from service.labeling.loop import label_windows  # noqa: E402
 from service.labeling.merged_windows import merged_windows  # noqa: E402
-from service.labeling.second_pass import MOSTLY_DOUBTFUL, doubtful_share  # noqa: E402
+from service.labeling.second_pass import MOSTLY_DOUBTFUL, doubtful_share, judged_passes  # noqa: E402
 from service.labeling.stats import DOUBTFUL_WARNING  # noqa: E402
 
 Run = tuple[str, str, int, int, str, str | None]  # recording, condition, seed, frames, formulation, scenario file
@@ -83,13 +81,9 @@ def _both_passes(run: Run) -> tuple[Run, tuple[float, float, float], tuple[float
     second = list(label_windows(chain, labeling.formulation, spread, simulated.cloud.n_frames, scenario.window))
     passes = (first, second)
     first_score, second_score = (label_scores(simulated, labeling.result(p)).label_accuracy for p in passes)
-    one, two = (labeled(p) for p in passes)
-    off = first_frame_disagreement([one.positions, two.positions], start.position, start.neighbours)
-    kept, other = (second, first) if off[1] < off[0] else (first, second)
-    own, theirs = (two, one) if off[1] < off[0] else (one, two)
-    taken = pass_per_marker((own.point_index, theirs.point_index), (own.positions, theirs.positions),
-                            start.position, start.neighbours) == 1
-    merged = label_scores(simulated, labeling.result(merged_windows(kept, other, taken))).label_accuracy
+    kept, taken, off = judged_passes(labeled(first), labeled(second), start)
+    mine, theirs = (second, first) if kept == 2 else (first, second)
+    merged = label_scores(simulated, labeling.result(merged_windows(mine, theirs, taken))).label_accuracy
     return run, (first_score, second_score, merged), (doubtful_share(first), doubtful_share(second)), off
 
 

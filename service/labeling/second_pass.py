@@ -122,15 +122,29 @@ def second_pass(
         if stop is not None and stop():
             return None
     relabeled = labels(second)
-    off = first_frame_disagreement([labeled.positions, relabeled.positions], first.position, first.neighbours)
-    # NaN (no rigid pair labeled together) compares False: the first pass stays.
-    kept = 2 if off[1] < off[0] else 1
-    mine, theirs, own, other = (second, outcomes, relabeled, labeled) if kept == 2 else (outcomes, second, labeled, relabeled)
-    taken = pass_per_marker((own.point_index, other.point_index), (own.positions, other.positions),
-                            first.position, first.neighbours) == 1
+    kept, taken, off = judged_passes(labeled, relabeled, first)
+    mine, theirs = (second, outcomes) if kept == 2 else (outcomes, second)
     first_off, second_off = (None if np.isnan(v) else float(v) for v in off)
     choice = PassChoice(before, doubtful_share(second), kept, first_off, second_off, int(taken.sum()))
-    return merged_windows(with_other_reading(mine, theirs), with_other_reading(theirs, mine), taken), choice
+    windows = with_other_reading(mine, theirs)
+    if not taken.any():  # nothing from the other pass: its confidences need no second judging
+        return windows, choice
+    return merged_windows(windows, with_other_reading(theirs, mine), taken), choice
+
+
+def judged_passes(
+    first_labels: LabeledTrajectories, second_labels: LabeledTrajectories, first: MarkerState,
+) -> tuple[int, np.ndarray, np.ndarray]:
+    """Which pass's windows are kept (1 or 2: the one whose rigid pairs agree better with the
+    first frame, ``first_frame_disagreement``), the ``(N,)`` markers to take from the other
+    (``pass_merge``), and each pass's disagreement (mm)."""
+    off = first_frame_disagreement([first_labels.positions, second_labels.positions], first.position, first.neighbours)
+    # NaN (no rigid pair labeled together) compares False: the first pass stays.
+    kept = 2 if off[1] < off[0] else 1
+    own, other = (second_labels, first_labels) if kept == 2 else (first_labels, second_labels)
+    taken = pass_per_marker((own.point_index, other.point_index), (own.positions, other.positions),
+                            first.position, first.neighbours) == 1
+    return kept, taken, off
 
 
 def with_other_reading(kept: list[WindowOutcome], other: list[WindowOutcome]) -> list[WindowOutcome]:
