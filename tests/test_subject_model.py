@@ -72,6 +72,21 @@ def test_synthetic_chain_groups_joints_and_limbs(seed: int) -> None:
         assert abs(limb.length - LIMB) < 3.0
 
 
+def test_a_limb_whose_joints_are_never_posed_together_is_measured_on_its_segment() -> None:
+    """Segment 0 seen only in the first half, segment 2 only in the second: the two joints of
+    segment 1 never exist in one frame. Their mean distance over frames is undefined; the
+    length is the centres' distance in segment 1's own frame, and the model reads back
+    (an infinite length made the fitted model of 03_rolling unreadable)."""
+    names, positions, _ = chain(3)
+    half = len(positions) // 2
+    positions[half:, :4] = np.nan
+    positions[:half, 8:12] = np.nan
+    model = fit_subject(names, positions).model
+    middle = [limb for limb in model.limbs if limb.segment == "S1M0"]
+    assert len(middle) == 1 and abs(middle[0].length - LIMB) < 3.0
+    assert SubjectModel.from_json(model.to_json()) == model
+
+
 def test_a_marker_alone_on_its_segment_is_kept_as_a_single() -> None:
     names, positions, _ = chain(0)
     keep = [i for i, name in enumerate(names) if not name.startswith("S3") or name == "S3M0"]

@@ -73,7 +73,10 @@ def build_skeleton(segments: list[SegmentFit], positions: Array, joint_rms: floa
 def limb_lengths(skeleton: Skeleton, count: int) -> list[tuple[int, int, int, float]]:
     """(segment, joint i, joint j, length) for each segment between two joints.
 
-    The length is the mean over frames of |t_i(k) - t_j(k)|, the distance of the two joint trajectories.
+    The length is the mean over frames of |t_i(k) - t_j(k)|, the distance of the two joint
+    trajectories; where they never exist in one frame (a gappy take: the segments on either
+    side never posed together), the distance of the two centres in the segment's own frame,
+    which is constant on a rigid segment (a model with an infinite length cannot be read back).
     """
     limbs = []
     for segment in range(count):
@@ -81,5 +84,14 @@ def limb_lengths(skeleton: Skeleton, count: int) -> list[tuple[int, int, int, fl
         for n, i in enumerate(touching):
             for j in touching[n + 1:]:
                 length = mean_distance(skeleton.joints[i][2].trajectory, skeleton.joints[j][2].trajectory)
+                if not np.isfinite(length):
+                    gap = _centre_on(skeleton, i, segment) - _centre_on(skeleton, j, segment)
+                    length = float(np.linalg.norm(gap))
                 limbs.append((segment, i, j, length))
     return limbs
+
+
+def _centre_on(skeleton: Skeleton, joint: int, segment: int) -> Array:
+    """The joint's centre in ``segment``'s own frame."""
+    a, _, fit = skeleton.joints[joint]
+    return fit.centre_a if segment == a else fit.centre_b
