@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -118,7 +119,7 @@ class MarkerState:
                 than fly off on a stale velocity.
             rate: Weight of the newest frame in the running distance statistics.
         """
-        predicted, followed, carried = self._predict()
+        predicted, followed, carried = self._prediction
         position = np.where(seen[:, None], observed, predicted)
         was_seen = self.visible & seen
         # Seen twice: measured. Otherwise the displacement the neighbours imply (a stale
@@ -219,8 +220,8 @@ class MarkerState:
         return var
 
     def predict(self) -> np.ndarray:
-        """``(N, 3)`` predicted position one frame ahead (see ``_predict``)."""
-        return self._predict()[0]
+        """``(N, 3)`` predicted position one frame ahead (see ``_prediction``)."""
+        return self._prediction[0].copy()
 
     def stranded(self, after: int) -> np.ndarray:
         """``(N,)`` unseen for ``after`` frames or more with no seen neighbour to follow:
@@ -252,9 +253,11 @@ class MarkerState:
         usable[short] |= (self.anchor_carried & seen_now)[short]
         return usable
 
-    def _predict(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    @cached_property
+    def _prediction(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Predicted positions, which markers followed their neighbours, and which of those
-        a firm rigid fit carried (``rigid.follow_neighbours``).
+        a firm rigid fit carried (``rigid.follow_neighbours``); computed once per state (the
+        labeler predicts a state, then advances it), so never to be written into.
 
         Constant velocity for markers seen now. An unseen marker follows the neighbours
         seen both at its anchor frame and now: their robust rigid motion (near neighbours
