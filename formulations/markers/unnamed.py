@@ -127,7 +127,7 @@ def unnamed_chains(
     """
     if not around.known:
         return UnnamedChains.empty(len(frames))
-    reach, link_radius = _radii(state, gate)
+    reach, link_radius = chain_radii(state, gate)
     free = around.template[_farther(around.template, state.position[state.visible], HELD_MM)]
     tracked, step = _predecessors(free, around.before, reach)
     chains = [_Chain(p, v, 0, True) for p, v in zip(free[tracked], step[tracked])]
@@ -174,8 +174,9 @@ def _guide_holds(guide: GuideTrack, state: MarkerState, frames: list[np.ndarray]
     return holds
 
 
-def _radii(state: MarkerState, gate: Gate) -> tuple[float, float]:
-    """(reach, link radius) in mm (``unnamed_chains``)."""
+def chain_radii(state: MarkerState, gate: Gate) -> tuple[float, float]:
+    """(reach, link radius) in mm (``unnamed_chains``): how far a point may step in one frame
+    with its velocity unknown, and off where its own last step puts it."""
     link_radius = gate.motion_sigmas * float(np.sqrt(3 * np.median(state.motion_var)))
     moving = state.visible & state.velocity_known
     speed = np.linalg.norm(state.velocity[moving], axis=1)

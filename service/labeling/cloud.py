@@ -14,13 +14,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
-from formulations.markers.exchange import repair_exchanges
+from formulations.markers.exchange import continued_points, repair_exchanges
 from formulations.markers.guide import assign_nearest
 from formulations.markers.mirror import repair_mirrors
 from formulations.markers.pair_evidence import repair_pair_evidence
 from formulations.markers.state import MarkerState
 from formulations.markers.turns import repair_turns, rigid_triples
-from formulations.markers.unnamed import MIN_BIRTH_POINTS, WindowSurround
+from formulations.markers.unnamed import MIN_BIRTH_POINTS, WindowSurround, chain_radii
 from formulations.relaxation.components import coupled_components
 from formulations.window.build import build_window, taken_candidates
 from formulations.window.costs import ArcCostWeights
@@ -82,7 +82,7 @@ class CloudChain:
     def pose(
         self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
     ) -> tuple[WindowProblem, CloudInverse]:
-        state, _ = repair_exchanges(state, _unclaimed(self.cloud.points[template], state), confidence)
+        state = self._exchanges_repaired(state, template, confidence)
         state, _ = repair_mirrors(state, np.asarray(self.first_frame, dtype=float))
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
@@ -102,6 +102,17 @@ class CloudChain:
         state, filled = _advance(inverse.state, inverse.frames, taken)
         state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
+
+    def _exchanges_repaired(self, state: MarkerState, template: int, confidence: np.ndarray | None) -> MarkerState:
+        """``repair_exchanges`` at the template, an unseen marker taking only free points the
+        next frame continues within the unnamed tracks' one-frame reach (``chain_radii``)."""
+        unclaimed = _unclaimed(self.cloud.points[template], state)
+        continued = None
+        if template + 1 < self.cloud.n_frames:
+            reach, _ = chain_radii(state, self.gating.gate)
+            continued = continued_points(unclaimed, self.cloud.points[template + 1], reach)
+        repaired, _ = repair_exchanges(state, unclaimed, confidence, continued)
+        return repaired
 
     def _around(self, template: int, last: int) -> WindowSurround:
         """The points next to the window, for its unnamed tracks (``markers.unnamed``)."""
