@@ -18,17 +18,16 @@ def rigid_transform(source: np.ndarray, target: np.ndarray, weight: np.ndarray) 
     Returns:
         ``(S, 3, 3)`` rotations, ``(S, 3)`` source and ``(S, 3)`` target centroids.
     """
-    # matmul, not three-operand einsum: this runs some 50,000 times a take (``follow_neighbours``)
-    w = weight / np.maximum(weight.sum(axis=1, keepdims=True), 1e-12)
-    c_s = np.matmul(w[:, None, :], source)[:, 0]
-    c_t = np.matmul(w[:, None, :], target)[:, 0]
-    h = np.matmul((source - c_s[:, None]).transpose(0, 2, 1) * w[:, None, :], target - c_t[:, None])
+    total = weight.sum(axis=1, keepdims=True)
+    w = weight / np.maximum(total, 1e-12)
+    c_s = np.einsum("sk,skd->sd", w, source)
+    c_t = np.einsum("sk,skd->sd", w, target)
+    h = np.einsum("sk,ski,skj->sij", w, source - c_s[:, None], target - c_t[:, None])
     u, _, vt = np.linalg.svd(h)
-    v = vt.transpose(0, 2, 1)
-    rotation = np.matmul(v, u.transpose(0, 2, 1))  # V U^T
-    reflected = np.linalg.det(rotation) < 0  # then V diag(1, 1, -1) U^T = V U^T - 2 v_3 u_3^T
-    if reflected.any():
-        rotation[reflected] -= 2.0 * v[reflected][:, :, 2:3] * u[reflected][:, :, 2][:, None, :]
+    sign = np.sign(np.linalg.det(np.einsum("sji,skj->sik", vt, u)))  # det(V U^T)
+    fix = np.ones((len(h), 3))
+    fix[:, 2] = np.where(sign == 0, 1.0, sign)
+    rotation = np.einsum("sji,sj,skj->sik", vt, fix, u)  # V diag(fix) U^T
     return rotation, c_s, c_t
 
 
