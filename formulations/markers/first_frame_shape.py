@@ -49,17 +49,27 @@ def first_frame_disagreement(
         first: ``(N, 3)`` the labeled first frame (NaN for a marker it lacks).
         neighbours: ``(N, K)`` each marker's neighbours (``MarkerState.neighbours``).
     """
-    mates = rigid_mates(labelings, neighbours, partners)
-    rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
-    off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
-                    for positions in labelings])  # (P, F, N, R), NaN where a pair is not labeled together
-    judged = np.isfinite(off).any(axis=0)
+    capped, judged = pair_offsets(labelings, first, neighbours, partners, cap_mm)
     if not judged.any():
         return np.full(len(labelings), np.nan)
-    return np.array([np.where(np.isfinite(each), np.minimum(each, cap_mm), cap_mm)[judged].mean() for each in off])
+    return np.array([each[judged].mean() for each in capped])
 
 
-def rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners: int = PARTNERS) -> NDArray[np.int64]:
+def pair_offsets(
+    labelings: list[Array], first: Array, neighbours: NDArray[np.int64], partners: int = PARTNERS, cap_mm: float = CAP_MM,
+) -> tuple[Array, NDArray[np.bool_]]:
+    """``(P, F, N, R)`` each labeling's offset of each marker's R rigid partners off the first
+    frame, ``min(| ||L_p[t, m] - L_p[t, j]|| - d0_mj |, cap)``, the cap where it does not label
+    both (module doc); and ``(F, N, R)`` the triples some labeling labels together (U)."""
+    mates = _rigid_mates(labelings, neighbours, partners)
+    rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
+    off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
+                    for positions in labelings])  # NaN where a pair is not labeled together
+    capped: Array = np.where(np.isfinite(off), np.minimum(off, cap_mm), cap_mm)
+    return capped, np.isfinite(off).any(axis=0)
+
+
+def _rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners: int) -> NDArray[np.int64]:
     """``(N, partners)`` each marker's neighbours of least spread r_mj in any labeling (module doc)."""
     rigidity = np.fmin.reduce([take_spread(positions, neighbours) for positions in labelings])
     order = np.argsort(np.where(np.isfinite(rigidity), rigidity, np.inf), axis=1)[:, :partners]

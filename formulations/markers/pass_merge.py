@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from formulations.markers.first_frame_shape import CAP_MM, PARTNERS, rigid_mates
+from formulations.markers.first_frame_shape import pair_offsets
 
 Array = NDArray[np.float64]
 
@@ -42,11 +42,8 @@ def pass_per_marker(
     kept = np.zeros(len(first), dtype=np.int64)
     if not differs.any():
         return kept
-    mates = rigid_mates(list(positions), neighbours, PARTNERS)
-    rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
-    offs = np.stack([np.abs(np.linalg.norm(p[:, :, None] - p[:, mates], axis=3) - rest) for p in positions])
-    judged = np.isfinite(offs).any(axis=0)  # (F, N, R)
-    per_marker = np.where(judged, np.where(np.isfinite(offs), np.minimum(offs, CAP_MM), CAP_MM), 0.0).sum(axis=(1, 3))
+    capped, judged = pair_offsets(list(positions), first, neighbours)
+    per_marker = np.where(judged, capped, 0.0).sum(axis=(1, 3))  # (2, N)
     for g in np.unique(group[differs]):
         members = differs & (group == g)
         kept[members] = int(per_marker[1, members].sum() < per_marker[0, members].sum())
