@@ -112,6 +112,11 @@ class MarkerState:
     def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
         """The state one frame later.
 
+        The guide track (``guide.guide_track``) advances a window's states with the points it
+        takes, and the window's labels then advance the same states again, mostly with the
+        same points: each state keeps the states it has been advanced to, by their arguments,
+        so an advance already made is not made twice (``_advanced``, exactly the same state).
+
         Args:
             observed: ``(N, 3)`` positions taken this frame (ignored where not ``seen``).
             seen: ``(N,)`` bool, markers labeled this frame.
@@ -119,6 +124,19 @@ class MarkerState:
                 than fly off on a stale velocity.
             rate: Weight of the newest frame in the running distance statistics.
         """
+        seen = np.asarray(seen, dtype=bool)
+        key = (np.asarray(observed, dtype=float).tobytes(), seen.tobytes(), damping, rate)
+        if key not in self._advanced:
+            self._advanced[key] = self._advance(observed, seen, damping, rate)
+        return self._advanced[key]
+
+    @cached_property
+    def _advanced(self) -> dict[tuple[bytes, bytes, float, float], MarkerState]:
+        """The states this one has been advanced to (``advance``), by their arguments."""
+        return {}
+
+    def _advance(self, observed: np.ndarray, seen: np.ndarray, damping: float, rate: float) -> MarkerState:
+        """``advance`` computed."""
         predicted, followed, carried = self._prediction
         position = np.where(seen[:, None], observed, predicted)
         was_seen = self.visible & seen
