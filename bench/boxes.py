@@ -3,7 +3,7 @@
 Input: MPNTrack's published boxes with their ids dropped. Prints the median over repeats
 per formulation, and the boxes per frame.
 
-    .venv/bin/python bench/boxes.py [--repeats 3] [--window 5] [--returns-compete]
+    .venv/bin/python bench/boxes.py [--repeats 3] [--window 5] [--no-newcomer-test]
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--window", type=int, default=5)
-    parser.add_argument("--returns-compete", action="store_true", help="Lifecycle(returns_compete=True)")
+    parser.add_argument("--no-newcomer-test", action="store_true", help="Lifecycle(returns_compete=False)")
     args = parser.parse_args()
     detections = read_detections(SEQUENCE / "trackers" / "MPNTrack.txt", read_seqinfo(SEQUENCE / "seqinfo.ini"))
     print(f"MOT17-02: {detections.n_frames} frames, {len(detections.frame) / detections.n_frames:.1f} boxes per frame, "
           f"window {args.window}")
     for formulation in ("lp-l1", "ilp", "nn-hungarian"):
-        lifecycle = Lifecycle(returns_compete=args.returns_compete)
+        lifecycle = Lifecycle(returns_compete=not args.no_newcomer_test)
         seconds = [track_boxes(detections, formulation, window=args.window, lifecycle=lifecycle).seconds
                    for _ in range(args.repeats)]
         median = statistics.median(seconds)

@@ -14,11 +14,11 @@ The cost constants were chosen on TUD-Campus and MOT17-02; the other three are h
 Arcs are priced by Jiang's weighted costs, or with ``--likelihood`` as negative
 log-likelihoods (``formulations.boxes.likelihood``), the same for every formulation.
 
-With ``--returns-compete`` a chain a lost object took after a miss is weighed as its return
-against a newcomer (``Lifecycle(returns_compete=True)``, ``formulations.boxes.returns``), for
-every formulation.
+By default a chain a lost object took after a miss is weighed as its return against a
+newcomer (``Lifecycle(returns_compete=True)``, ``formulations.boxes.returns``), for every
+formulation; ``--no-newcomer-test`` leaves it to the window's costs.
 
-    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--returns-compete]
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--no-newcomer-test]
 """
 
 from __future__ import annotations
@@ -59,7 +59,8 @@ def main() -> None:
     parser.add_argument("--window", type=int, default=5)
     parser.add_argument("--formulations", default="lp-l1,ilp,nn-hungarian")
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
-    parser.add_argument("--returns-compete", action="store_true", help="weigh a lost object's return against a newcomer")
+    parser.add_argument("--no-newcomer-test", action="store_true",
+                        help="Lifecycle(returns_compete=False): the window's costs alone decide a lost object's return")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
     print("|---|---|---|---|---|---|---|")
@@ -68,7 +69,7 @@ def main() -> None:
             detections = read_detections(det, read_seqinfo(seqinfo) if seqinfo else None)
             for formulation in args.formulations.split(","):
                 run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
-                                  lifecycle=Lifecycle(returns_compete=args.returns_compete))
+                                  lifecycle=Lifecycle(returns_compete=not args.no_newcomer_test))
                 result = Path(folder) / f"{name}-{formulation}.txt"
                 write_tracks(result, run.tracks)
                 s = mot_scores(result, gt, seqinfo)

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import motmetrics
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -43,3 +44,27 @@ def test_errors_are_one_line(tmp_path):
         run = runner.invoke(app, args)
         assert run.exit_code == 2, run.output
         assert len(run.output.strip().splitlines()) == 1 and run.output.startswith("error:")
+
+
+def test_the_newcomer_test_is_on_by_default_and_can_be_turned_off(tmp_path):
+    # A walks right in frames 1..10 and is gone; from frame 14 B walks left inside A's widening
+    # forecast; two people stand far off, so that the boxes span a camera's sizes
+    # (``tests/test_boxes_births.py``). The newcomer test makes B a new person; the window's
+    # costs alone hand B to A.
+    rng = np.random.default_rng(0)
+    rows = [(f, 100.0 + 3 * f, 100.0, 40.0, 100.0) for f in range(1, 11)]
+    rows += [(f, 242.0 - 3 * f, 110.0, 44.0, 110.0) for f in range(14, 41)]
+    rows += [(f, x, y, w, h) for f in range(1, 41) for x, y, w, h in ((1500.0, 100.0, 20.0, 50.0), (1600.0, 500.0, 120.0, 300.0))]
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{x - w / 2 + rng.normal(0, 1):.2f},{y - h / 2 + rng.normal(0, 1):.2f},{w},{h},1\n"
+                           for f, x, y, w, h in sorted(rows)))
+    info = tmp_path / "seqinfo.ini"
+    info.write_text("[Sequence]\nname=walkers\nseqLength=40\nimWidth=1920\nimHeight=1080\n")
+    tracks = {}
+    for flag in ([], ["--no-newcomer-test"]):
+        run = runner.invoke(app, ["boxes", str(det), "--out", str(tmp_path / "r.txt"), "--seqinfo", str(info), "--json", *flag])
+        assert run.exit_code == 0, run.output
+        summary = json.loads(run.stdout)
+        assert summary["newcomer_test"] == (not flag)
+        tracks[bool(flag)] = summary["tracks"]
+    assert tracks == {False: 4, True: 3}  # A, B and the two standing; B handed to A without the test

@@ -169,12 +169,18 @@ def boxes(
     seqinfo: Annotated[Path | None, typer.Option(help="seqinfo.ini: sequence length and image size.")] = None,
     images: Annotated[Path | None, typer.Option(help="Folder of frames (000001.jpg, ...): adds 64-bin grey histograms.")] = None,
     window: Annotated[int, typer.Option("--window", "-w", help="Frames per window, template included.")] = 5,
+    newcomer_test: Annotated[bool, typer.Option(
+        "--newcomer-test/--no-newcomer-test",
+        help="Weigh boxes a lost object takes back against a new person (off: the window's costs alone decide).",
+    )] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object of the figures on stdout.")] = False,
 ) -> None:
     """Track the boxes of one camera (Jiang's window LP) and write MOTChallenge results."""
     from service.cli.boxes import run_boxes
 
-    _guard(lambda: run_boxes(detections, out, formulation, seqinfo, images, _window(window) or 5, as_json))
+    _guard(lambda: run_boxes(
+        detections, out, formulation, seqinfo, images, _window(window) or 5, as_json, newcomer_test,
+    ))
 
 
 @app.command("mot-eval")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from formulations.boxes.lifecycle import Lifecycle
 from service.boxes.frames import box_histograms
 from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks
 from service.boxes.track import track_boxes
@@ -15,8 +16,9 @@ from service.errors import InputError
 
 
 def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | None, images: Path | None,
-              window: int, as_json: bool) -> None:
-    """Read ``detections``, track them window by window, write ``output``, print the figures."""
+              window: int, as_json: bool, newcomer_test: bool = True) -> None:
+    """Read ``detections``, track them window by window, write ``output``, print the figures;
+    ``newcomer_test``: ``Lifecycle.returns_compete``."""
     check_writable_folder(output.parent if str(output.parent) else Path("."))
     info = read_seqinfo(seqinfo) if seqinfo is not None else None
     boxes = read_detections(detections, info)
@@ -26,14 +28,15 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
     histograms = None
     if images is not None:
         histograms = box_histograms(boxes, images, info.image_ext if info is not None else None)
-    run = track_boxes(boxes, solver, window=window, histograms=histograms)
+    run = track_boxes(boxes, solver, window=window, histograms=histograms,
+                      lifecycle=Lifecycle(returns_compete=newcomer_test))
     write_tracks(output, run.tracks)
     summary = {
         "frames": boxes.n_frames, "detections": len(boxes.frame), "tracked_boxes": len(run.tracks.frame),
         "tracks": int(len(set(run.tracks.track_id.tolist()))), "formulation": formulation, "window": window,
         "integral_window_fraction": run.integral_windows / run.windows if run.windows else None,
         "seconds": round(run.seconds, 3), "frames_per_second": round(boxes.n_frames / max(run.seconds, 1e-9), 1),
-        "histograms": histograms is not None, "output": str(output),
+        "histograms": histograms is not None, "newcomer_test": newcomer_test, "output": str(output),
     }
     if as_json:
         print(json.dumps(summary))
