@@ -28,9 +28,11 @@ def round_greedy(problem: WindowProblem, y: np.ndarray) -> np.ndarray:
     groups = problem.conflict_groups
     rivals = (groups.T @ groups).tocsr() if groups.shape[0] else sp.csr_matrix((problem.n_nodes,) * 2)
     path = np.full((problem.n_objects, problem.n_frames), -1)
+    value = np.round(y, 9)
     inner = np.flatnonzero((problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames))
+    inner = inner[_takeable(problem, value, inner)]
     # Largest y first; on ties prefer the occlusion node (it blocks nobody).
-    order = inner[np.lexsort((problem.node_kind[inner] != OCCLUSION, -np.round(y[inner], 9), problem.node_frame[inner]))]
+    order = inner[np.lexsort((problem.node_kind[inner] != OCCLUSION, -value[inner], problem.node_frame[inner]))]
     visited = np.zeros(problem.n_nodes, dtype=bool)
     for v in order:
         n, m = problem.node_object[v], problem.node_frame[v] - 1
@@ -39,3 +41,15 @@ def round_greedy(problem: WindowProblem, y: np.ndarray) -> np.ndarray:
         path[n, m] = v
         visited[rivals.indices[rivals.indptr[v]:rivals.indptr[v + 1]]] = True
     return path
+
+
+def _takeable(problem: WindowProblem, value: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """``(len(inner),)`` the nodes the greedy can take: a node valued at most its object's
+    occlusion node in that frame comes after it in the order, and an occlusion node is never
+    blocked, so it is never taken (a window's LP puts most candidates at 0)."""
+    occlusion = np.full((problem.n_objects, problem.n_frames + 2), -np.inf)
+    occluded = inner[problem.node_kind[inner] == OCCLUSION]
+    occlusion[problem.node_object[occluded], problem.node_frame[occluded]] = value[occluded]
+    bar = occlusion[problem.node_object[inner], problem.node_frame[inner]]
+    takeable: np.ndarray = (problem.node_kind[inner] == OCCLUSION) | (value[inner] > bar)
+    return takeable
