@@ -35,7 +35,7 @@ matrix, seed 0, 600 frames, five conditions, lp-l1: 96.23 -> 96.26 % mean, swaps
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
+from functools import lru_cache, partial
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -89,7 +89,7 @@ def reacquire_by_shape(
     score = judges.chi_square(guess, np.vstack([free, guess[looked_for]]))
     own = score[np.arange(len(looked_for)), len(free) + np.arange(len(looked_for))]  # each prediction's own fit
     score = score[:, : len(free)]
-    inside = score <= chi_square.ppf(settings.quantile, judges.count)[:, None]
+    inside = score <= chi_square_gate(settings.quantile, settings.rigid)[judges.count][:, None]
     outside = (min(score.shape) + 1) * (score.max() + 1.0)  # above any sum of inside scores
     rows, cols = linear_sum_assignment(np.where(inside, score, outside))
     contested = _claimed_by_another(guess, state, looked_for, free, settings)
@@ -99,6 +99,16 @@ def reacquire_by_shape(
         if inside[row, col] and alone and score[row, col] < own[row]:
             moved[looked_for[row]] = free[col]
     return moved
+
+
+@lru_cache(maxsize=8)
+def chi_square_gate(quantile: float, most: int) -> np.ndarray:
+    """``(most + 1,)`` the chi-square ``quantile`` for 0..``most`` degrees of freedom (NaN at 0),
+    looked up per judged marker: scipy's ``ppf`` costs more per call than the rest of a frame's
+    re-acquisition test, and the judges are at most ``ShapeReacquisition.rigid``."""
+    gate: np.ndarray = chi_square.ppf(quantile, np.arange(most + 1))
+    gate.setflags(write=False)
+    return gate
 
 
 def _claimed_by_another(
@@ -112,7 +122,7 @@ def _claimed_by_another(
     close = np.flatnonzero(near.any(axis=1))
     if len(close):
         judges = _judges(state, unseen[close], settings)
-        gate = chi_square.ppf(settings.quantile, np.maximum(judges.count, 1))[:, None]
+        gate = chi_square_gate(settings.quantile, settings.rigid)[np.maximum(judges.count, 1)][:, None]
         fits = (judges.chi_square(guess, free) <= gate) & (judges.count >= 1)[:, None]
         claim[close] = near[close] & fits
     other = unseen[None, :] != looked_for[:, None]  # (L, U)
