@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from formulations.markers.first_frame_shape import first_frame_disagreement
+from formulations.markers.first_frame_shape import first_frame_disagreement, pair_offsets
 from formulations.markers.pass_merge import pass_per_marker
 from formulations.markers.state import MarkerState
 
@@ -48,7 +48,7 @@ def test_each_pass_keeps_the_plate_it_labels_right() -> None:
     whole = first_frame_disagreement([one[1], two[1]], truth[0], neighbours)
     kept = int(np.argmin(whole))
     assert not np.array_equal((one, two)[kept][0], np.tile(np.arange(8), (FRAMES, 1)))  # a whole pass keeps an exchange
-    take = pass_per_marker((one[0], two[0]), (one[1], two[1]), truth[0], neighbours)
+    take = pass_per_marker((one[0], two[0]), *pair_offsets([one[1], two[1]], truth[0], neighbours))
     assert take.tolist() == [0, 0, 0, 0, 0, 1, 1, 0]  # only the markers the passes label differently move
     merged = np.where(take[None] == 1, two[0], one[0])
     assert np.array_equal(merged, np.tile(np.arange(8), (FRAMES, 1)))
@@ -80,7 +80,7 @@ def test_no_frame_gives_one_point_to_two_markers(seed: int) -> None:
             row[np.flatnonzero(row >= 0)[again]] = -1
     clouds = np.concatenate([truth, truth[:, :2] + 300.0], axis=1)
     positions = [np.where((p >= 0)[..., None], clouds[np.arange(FRAMES)[:, None], np.maximum(p, 0)], np.nan) for p in passes]
-    take = pass_per_marker((passes[0], passes[1]), (positions[0], positions[1]), truth[0], neighbours)
+    take = pass_per_marker((passes[0], passes[1]), *pair_offsets(positions, truth[0], neighbours))
     merged = np.where(take[None] == 1, passes[1], passes[0])
     for row in merged:
         held = row[row >= 0]

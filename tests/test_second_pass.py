@@ -88,12 +88,12 @@ def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, 
         ran.append(_stats_doubt(list(real(*args, **kwargs)), 90))  # far more doubtful, kept or not
         return ran[-1]
 
-    def disagreement(labelings, first_frame, neighbours):
-        judged.append(len(labelings))
+    def disagreement(capped, judged_triples):
+        judged.append(len(capped))
         return np.array(off)
 
     monkeypatch.setattr(second_pass_module, "label_windows", counted)
-    monkeypatch.setattr(second_pass_module, "first_frame_disagreement", disagreement)
+    monkeypatch.setattr(second_pass_module, "disagreement", disagreement)
     monkeypatch.setattr(second_pass_module, "pass_per_marker", lambda points, *_: np.zeros(points[0].shape[1], int))
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001  (the pass as refine runs it)
     kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, labeling.result)  # noqa: SLF001
@@ -130,7 +130,7 @@ def test_markers_the_other_pass_labels_better_come_from_it(monkeypatch, kept: in
 
     monkeypatch.setattr(second_pass_module, "label_windows", shifted)
     off = [5.0, 3.0] if kept == 2 else [3.0, 5.0]
-    monkeypatch.setattr(second_pass_module, "first_frame_disagreement", lambda *_: np.array(off))
+    monkeypatch.setattr(second_pass_module, "disagreement", lambda *_: np.array(off))
     first_two = lambda points, *_: (np.arange(points[0].shape[1]) < 2).astype(int)  # noqa: E731
     monkeypatch.setattr(second_pass_module, "pass_per_marker", first_two)
     first_labels = labeling.result(outcomes)  # what the judges read is stubbed above
@@ -158,7 +158,7 @@ def test_a_job_stores_the_kept_pass_windows_with_its_result(monkeypatch, tmp_pat
     partial result reads is the labeling the result was assembled from."""
     # a second pass runs and is kept, in the job and in the library alike
     monkeypatch.setattr(second_pass_module, "doubtful_share", lambda outcomes: 0.5)
-    monkeypatch.setattr(second_pass_module, "first_frame_disagreement", lambda *args: np.array([5.0, 1.0]))
+    monkeypatch.setattr(second_pass_module, "disagreement", lambda *args: np.array([5.0, 1.0]))
     real = second_pass_module.label_windows
 
     def marked(*args, **kwargs):

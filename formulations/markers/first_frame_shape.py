@@ -49,9 +49,14 @@ def first_frame_disagreement(
         first: ``(N, 3)`` the labeled first frame (NaN for a marker it lacks).
         neighbours: ``(N, K)`` each marker's neighbours (``MarkerState.neighbours``).
     """
-    capped, judged = pair_offsets(labelings, first, neighbours, partners, cap_mm)
+    return disagreement(*pair_offsets(labelings, first, neighbours, partners, cap_mm))
+
+
+def disagreement(capped: Array, judged: NDArray[np.bool_]) -> Array:
+    """``(P,)`` each labeling's mean capped offset over the judged triples (``pair_offsets``);
+    all NaN when no triple is judged."""
     if not judged.any():
-        return np.full(len(labelings), np.nan)
+        return np.full(len(capped), np.nan)
     return np.array([each[judged].mean() for each in capped])
 
 

@@ -21,28 +21,23 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from formulations.markers.first_frame_shape import pair_offsets
-
 Array = NDArray[np.float64]
 
 
 def pass_per_marker(
-    points: tuple[NDArray[np.int64], NDArray[np.int64]], positions: tuple[Array, Array], first: Array,
-    neighbours: NDArray[np.int64],
+    points: tuple[NDArray[np.int64], NDArray[np.int64]], capped: Array, judged: NDArray[np.bool_],
 ) -> NDArray[np.int64]:
     """``(N,)`` 0 or 1: whose labels each marker keeps (module doc); 0 where the passes agree.
 
     Args:
         points: Each pass's ``(F, N)`` point index per frame and marker, -1 unlabeled.
-        positions: Each pass's ``(F, N, 3)`` labeled positions, NaN where unlabeled.
-        first: ``(N, 3)`` the labeled first frame.
-        neighbours: ``(N, K)`` each marker's neighbours (``MarkerState.neighbours``).
+        capped, judged: The passes' offsets off the labeled first frame, in the order of
+            ``points`` (``first_frame_shape.pair_offsets``).
     """
     group, differs = _groups(*points)
-    kept = np.zeros(len(first), dtype=np.int64)
+    kept = np.zeros(points[0].shape[1], dtype=np.int64)
     if not differs.any():
         return kept
-    capped, judged = pair_offsets(list(positions), first, neighbours)
     per_marker = np.where(judged, capped, 0.0).sum(axis=(1, 3))  # (2, N)
     for g in np.unique(group[differs]):
         members = differs & (group == g)

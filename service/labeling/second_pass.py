@@ -44,7 +44,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from formulations.confidence.two_readings import agreed_confidence
-from formulations.markers.first_frame_shape import first_frame_disagreement
+from formulations.markers.first_frame_shape import disagreement, pair_offsets
 from formulations.markers.pass_merge import pass_per_marker
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import with_take_spread
@@ -136,14 +136,16 @@ def judged_passes(
     first_labels: LabeledTrajectories, second_labels: LabeledTrajectories, first: MarkerState,
 ) -> tuple[int, np.ndarray, np.ndarray]:
     """Which pass's windows are kept (1 or 2: the one whose rigid pairs agree better with the
-    first frame, ``first_frame_disagreement``), the ``(N,)`` markers to take from the other
-    (``pass_merge``), and each pass's disagreement (mm)."""
-    off = first_frame_disagreement([first_labels.positions, second_labels.positions], first.position, first.neighbours)
+    first frame, ``first_frame_shape``), the ``(N,)`` markers to take from the other
+    (``pass_merge``), and each pass's disagreement (mm). Both judges read one computation
+    of the passes' offsets off the first frame."""
+    capped, judged = pair_offsets([first_labels.positions, second_labels.positions], first.position, first.neighbours)
+    off = disagreement(capped, judged)
     # NaN (no rigid pair labeled together) compares False: the first pass stays.
     kept = 2 if off[1] < off[0] else 1
-    own, other = (second_labels, first_labels) if kept == 2 else (first_labels, second_labels)
-    taken = pass_per_marker((own.point_index, other.point_index), (own.positions, other.positions),
-                            first.position, first.neighbours) == 1
+    order = [1, 0] if kept == 2 else [0, 1]
+    points = (first_labels.point_index, second_labels.point_index)
+    taken = pass_per_marker((points[order[0]], points[order[1]]), capped[order], judged) == 1
     return kept, taken, off
 
 
