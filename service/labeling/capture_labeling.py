@@ -38,6 +38,7 @@ from service.capture.formulation_spec import resolve_formulation
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.cloud import CloudChain
+from service.labeling.exchanged import exchanged_back
 from service.labeling.extension import extended
 from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
@@ -136,12 +137,15 @@ class CaptureLabeling:
         return self._view_choice.attach(labels, self._association.views(outcomes))
 
     def _labeled(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
-        """The windows' labels with their confidence, tracks extended over free points (3D points)."""
+        """The windows' labels with their confidence, tracks extended over free points and
+        exchanges the first frame finds over the take given back (3D points: ``exchanged``)."""
         labels = self._association.assemble(outcomes)
         labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
         if self._points is None:
             return labels
-        return extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
+        labels = extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
+        # A frame-by-frame baseline sees no later frame, so no take-wide repair either.
+        return exchanged_back(labels, self._first) if self.formulation.look_ahead else labels
 
     def _fill(self, labels: LabeledTrajectories) -> np.ndarray:
         """The windows' fill tied to both sightings, refilled from rigid donors; with a model

@@ -1,0 +1,213 @@
+"""Recovery over a whole labeled take: two markers the windows exchanged, given back on the
+say of the labeled first frame.
+
+The window repairs (``exchange``, ``pair_evidence``) judge an exchange by the distances the
+marker state has learned, and those follow the labels: a pair exchanged before its
+distances were learned, or kept exchanged for longer than the ~33 frames the statistics
+take to adapt, fits its learned shape either way. Hamner's running take at 2 mm noise: the
+right wrist's radial and ulnar markers, 63 mm apart, 271 +- 4 and 259 +- 3 mm from the
+elbow (their one rigid neighbour), exchanged at frame 83 and kept so for 500 frames.
+
+The first frame, which the user labeled, does not adapt. A pair (a, b) rigid with each other
+over the take (distance sd under ``RIGID_SD_MM``, ``take_spread``: robust to a tenth of wrong
+labels) and near (one among the other's ``NEAREST`` nearest in the first frame: a returning
+marker takes a point for its own where the two are close; the back and a shoulder, 200 mm
+apart, were exchanged on the say of a sternum a stooping trunk moved) is judged by its
+witnesses: the markers rigid with both. With d0_mj the first frame's distance of marker m
+to witness j and var_mj the take's spread, the cost of m at x in frame t is
+
+    c_m(x, t) = mean_j min(z_mj^2, CAP^2) / 2,   z_mj = (||x - r_j(t)|| - d0_mj) / sd_j,
+    sd_j^2 = var_aj + var_bj,
+
+over the witnesses seen at t. In a frame where both are labeled the exchange gains
+
+    g_t = c_a(x_a) + c_b(x_b) - c_a(x_b) - c_b(x_a),
+
+which (uncapped) is -(d_a - d_b)(d0_a - d0_b) / sd^2 per witness: whether the two sit as
+they sat in the first frame, blind to an offset both distances share (a pose the first frame
+did not have moves both). One marker's distance alone is not: a running wrist's pose moves
+the radial marker's distance to the elbow by as much as the 12 mm that tells it from the
+ulnar one, so a frame that labels one of them only gives no evidence.
+
+The pair is exchanged over the frames [s, e) that maximise sum g_t (frame 0 is the user's
+and never changes) among those an exchange can start and stop at: where the labels step
+farther from where each marker was heading (its track continued over gaps by the windows'
+prediction) than the exchanged labels would, or after a frame that labels neither (then
+nothing seen says which came back on whose point). Elsewhere the exchange would put jumps
+into two smooth tracks, or give a marker a point too far off for it to have been taken. It
+is made where
+
+- the sum reaches ``EXCHANGE_NATS`` and ``MIN_RATE`` per frame labeling both: a pose the
+  first frame did not have biases a pair's distances slowly, and over hundreds of frames
+  sums to as much as a true exchange gives in tens (CMU HDM05 at 4 mm: the sternum and a
+  shoulder marker, 1.8 mm apart in their distance to T10, 67 nats over 268 frames);
+- the exchanged labels fit as right labels do (their mean c at most ``FIT_COST``), and so
+  do the labels outside the run: a pair whose witnesses do not keep the first frame's
+  distances where it is labeled right is no judge of where it is not (Numediart's rolling
+  take with 30 % deletions: an upper-arm pair, mean c 2.0 outside its run).
+
+Best exchanges first, every pair judged again after each, until none clears. Distances
+cannot see a reflection (``mirror``) nor a plate's symmetry (``turns``): those gain nothing
+here and are left alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.state import RIGID_SD_MM
+from formulations.markers.take_spread import take_spread
+
+Array = NDArray[np.float64]
+
+CAP = 3.0  # z beyond 3 sd counts as 3: a slipped neighbour or a foreign point, not more evidence
+EXCHANGE_NATS = 20.0  # as the window's pair evidence: frames are not independent (skin motion is slow)
+NEAREST = 3  # a pair is among either's three nearest in the first frame: a plate, a wrist, a forefoot
+MIN_RATE = 0.5  # nats a frame labeling both must give on average: a pose's slow bias gives less
+FIT_COST = 1.0  # mean c of the exchanged labels: a right label's is about 0.25-0.5 (sd_j^2 is two spreads)
+
+
+@dataclass(frozen=True)
+class TakeExchange:
+    """Markers ``a`` and ``b`` exchange their labels over frames [start, stop)."""
+
+    a: int
+    b: int
+    start: int
+    stop: int
+    nats: float
+
+
+def take_exchanges(
+    positions: Array, first: Array, neighbours: NDArray[np.int64], predicted: Array | None = None,
+) -> list[TakeExchange]:
+    """The exchanges that give a labeling back its first frame's shape (module doc), in the
+    order they apply.
+
+    Args:
+        positions: ``(F, N, 3)`` labeled positions, NaN where a marker has no label.
+        first: ``(N, 3)`` the labeled first frame (NaN for a marker it lacks).
+        neighbours: ``(N, K)`` each marker's neighbours (``MarkerState.neighbours``).
+        predicted: ``(F, N, 3)`` where each unlabeled marker was predicted to be (the windows'
+            fill), NaN elsewhere; without it an unlabeled marker is where it was last labeled.
+    """
+    n = len(first)
+    spread = np.full((n, n), np.inf)
+    spread[np.repeat(np.arange(n), neighbours.shape[1]), neighbours.ravel()] = take_spread(positions, neighbours).ravel()
+    spread = np.fmin(spread, spread.T)  # NaN (too few frames together) and inf both compare False below
+    known = np.asarray(np.isfinite(first).all(axis=1))
+    rigid: NDArray[np.bool_] = (spread <= RIGID_SD_MM**2) & known[:, None] & known[None, :]
+    d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
+    near = np.zeros((n, n), bool)
+    near[np.repeat(np.arange(n), min(NEAREST, neighbours.shape[1])), neighbours[:, :NEAREST].ravel()] = True
+    pairs = [(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(rigid & (near | near.T), 1)))]
+    continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
+    working, done = np.stack([positions, continued]), []
+    judged = {pair: _judged(working, *pair, rigid, d0, spread) for pair in pairs}
+    for _ in range(n):
+        found = [e for e in judged.values() if e is not None]
+        if not found:
+            break
+        best = max(found, key=lambda e: e.nats)
+        moved = [best.a, best.b]
+        working[:, best.start : best.stop, moved] = working[:, best.start : best.stop, moved[::-1]]
+        done.append(best)
+        for a, b in pairs:  # judged again: the pairs the exchange moved, or moved a witness of
+            if a in moved or b in moved or (rigid[a, moved] & rigid[b, moved]).any():
+                judged[a, b] = _judged(working, a, b, rigid, d0, spread)
+    return done
+
+
+def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, spread: Array) -> TakeExchange | None:
+    """The pair's exchange over its best frames, None when it does not clear (module doc).
+    ``tracks``: the labeled positions and the same continued over gaps by the prediction."""
+    positions = tracks[0]
+    witness = rigid[a] & rigid[b]
+    witness[[a, b]] = False
+    j = np.flatnonzero(witness)
+    if not j.size:
+        return None
+    sd = np.sqrt(spread[a, j] + spread[b, j])
+    own, other = positions[:, a], positions[:, b]
+    right = _cost(own, positions[:, j], d0[a, j], sd) + _cost(other, positions[:, j], d0[b, j], sd)
+    swapped = _cost(other, positions[:, j], d0[a, j], sd) + _cost(own, positions[:, j], d0[b, j], sd)
+    both = np.isfinite(right) & np.isfinite(swapped)
+    gain = np.where(both, right - swapped, 0.0)
+    if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:  # no run can reach it: spare the turns
+        return None
+    start, stop, nats = best_run(gain, _may_turn(own, other, tracks[1][:, a], tracks[1][:, b]))
+    inside = np.zeros(len(both), bool)
+    inside[start:stop] = True
+    outside = both & ~inside
+    outside[0] = False  # the first frame is d0 itself
+    if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
+        return None
+    if swapped[both & inside].mean() / 2 > FIT_COST or (outside.any() and right[outside].mean() / 2 > FIT_COST):
+        return None
+    return TakeExchange(a, b, start, stop, nats)
+
+
+def best_run(gain: Array, may_turn: NDArray[np.bool_]) -> tuple[int, int, float]:
+    """The frames [start, stop) with the largest sum of ``gain`` that start and stop where
+    ``may_turn`` (``(F + 1,)``; frame F, the take's end, always may), frame 0 (the user's) left
+    out; and that sum (a maximum subarray, by prefix sums). (0, 0, -inf) when no run may."""
+    total = np.concatenate([[0.0], np.cumsum(gain)])  # total[t]: sum of gain[:t]
+    starts = np.where(may_turn, total, np.inf)
+    starts[[0, -1]] = np.inf
+    low = np.minimum.accumulate(starts)[:-1]  # least allowed prefix before each stop
+    may_stop = np.append(may_turn[1:-1], True)
+    ends = np.where(may_stop & np.isfinite(low), total[1:] - low, -np.inf)
+    stop = int(np.argmax(ends)) + 1
+    if not np.isfinite(ends[stop - 1]):
+        return 0, 0, -np.inf
+    start = int(np.flatnonzero(starts[:stop] == low[stop - 1])[-1])
+    return start, stop, float(total[stop] - total[start])
+
+
+def _may_turn(own: Array, other: Array, own_continued: Array, other_continued: Array) -> NDArray[np.bool_]:
+    """``(F + 1,)`` frames where an exchange of the pair may start or stop: where the labels
+    step farther from where each marker was heading (``_heading`` of its track continued over
+    gaps) than the exchanged labels would, or after a frame that labels neither (both were
+    predicted there: which returned on whose point, nothing seen says). Elsewhere an exchange
+    would put a jump into two tracks, or exchange markers too far apart for one to have taken
+    the other's point."""
+    heading = [_heading(own_continued), _heading(other_continued)]
+    kept = _distance(own, heading[0]) + _distance(other, heading[1])
+    crossed = _distance(other, heading[0]) + _distance(own, heading[1])
+    neither = np.asarray(~np.isfinite(own).all(axis=1) & ~np.isfinite(other).all(axis=1))
+    return np.append((crossed < kept) | np.append(False, neither[:-1]), True)
+
+
+def _heading(track: Array) -> Array:
+    """``(F, 3)`` where the marker was heading in each frame: its last known position before
+    it, moved on at the velocity between its last two known frames (none: still); NaN before
+    the first."""
+    frames = np.arange(len(track))
+    seen = np.isfinite(track).all(axis=1)
+    last = np.maximum.accumulate(np.where(seen, frames, -1))  # last labeled frame at or before t
+    before = np.concatenate([[-1], last[:-1]])  # ... strictly before t
+    previous = np.concatenate([[-1], last])[np.maximum(before, 0)]  # the labeled frame before that
+    previous = np.where(before >= 0, previous, -1)
+    step = np.where(((previous >= 0) & (before >= 0))[:, None],
+                    (track[before] - track[np.maximum(previous, 0)]) / np.maximum(before - previous, 1)[:, None], 0.0)
+    heading = track[np.maximum(before, 0)] + step * (frames - before)[:, None]
+    return np.where((before >= 0)[:, None], heading, np.nan)
+
+
+def _distance(x: Array, y: Array) -> Array:
+    """``(F,)`` distance, 0 where either is NaN (a marker without a label steps nowhere)."""
+    distance: Array = np.nan_to_num(np.linalg.norm(x - y, axis=1), nan=0.0)
+    return distance
+
+
+def _cost(x: Array, witnesses: Array, d0: Array, sd: Array) -> Array:
+    """``(F,)`` c(x_t, t) (module doc) of a marker at ``x`` against ``witnesses`` ``(F, W, 3)``
+    at first-frame distances ``d0``; NaN where x or every witness is unlabeled."""
+    z = (np.linalg.norm(x[:, None] - witnesses, axis=2) - d0) / sd
+    terms = np.minimum(z**2, CAP**2) / 2.0  # NaN where x or the witness is unlabeled
+    seen = np.isfinite(terms).sum(axis=1)
+    with np.errstate(invalid="ignore"):
+        return np.where(seen > 0, np.nansum(terms, axis=1) / np.maximum(seen, 1), np.nan)

@@ -1,0 +1,101 @@
+"""Two markers exchanged for most of a take, given back on the say of the labeled first frame:
+the traced Hamner case (a wrist pair 63 mm apart, 12 mm apart in their distance to the elbow,
+their only rigid neighbour) with skin motion that moves both distances alike."""
+
+import numpy as np
+import pytest
+from rigid_scenes import SwingingSegment
+
+from formulations.markers.state import MarkerState
+from formulations.markers.take_exchange import best_run, take_exchanges
+from service.io.recording import LabeledTrajectories
+from service.labeling.exchanged import EXCHANGED_CONFIDENCE, exchanged_back
+
+# Hamner's right forearm: the elbow (0), radial (1) and ulnar (2) wrist markers, 271 and
+# 259 mm from the elbow; an upper-arm marker (3) swinging about the elbow; a trunk marker (4).
+FOREARM = np.array([[0, 0, 0], [268, 40, 0], [258, -23, 0]], float)
+LAT, MED = 1, 2
+RUN = SwingingSegment(turn=(0.8, 0.3, 1.2), periods=(9, 13, 7), speed=5.0, sway=60.0, hinge=0, swing=0.9, swing_period=6)
+FRAMES, EXCHANGED_AT = 400, 83
+
+
+def _take(noise: float = 2.0, slide_mm: float = 8.0, seed: int = 0) -> np.ndarray:
+    """``(FRAMES, 5, 3)``: the elbow's skin slides along the forearm by ``slide_mm``, which
+    moves both wrist distances alike (as a pose the first frame did not have does)."""
+    rng = np.random.default_rng(seed)
+    frames = []
+    for t in range(FRAMES):
+        forearm = FOREARM.copy()
+        forearm[0, 0] += slide_mm * np.sin(t / 17)
+        frames.append(RUN.frame(t, forearm))
+    return np.stack(frames) + rng.normal(0, noise, (FRAMES, 5, 3))
+
+
+def _exchanged(take: np.ndarray, start: int = EXCHANGED_AT) -> np.ndarray:
+    labeled = take.copy()
+    labeled[start:, [LAT, MED]] = take[start:, [MED, LAT]]
+    return labeled
+
+
+def _found(labeled: np.ndarray) -> list[tuple[int, int, int, int]]:
+    neighbours = MarkerState.from_first_frame(labeled[0], n_neighbours=4).neighbours
+    return [(e.a, e.b, e.start, e.stop) for e in take_exchanges(labeled, labeled[0], neighbours)]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_an_exchange_kept_to_the_end_is_given_back_from_where_it_began(seed: int) -> None:
+    (found,) = _found(_exchanged(_take(seed=seed)))
+    a, b, start, stop = found
+    assert (a, b) == (LAT, MED)
+    assert abs(start - EXCHANGED_AT) <= 2
+    assert stop == FRAMES
+
+
+def test_each_marker_distance_alone_would_take_the_skin_slide_for_an_exchange() -> None:
+    """Why the pair is judged by the difference of its distances: with the slide, the radial
+    marker's own distance to the elbow is nearer the ulnar one's first-frame distance in many
+    frames where the labels are right."""
+    take = _take(noise=0.0)
+    d0 = np.linalg.norm(take[0, [LAT, MED]] - take[0, 0], axis=1)
+    lateral = np.linalg.norm(take[:, LAT] - take[:, 0], axis=1)
+    assert np.mean(np.abs(lateral - d0[1]) < np.abs(lateral - d0[0])) > 0.2
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_right_labels_are_left_alone(seed: int) -> None:
+    assert _found(_take(noise=2.0, seed=seed)) == []
+
+
+def test_the_labeled_first_frame_is_never_exchanged() -> None:
+    assert _found(_exchanged(_take(), start=0)) in ([], [(LAT, MED, 1, FRAMES)])
+
+
+def test_best_run_is_the_largest_sum_of_any_run_that_may_start_and_stop_there() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        frames = int(rng.integers(2, 30))
+        gain, may = rng.normal(-0.2, 1.0, frames), rng.random(frames + 1) < 0.4
+        start, stop, total = best_run(gain, may)
+        runs = [(gain[s:e].sum(), s, e) for s in range(1, frames) for e in range(s + 1, frames + 1)
+                if may[s] and (may[e] or e == frames)]
+        if not runs:
+            assert total == -np.inf
+            continue
+        assert total == pytest.approx(max(runs)[0])
+        assert 1 <= start < stop <= frames and may[start] and (may[stop] or stop == frames)
+        assert gain[start:stop].sum() == pytest.approx(total)
+
+
+def test_every_per_label_array_follows_the_exchange_and_its_labels_are_doubtful() -> None:
+    take = _exchanged(_take())
+    index = np.tile(np.arange(5), (FRAMES, 1))
+    index[EXCHANGED_AT:, [LAT, MED]] = index[EXCHANGED_AT:, [MED, LAT]]
+    labels = LabeledTrajectories(
+        names=["elbow", "lat", "med", "arm", "trunk"], positions=take, occluded=np.zeros((FRAMES, 5), bool), rate=100.0,
+        point_index=index, filled=np.full(take.shape, np.nan), confidence=np.ones((FRAMES, 5)),
+    )
+    back = exchanged_back(labels, MarkerState.from_first_frame(take[0], n_neighbours=4))
+    assert (back.point_index == np.arange(5)).all()
+    assert np.allclose(back.positions, _take())
+    assert (back.confidence[EXCHANGED_AT + 2 :, [LAT, MED]] == EXCHANGED_CONFIDENCE).all()
+    assert (back.confidence[:, [0, 3, 4]] == 1.0).all()
