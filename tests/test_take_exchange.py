@@ -19,14 +19,15 @@ RUN = SwingingSegment(turn=(0.8, 0.3, 1.2), periods=(9, 13, 7), speed=5.0, sway=
 FRAMES, EXCHANGED_AT = 400, 83
 
 
-def _take(noise: float = 2.0, slide_mm: float = 8.0, seed: int = 0) -> np.ndarray:
+def _take(noise: float = 2.0, slide_mm: float = 8.0, seed: int = 0, settled_mm: float = 0.0) -> np.ndarray:
     """``(FRAMES, 5, 3)``: the elbow's skin slides along the forearm by ``slide_mm``, which
-    moves both wrist distances alike (as a pose the first frame did not have does)."""
+    moves both wrist distances alike (as a pose the first frame did not have does), and after
+    the first frame stays ``settled_mm`` further along."""
     rng = np.random.default_rng(seed)
     frames = []
     for t in range(FRAMES):
         forearm = FOREARM.copy()
-        forearm[0, 0] += slide_mm * np.sin(t / 17)
+        forearm[0, 0] += slide_mm * np.sin(t / 17) + (settled_mm if t else 0.0)
         frames.append(RUN.frame(t, forearm))
     return np.stack(frames) + rng.normal(0, noise, (FRAMES, 5, 3))
 
@@ -59,6 +60,15 @@ def test_each_marker_distance_alone_would_take_the_skin_slide_for_an_exchange() 
     d0 = np.linalg.norm(take[0, [LAT, MED]] - take[0, 0], axis=1)
     lateral = np.linalg.norm(take[:, LAT] - take[:, 0], axis=1)
     assert np.mean(np.abs(lateral - d0[1]) < np.abs(lateral - d0[0])) > 0.2
+
+
+def test_a_first_frame_in_a_pose_the_take_leaves_still_judges_the_pair() -> None:
+    """Both distances 15 mm off the first frame's for the rest of the take: each alone fits
+    it badly, right or exchanged; their difference keeps it."""
+    take = _take(slide_mm=2.0, settled_mm=15.0)
+    assert _found(take) == []
+    ((a, b, start, stop),) = _found(_exchanged(take))
+    assert (a, b, stop) == (LAT, MED, FRAMES) and abs(start - EXCHANGED_AT) <= 2
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

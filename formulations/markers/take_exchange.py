@@ -41,10 +41,14 @@ is made where
   first frame did not have biases a pair's distances slowly, and over hundreds of frames
   sums to as much as a true exchange gives in tens (CMU HDM05 at 4 mm: the sternum and a
   shoulder marker, 1.8 mm apart in their distance to T10, 67 nats over 268 frames);
-- the exchanged labels fit as right labels do (their mean c at most ``FIT_COST``), and so
-  do the labels outside the run: a pair whose witnesses do not keep the first frame's
-  distances where it is labeled right is no judge of where it is not (Numediart's rolling
-  take with 30 % deletions: an upper-arm pair, mean c 2.0 outside its run).
+- the exchanged labels fit as right labels do, and so do the labels outside the run: the
+  pair's difference of distances to each witness keeps the first frame's, mean capped
+  e^2 / 2 at most ``FIT_COST`` with e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j, offset-blind
+  as the gain is. A pair whose witnesses do not keep the first frame where it is labeled
+  right is no judge of where it is not. (Each distance against its own d0 is no such test:
+  OpenSim's walking knee pair, LMFC and LKJC, exchanged for 174 frames, fits at 1.3-1.6
+  that way, right or exchanged, as the knee flexes from the first frame's stance, and at
+  0.12-0.14 by the difference.)
 
 Best exchanges first, every pair judged again after each, until none clears. Distances
 cannot see a reflection (``mirror``) nor a plate's symmetry (``turns``): those gain nothing
@@ -67,7 +71,7 @@ CAP = 3.0  # z beyond 3 sd counts as 3: a slipped neighbour or a foreign point, 
 EXCHANGE_NATS = 20.0  # as the window's pair evidence: frames are not independent (skin motion is slow)
 NEAREST = 3  # a pair is among either's three nearest in the first frame: a plate, a wrist, a forefoot
 MIN_RATE = 0.5  # nats a frame labeling both must give on average: a pose's slow bias gives less
-FIT_COST = 1.0  # mean c of the exchanged labels: a right label's is about 0.25-0.5 (sd_j^2 is two spreads)
+FIT_COST = 1.0  # mean capped e^2 / 2 of a right pair: about 0.1-0.4 (sd_j^2 is two spreads)
 
 
 @dataclass(frozen=True)
@@ -145,7 +149,9 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     outside[0] = False  # the first frame is d0 itself
     if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
         return None
-    if swapped[both & inside].mean() / 2 > FIT_COST or (outside.any() and right[outside].mean() / 2 > FIT_COST):
+    apart = np.linalg.norm(own[:, None] - positions[:, j], axis=2) - np.linalg.norm(other[:, None] - positions[:, j], axis=2)
+    apart0 = d0[a, j] - d0[b, j]
+    if _fit(-apart[both & inside], apart0, sd) > FIT_COST or _fit(apart[outside], apart0, sd) > FIT_COST:
         return None
     return TakeExchange(a, b, start, stop, nats)
 
@@ -201,6 +207,16 @@ def _distance(x: Array, y: Array) -> Array:
     """``(F,)`` distance, 0 where either is NaN (a marker without a label steps nowhere)."""
     distance: Array = np.nan_to_num(np.linalg.norm(x - y, axis=1), nan=0.0)
     return distance
+
+
+def _fit(apart: Array, apart0: Array, sd: Array) -> float:
+    """Mean over frames of mean_j min(e_j^2, CAP^2) / 2, e_j = (apart_j - apart0_j) / sd_j: how
+    the pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
+    if not len(apart):
+        return 0.0
+    terms = np.minimum(((apart - apart0) / sd) ** 2, CAP**2) / 2.0
+    with np.errstate(invalid="ignore"):  # a witness unlabeled in a frame that labels both
+        return float(np.nanmean(np.nanmean(terms, axis=1)))
 
 
 def _cost(x: Array, witnesses: Array, d0: Array, sd: Array) -> Array:
