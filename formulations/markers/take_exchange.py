@@ -98,13 +98,9 @@ def take_exchanges(
         predicted: ``(F, N, 3)`` where each unlabeled marker was predicted to be (the windows'
             fill), NaN elsewhere; without it an unlabeled marker is where it was last labeled.
     """
-    n = len(first)
-    spread = np.full((n, n), np.inf)
-    spread[np.repeat(np.arange(n), neighbours.shape[1]), neighbours.ravel()] = take_spread(positions, neighbours).ravel()
-    spread = np.fmin(spread, spread.T)  # NaN (too few frames together) and inf both compare False below
-    known = np.asarray(np.isfinite(first).all(axis=1))
-    rigid: NDArray[np.bool_] = (spread <= RIGID_SD_MM**2) & known[:, None] & known[None, :]
+    spread, rigid = _rigid(positions, first, neighbours)
     d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
+    n = len(first)
     near = np.zeros((n, n), bool)
     near[np.repeat(np.arange(n), min(NEAREST, neighbours.shape[1])), neighbours[:, :NEAREST].ravel()] = True
     pairs = [(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(rigid & (near | near.T), 1)))]
@@ -123,6 +119,18 @@ def take_exchanges(
             if a in moved or b in moved or (rigid[a, moved] & rigid[b, moved]).any():
                 judged[a, b] = _judged(working, a, b, rigid, d0, spread)
     return done
+
+
+def _rigid(positions: Array, first: Array, neighbours: NDArray[np.int64]) -> tuple[Array, NDArray[np.bool_]]:
+    """``(N, N)`` the take's spread of each neighbour pair's distance (``take_spread``; inf for
+    a pair that is not neighbours), and which pairs are rigid and both in the first frame."""
+    n = len(first)
+    spread = np.full((n, n), np.inf)
+    spread[np.repeat(np.arange(n), neighbours.shape[1]), neighbours.ravel()] = take_spread(positions, neighbours).ravel()
+    spread = np.fmin(spread, spread.T)  # NaN (too few frames together) and inf both compare False below
+    known = np.asarray(np.isfinite(first).all(axis=1))
+    rigid: NDArray[np.bool_] = (spread <= RIGID_SD_MM**2) & known[:, None] & known[None, :]
+    return spread, rigid
 
 
 def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, spread: Array) -> TakeExchange | None:
