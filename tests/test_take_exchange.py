@@ -2,14 +2,21 @@
 the traced Hamner case (a wrist pair 63 mm apart, 12 mm apart in their distance to the elbow,
 their only rigid neighbour) with skin motion that moves both distances alike."""
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from rigid_scenes import SwingingSegment
+from service_fixtures import document_json, generated_capture
+from typer.testing import CliRunner
 
+import service.labeling.exchanged as exchanged_module
 from formulations.markers.state import MarkerState
-from formulations.markers.take_exchange import best_run, take_exchanges
+from formulations.markers.take_exchange import TakeExchange, best_run, take_exchanges
+from service.cli.app import app
 from service.io.recording import LabeledTrajectories
-from service.labeling.exchanged import EXCHANGED_CONFIDENCE, exchanged_back
+from service.labeling.exchanged import EXCHANGED_CONFIDENCE, exchange_summary, exchanged_back
 
 # Hamner's right forearm: the elbow (0), radial (1) and ulnar (2) wrist markers, 271 and
 # 259 mm from the elbow; an upper-arm marker (3) swinging about the elbow; a trunk marker (4).
@@ -104,8 +111,25 @@ def test_every_per_label_array_follows_the_exchange_and_its_labels_are_doubtful(
         names=["elbow", "lat", "med", "arm", "trunk"], positions=take, occluded=np.zeros((FRAMES, 5), bool), rate=100.0,
         point_index=index, filled=np.full(take.shape, np.nan), confidence=np.ones((FRAMES, 5)),
     )
-    back = exchanged_back(labels, MarkerState.from_first_frame(take[0], n_neighbours=4))
+    back, exchanges = exchanged_back(labels, MarkerState.from_first_frame(take[0], n_neighbours=4))
+    assert exchange_summary(exchanges, labels.names) == [{"markers": ["lat", "med"], "frames": [EXCHANGED_AT, FRAMES]}]
     assert (back.point_index == np.arange(5)).all()
     assert np.allclose(back.positions, _take())
     assert (back.confidence[EXCHANGED_AT + 2 :, [LAT, MED]] == EXCHANGED_CONFIDENCE).all()
     assert (back.confidence[:, [0, 3, 4]] == 1.0).all()
+
+
+def test_track_says_which_pairs_the_first_frame_gave_back(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The summary reports the exchanges the repair made (here one is forced on a generated
+    take, so that the report, not the repair, is what is checked) and its labels are doubtful."""
+    source, capture = tmp_path / "take.json", generated_capture(60)
+    source.write_text(document_json(capture))
+    forced = [TakeExchange(0, 1, 10, 30, 99.0)]
+    monkeypatch.setattr(exchanged_module, "take_exchanges", lambda *args: forced)
+    done = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "a.csv"), "--json", "--one-pass"])
+    assert done.exit_code == 0, done.output
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert summary["exchanged_back"] == [{"markers": capture.names[:2], "frames": [10, 30]}]
+    assert summary["doubtful_fraction"] >= 30 / (60 * len(capture.names))
+    line = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "b.csv"), "--one-pass"], env={"COLUMNS": "400"})
+    assert "1 exchanged pair given back by the first frame's shape (labels doubtful)" in line.stdout

@@ -28,6 +28,7 @@ from formulations.cameras.rig import Rig
 from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
+from formulations.markers.take_exchange import TakeExchange
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_tracks import joint_tracks
 from formulations.subject.pose_fill import pose_fill
@@ -77,6 +78,7 @@ class CaptureLabeling:
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
+        self.exchanges: list[TakeExchange] = []  # given back in the last labels assembled (``exchanged``)
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
         model = capture.model
@@ -144,8 +146,10 @@ class CaptureLabeling:
         if self._points is None:
             return labels
         labels = extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
-        # A frame-by-frame baseline sees no later frame, so no take-wide repair either.
-        return exchanged_back(labels, self._first) if self.formulation.look_ahead else labels
+        if not self.formulation.look_ahead:  # a frame-by-frame baseline sees no later frame: no take-wide repair
+            return labels
+        labels, self.exchanges = exchanged_back(labels, self._first)
+        return labels
 
     def _fill(self, labels: LabeledTrajectories) -> np.ndarray:
         """The windows' fill tied to both sightings, refilled from rigid donors; with a model
