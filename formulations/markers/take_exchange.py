@@ -144,8 +144,9 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
         return None
     sd = np.sqrt(spread[a, j] + spread[b, j])
     own, other = positions[:, a], positions[:, b]
-    right = _cost(own, positions[:, j], d0[a, j], sd) + _cost(other, positions[:, j], d0[b, j], sd)
-    swapped = _cost(other, positions[:, j], d0[a, j], sd) + _cost(own, positions[:, j], d0[b, j], sd)
+    to_own, to_other = (np.linalg.norm(x[:, None] - positions[:, j], axis=2) for x in (own, other))  # (F, W)
+    right = _capped((to_own - d0[a, j]) / sd) + _capped((to_other - d0[b, j]) / sd)
+    swapped = _capped((to_other - d0[a, j]) / sd) + _capped((to_own - d0[b, j]) / sd)
     both = np.isfinite(right) & np.isfinite(swapped)
     gain = np.where(both, right - swapped, 0.0)
     if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:  # no run can reach it: spare the turns
@@ -157,9 +158,8 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     outside[0] = False  # the first frame is d0 itself
     if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
         return None
-    apart = np.linalg.norm(own[:, None] - positions[:, j], axis=2) - np.linalg.norm(other[:, None] - positions[:, j], axis=2)
-    apart0 = d0[a, j] - d0[b, j]
-    if _fit(-apart[both & inside], apart0, sd) > FIT_COST or _fit(apart[outside], apart0, sd) > FIT_COST:
+    apart, apart0 = to_own - to_other, d0[a, j] - d0[b, j]
+    if _fit((-apart[both & inside] - apart0) / sd) > FIT_COST or _fit((apart[outside] - apart0) / sd) > FIT_COST:
         return None
     return TakeExchange(a, b, start, stop, nats)
 
@@ -217,21 +217,16 @@ def _distance(x: Array, y: Array) -> Array:
     return distance
 
 
-def _fit(apart: Array, apart0: Array, sd: Array) -> float:
-    """Mean over frames of mean_j min(e_j^2, CAP^2) / 2, e_j = (apart_j - apart0_j) / sd_j: how
-    the pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
-    if not len(apart):
-        return 0.0
-    terms = np.minimum(((apart - apart0) / sd) ** 2, CAP**2) / 2.0
-    with np.errstate(invalid="ignore"):  # a witness unlabeled in a frame that labels both
-        return float(np.nanmean(np.nanmean(terms, axis=1)))
+def _fit(e: Array) -> float:
+    """Mean over frames of ``_capped(e)``, e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j: how the
+    pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
+    return float(np.nanmean(_capped(e))) if len(e) else 0.0
 
 
-def _cost(x: Array, witnesses: Array, d0: Array, sd: Array) -> Array:
-    """``(F,)`` c(x_t, t) (module doc) of a marker at ``x`` against ``witnesses`` ``(F, W, 3)``
-    at first-frame distances ``d0``; NaN where x or every witness is unlabeled."""
-    z = (np.linalg.norm(x[:, None] - witnesses, axis=2) - d0) / sd
-    terms = np.minimum(z**2, CAP**2) / 2.0  # NaN where x or the witness is unlabeled
+def _capped(z: Array) -> Array:
+    """``(F,)`` mean over the witnesses seen in each frame of min(z^2, CAP^2) / 2 (``z``:
+    ``(F, W)``, NaN where x or the witness is unlabeled); NaN where none is seen."""
+    terms = np.minimum(z**2, CAP**2) / 2.0
     seen = np.isfinite(terms).sum(axis=1)
     with np.errstate(invalid="ignore"):
         return np.where(seen > 0, np.nansum(terms, axis=1) / np.maximum(seen, 1), np.nan)
