@@ -62,6 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.heading import track_heading
 from formulations.markers.state import RIGID_SD_MM
 from formulations.markers.take_spread import take_spread
 
@@ -98,7 +99,7 @@ def take_exchanges(
         predicted: ``(F, N, 3)`` where each unlabeled marker was predicted to be (the windows'
             fill), NaN elsewhere; without it an unlabeled marker is where it was last labeled.
     """
-    spread, rigid = _rigid(positions, first, neighbours)
+    spread, rigid = rigid_pairs(positions, first, neighbours)
     d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
     n = len(first)
     near = np.zeros((n, n), bool)
@@ -121,7 +122,7 @@ def take_exchanges(
     return done
 
 
-def _rigid(positions: Array, first: Array, neighbours: NDArray[np.int64]) -> tuple[Array, NDArray[np.bool_]]:
+def rigid_pairs(positions: Array, first: Array, neighbours: NDArray[np.int64]) -> tuple[Array, NDArray[np.bool_]]:
     """``(N, N)`` the take's spread of each neighbour pair's distance (``take_spread``; inf for
     a pair that is not neighbours), and which pairs are rigid and both in the first frame."""
     n = len(first)
@@ -145,8 +146,8 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     sd = np.sqrt(spread[a, j] + spread[b, j])
     own, other = positions[:, a], positions[:, b]
     to_own, to_other = (np.linalg.norm(x[:, None] - positions[:, j], axis=2) for x in (own, other))  # (F, W)
-    right = _capped((to_own - d0[a, j]) / sd) + _capped((to_other - d0[b, j]) / sd)
-    swapped = _capped((to_other - d0[a, j]) / sd) + _capped((to_own - d0[b, j]) / sd)
+    right = capped_cost((to_own - d0[a, j]) / sd) + capped_cost((to_other - d0[b, j]) / sd)
+    swapped = capped_cost((to_other - d0[a, j]) / sd) + capped_cost((to_own - d0[b, j]) / sd)
     both = np.isfinite(right) & np.isfinite(swapped)
     gain = np.where(both, right - swapped, 0.0)
     if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:  # no run can reach it: spare the turns
@@ -183,32 +184,16 @@ def best_run(gain: Array, may_turn: NDArray[np.bool_]) -> tuple[int, int, float]
 
 def _may_turn(own: Array, other: Array, own_continued: Array, other_continued: Array) -> NDArray[np.bool_]:
     """``(F + 1,)`` frames where an exchange of the pair may start or stop: where the labels
-    step farther from where each marker was heading (``_heading`` of its track continued over
+    step farther from where each marker was heading (``heading.track_heading`` of its track continued over
     gaps) than the exchanged labels would, or after a frame that labels neither (both were
     predicted there: which returned on whose point, nothing seen says). Elsewhere an exchange
     would put a jump into two tracks, or exchange markers too far apart for one to have taken
     the other's point."""
-    heading = [_heading(own_continued), _heading(other_continued)]
+    heading = [track_heading(own_continued), track_heading(other_continued)]
     kept = _distance(own, heading[0]) + _distance(other, heading[1])
     crossed = _distance(other, heading[0]) + _distance(own, heading[1])
     neither = np.asarray(~np.isfinite(own).all(axis=1) & ~np.isfinite(other).all(axis=1))
     return np.append((crossed < kept) | np.append(False, neither[:-1]), True)
-
-
-def _heading(track: Array) -> Array:
-    """``(F, 3)`` where the marker was heading in each frame: its last known position before
-    it, moved on at the velocity between its last two known frames (none: still); NaN before
-    the first."""
-    frames = np.arange(len(track))
-    seen = np.isfinite(track).all(axis=1)
-    last = np.maximum.accumulate(np.where(seen, frames, -1))  # last labeled frame at or before t
-    before = np.concatenate([[-1], last[:-1]])  # ... strictly before t
-    previous = np.concatenate([[-1], last])[np.maximum(before, 0)]  # the labeled frame before that
-    previous = np.where(before >= 0, previous, -1)
-    step = np.where(((previous >= 0) & (before >= 0))[:, None],
-                    (track[before] - track[np.maximum(previous, 0)]) / np.maximum(before - previous, 1)[:, None], 0.0)
-    heading = track[np.maximum(before, 0)] + step * (frames - before)[:, None]
-    return np.where((before >= 0)[:, None], heading, np.nan)
 
 
 def _distance(x: Array, y: Array) -> Array:
@@ -218,12 +203,12 @@ def _distance(x: Array, y: Array) -> Array:
 
 
 def _fit(e: Array) -> float:
-    """Mean over frames of ``_capped(e)``, e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j: how the
+    """Mean over frames of ``capped_cost(e)``, e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j: how the
     pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
-    return float(np.nanmean(_capped(e))) if len(e) else 0.0
+    return float(np.nanmean(capped_cost(e))) if len(e) else 0.0
 
 
-def _capped(z: Array) -> Array:
+def capped_cost(z: Array) -> Array:
     """``(F,)`` mean over the witnesses seen in each frame of min(z^2, CAP^2) / 2 (``z``:
     ``(F, W)``, NaN where x or the witness is unlabeled); NaN where none is seen."""
     terms = np.minimum(z**2, CAP**2) / 2.0
