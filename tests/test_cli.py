@@ -285,6 +285,7 @@ def test_piped_track_prints_progress_lines_one_summary_line_and_json(tmp_path: P
     assert summary["occluded_fraction"] == 0.0 and summary["integral_window_fraction"] == 1.0
     assert 0.0 <= summary["gap_median"] <= summary["gap_max"] < 1e-9 and summary["seconds"] > 0
     assert summary["exchanged_back"] == []  # a clean take: the first frame's shape finds nothing to give back
+    assert summary["handed_back"] == []  # ... and no track was taken over
 
 
 def test_help_texts_show_bracketed_words_and_cite_what_exists() -> None:

@@ -23,7 +23,7 @@ from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.coincident import coincident_pairs, coincident_warning
-from service.labeling.exchanged import exchange_summary
+from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
@@ -77,6 +77,7 @@ def run_track(
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
+    summary["handed_back"] = handover_summary(labeling.handovers, capture.names)
     if as_json:
         print(json.dumps(summary, allow_nan=False))
     else:
@@ -85,7 +86,7 @@ def run_track(
             f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
             f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
-            f"{_second_pass_note(labeling.choice)}{_exchange_note(len(labeling.exchanges))}",
+            f"{_second_pass_note(labeling.choice)}{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}",
             highlight=False,
         )
     warn_doubtful(summary["doubtful_fraction"])
@@ -117,8 +118,9 @@ def track_summary(
     there (``service.labeling.lost_subject``: start, frames, points), or None.
     ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share, its
     rigid pairs' disagreement with the first frame, and the one kept), None when no second
-    pass applied; and ``exchanged_back``, the pairs whose labels the first frame's shape gave
-    back over the take (``service.labeling.exchanged``: markers, frames from 0 [start, stop)).
+    pass applied; ``exchanged_back``, the pairs whose labels the first frame's shape gave
+    back over the take (``service.labeling.exchanged``: markers, frames from 0 [start, stop));
+    and ``handed_back``, the tracks given back to the marker they continue (owner, taker, frames).
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {
@@ -151,11 +153,16 @@ def _second_pass_note(choice: PassChoice | None) -> str:
     return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
 
 
-def _exchange_note(exchanges: int) -> str:
-    """What the summary line says of pairs the first frame's shape gave back (``exchanged``)."""
-    if not exchanges:
-        return ""
-    return f"; {exchanges} exchanged pair{'s' if exchanges > 1 else ''} given back by the first frame's shape (labels doubtful)"
+def _exchange_note(exchanges: int, handovers: int) -> str:
+    """What the summary line says of pairs the first frame's shape gave back, and of tracks
+    handed back to the marker they continue (``exchanged``)."""
+    said = []
+    if exchanges:
+        said.append(f"{exchanges} exchanged pair{'s' if exchanges > 1 else ''} given back by the first frame's shape")
+    if handovers:
+        said.append(f"{handovers} tracks handed back to the markers they continue" if handovers > 1
+                    else "1 track handed back to the marker it continues")
+    return f"; {', '.join(said)} (labels doubtful)" if said else ""
 
 
 def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | None:

@@ -29,6 +29,7 @@ from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.take_exchange import TakeExchange
+from formulations.markers.take_handover import Handover
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_tracks import joint_tracks
 from formulations.subject.pose_fill import pose_fill
@@ -39,7 +40,7 @@ from service.capture.formulation_spec import resolve_formulation
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.cloud import CloudChain
-from service.labeling.exchanged import exchanged_back
+from service.labeling.exchanged import exchanged_back, handed_back
 from service.labeling.extension import extended
 from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
@@ -79,6 +80,7 @@ class CaptureLabeling:
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self.exchanges: list[TakeExchange] = []  # given back in the last labels assembled (``exchanged``)
+        self.handovers: list[Handover] = []  # tracks given back to their owners, likewise
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
         model = capture.model
@@ -149,6 +151,7 @@ class CaptureLabeling:
         if not self.formulation.look_ahead:  # a frame-by-frame baseline sees no later frame: no take-wide repair
             return labels
         labels, self.exchanges = exchanged_back(labels, self._first)
+        labels, self.handovers = handed_back(labels, self._first)
         return labels
 
     def _fill(self, labels: LabeledTrajectories) -> np.ndarray:

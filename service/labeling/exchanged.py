@@ -1,7 +1,8 @@
 """A labeling with the exchanges the labeled first frame finds over the whole take given
-back (``formulations.markers.take_exchange``).
+back (``formulations.markers.take_exchange``), and the tracks other markers took over handed
+back to the markers they continue (``formulations.markers.take_handover``).
 
-An exchanged label is one the windows read otherwise: it is given back, and marked doubtful
+Such a label is one the windows read otherwise: it is given back, and marked doubtful
 (``EXCHANGED_CONFIDENCE``) so that the summary counts it and a user looks at it.
 """
 
@@ -13,6 +14,7 @@ import numpy as np
 
 from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, take_exchanges
+from formulations.markers.take_handover import Handover, take_handovers
 from service.io.recording import LabeledTrajectories
 
 EXCHANGED_CONFIDENCE = 0.5  # the windows and the first frame's shape read these labels otherwise
@@ -36,7 +38,40 @@ def exchanged_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[Lab
     return replace(labels, **arrays), exchanges
 
 
+def handed_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[LabeledTrajectories, list[Handover]]:
+    """``labels`` with each hand-over of ``take_handovers`` undone in every per-label array: the
+    owner takes the labels back (doubtful, ``EXCHANGED_CONFIDENCE``), the taker is occluded
+    there with its fill held; and the hand-overs."""
+    predicted = labels.filled if labels.filled.size else None
+    handovers = take_handovers(labels.positions, first.position, first.neighbours, predicted)
+    if not handovers:
+        return labels, handovers
+    arrays = {name: getattr(labels, name).copy() for name in ("positions", "occluded", "point_index", "filled", "confidence")
+              if getattr(labels, name).size}
+    for h in handovers:
+        run = slice(h.start, h.stop)
+        held = arrays["filled"][h.start - 1, h.taker].copy() if "filled" in arrays else None
+        for values in arrays.values():
+            values[run, h.owner] = values[run, h.taker]
+        arrays["positions"][run, h.taker] = np.nan
+        arrays["occluded"][run, h.taker] = True
+        if "point_index" in arrays:
+            arrays["point_index"][run, h.taker] = -1
+        if held is not None:
+            arrays["filled"][run, h.owner] = np.nan
+            arrays["filled"][run, h.taker] = held if np.isfinite(held).all() else labels.positions[h.start - 1, h.taker]
+        if "confidence" in arrays:
+            arrays["confidence"][run, h.owner] = np.fmin(arrays["confidence"][run, h.owner], EXCHANGED_CONFIDENCE)
+    return replace(labels, **arrays), handovers
+
+
 def exchange_summary(exchanges: list[TakeExchange], names: list[str]) -> list[dict]:
     """Each exchange as ``{"markers": [a, b], "frames": [start, stop]}`` (frames from 0, stop
     exclusive), for a summary."""
     return [{"markers": [names[e.a], names[e.b]], "frames": [e.start, e.stop]} for e in exchanges]
+
+
+def handover_summary(handovers: list[Handover], names: list[str]) -> list[dict]:
+    """Each hand-over undone as ``{"owner": a, "taker": b, "frames": [start, stop]}`` (frames from
+    0, stop exclusive), for a summary."""
+    return [{"owner": names[h.owner], "taker": names[h.taker], "frames": [h.start, h.stop]} for h in handovers]

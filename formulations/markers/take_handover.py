@@ -1,0 +1,157 @@
+"""Recovery over a whole labeled take: a track taken over by another marker, given back to the
+marker whose track it continues.
+
+A window that reads a marker as occluded from frame t on, while another marker takes the
+very point its track runs into, has handed the track over. The window's costs can prefer
+that: a seen marker's expected step is its own last step, one difference of two noisy points,
+while an occluded marker's is its neighbours' fitted motion, so along the same points the
+occluded marker's path is cheaper (OpenSim walking5 at 2 mm: the left lateral condyle, lost
+for 140 frames, took the left thigh marker's last 10 frames at 46 nats against 52, and the
+thigh marker was read as occluded while its point sat 3 mm from where it was heading). Once
+the take is labeled both tracks are known, and the hand-over shows as two jumps:
+
+- the owner V, labeled in frame t - 1 and not in t, was heading to h_V(t) (its last labeled
+  step continued, ``heading``); the taker T's point x in t lies within ``CONTINUE_SDS``
+  sd of it: |x - h_V(t)| <= 3.4 s_V, s_V the per-axis sd of V's own constant-velocity
+  residual x_t - 2 x_(t-1) + x_(t-2) over the take (MAD-scaled median: 99 % of a 3D
+  Gaussian's norms lie within 3.37 sd);
+- T arrives from elsewhere: unlabeled in t - 1 or jumping, x lies outside T's own 3.4 s_T
+  of where T was heading (its labels continued by the windows' fill), and ``FAR_RATIO``
+  times farther from it than from h_V(t).
+
+Then T's labels from t, while T stays labeled and V does not, are V's: V gets them back, and
+T is occluded there (its fill held where it last was; the take's rigid fill refills it from
+donors). Earliest first, each judged on the labels the ones before left.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.heading import track_heading
+from formulations.markers.noise import MAD_TO_SIGMA
+from formulations.markers.take_exchange import FIT_COST, capped_cost, rigid_pairs
+
+Array = NDArray[np.float64]
+
+CONTINUE_SDS = 3.4  # the 99 % radius of a 3D Gaussian, in per-axis sds
+FAR_RATIO = 3.0  # how much farther the taker's own heading must be than the owner's
+MIN_RESIDUALS = 10  # constant-velocity residuals (frames) a marker needs for its step sd
+
+
+@dataclass(frozen=True)
+class Handover:
+    """Marker ``owner``'s track, held by ``taker`` over frames [start, stop), given back."""
+
+    owner: int
+    taker: int
+    start: int
+    stop: int
+
+
+def take_handovers(
+    positions: Array, first: Array, neighbours: NDArray[np.int64], predicted: Array | None = None,
+) -> list[Handover]:
+    """The hand-overs of a labeling (module doc), in the order they apply.
+
+    Args:
+        positions: ``(F, N, 3)`` labeled positions, NaN where a marker has no label.
+        first: ``(N, 3)`` the labeled first frame (NaN for a marker it lacks).
+        neighbours: ``(N, K)`` each marker's neighbours (``MarkerState.neighbours``).
+        predicted: ``(F, N, 3)`` the windows' fill where a marker has no label (NaN
+            elsewhere); without it an unlabeled marker is where it was last labeled.
+    """
+    working = positions.copy()
+    fill = np.full_like(positions, np.nan) if predicted is None else predicted.copy()
+    scale = step_sd(positions)
+    shape = FirstShape(*rigid_pairs(positions, first, neighbours), np.linalg.norm(first[:, None] - first[None], axis=2))
+    done: list[Handover] = []
+    for _ in range(positions.shape[0] * positions.shape[1]):
+        found = _first_handover(working, fill, scale, shape)
+        if found is None:
+            break
+        run = slice(found.start, found.stop)
+        held = fill[found.start - 1, found.taker] if found.start else np.full(3, np.nan)
+        if not np.isfinite(held).all():
+            held = working[found.start - 1, found.taker]
+        working[run, found.owner], fill[run, found.owner] = working[run, found.taker], np.nan
+        working[run, found.taker], fill[run, found.taker] = np.nan, held
+        done.append(found)
+    return done
+
+
+def step_sd(positions: Array) -> Array:
+    """``(N,)`` per-axis sd of each marker's constant-velocity residual over its labeled
+    frames (MAD-scaled median of the absolute residuals); NaN with too few."""
+    residual = positions[2:] - 2 * positions[1:-1] + positions[:-2]  # (F - 2, N, 3)
+    known: NDArray[np.bool_] = np.asarray(np.isfinite(residual).all(axis=2), dtype=bool)
+    absolute = np.where(known[..., None], np.abs(residual), np.nan).transpose(1, 0, 2).reshape(positions.shape[1], -1)
+    sd = np.full(positions.shape[1], np.nan)
+    enough = known.sum(axis=0) >= MIN_RESIDUALS
+    if enough.any():
+        sd[enough] = MAD_TO_SIGMA * np.nanmedian(absolute[enough], axis=1)
+    return sd
+
+
+def _first_handover(positions: Array, fill: Array, scale: Array, shape: FirstShape) -> Handover | None:
+    """The earliest hand-over the labels show (module doc), None when there is none."""
+    labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)  # (F, N)
+    continued = np.where(labeled[..., None], positions, fill)
+    owner_heading = np.stack([track_heading(positions[:, n]) for n in range(positions.shape[1])], axis=1)
+    taker_heading = np.stack([track_heading(continued[:, n]) for n in range(positions.shape[1])], axis=1)
+    gate = CONTINUE_SDS * scale  # (N,)
+    own_miss = np.linalg.norm(positions - taker_heading, axis=2)  # (F, N): each label from its own heading
+    arrives = labeled[1:] & (~labeled[:-1] | ~(own_miss[1:] <= gate))  # (F - 1, N): T from frame t = 1..
+    leaves = labeled[:-1] & ~labeled[1:]  # V labeled in t - 1, not in t
+    for t0 in (int(t) for t in np.flatnonzero(arrives.any(axis=1) & leaves.any(axis=1)) + 1):
+        owners, takers = np.flatnonzero(leaves[t0 - 1]), np.flatnonzero(arrives[t0 - 1])
+        x = positions[t0, takers]  # (T, 3)
+        to_owner = np.linalg.norm(x[:, None] - owner_heading[t0, owners][None], axis=2)  # (T, V)
+        to_own = np.nan_to_num(own_miss[t0, takers], nan=np.inf)[:, None]
+        fits = (to_owner <= gate[owners][None]) & (to_own > FAR_RATIO * to_owner) & ~(to_own <= gate[takers][:, None])
+        order = np.argsort(np.where(fits, to_owner / gate[owners][None], np.inf), axis=None)[: int(fits.sum())]
+        for k, v in zip(*np.unravel_index(order, fits.shape)):
+            taker, owner = int(takers[k]), int(owners[v])
+            after = labeled[t0:, taker] & ~labeled[t0:, owner]
+            stop = t0 + (int(np.argmin(after)) if not after.all() else len(after))
+            if shape.allows(positions, owner, taker, t0, stop):
+                return Handover(owner, taker, t0, stop)
+    return None
+
+
+@dataclass(frozen=True)
+class FirstShape:
+    """The first frame's say on whose points a run is (module doc): ``spread`` and ``rigid``
+    as ``take_exchange.rigid_pairs``, ``d0`` the first frame's distances."""
+
+    spread: Array
+    rigid: NDArray[np.bool_]
+    d0: Array
+
+    def allows(self, positions: Array, owner: int, taker: int, start: int, stop: int) -> bool:
+        """Whether the taker's points over [start, stop) may be the owner's: where both have
+        witnesses seen, they fit the owner (mean cost at most ``FIT_COST``) at no more cost in
+        sum than the taker; where only one has, they fit the owner or misfit the taker."""
+        x = positions[start:stop, taker]
+        as_owner, as_taker = (self._cost(positions, m, x, start, (owner, taker)) for m in (owner, taker))
+        both = np.isfinite(as_owner) & np.isfinite(as_taker)
+        if both.any():
+            return bool(as_owner[both].sum() <= as_taker[both].sum() and as_owner[both].mean() <= FIT_COST)
+        if np.isfinite(as_owner).any():
+            return bool(np.nanmean(as_owner) <= FIT_COST)
+        return not np.isfinite(as_taker).any() or bool(np.nanmean(as_taker) > FIT_COST)
+
+    def _cost(self, positions: Array, m: int, x: Array, start: int, pair: tuple[int, int]) -> Array:
+        """``(L,)`` mean capped z^2 / 2 of the points ``x`` against marker m's first-frame
+        distances to its rigid witnesses (``take_exchange.capped_cost``); NaN with none seen."""
+        j = np.flatnonzero(self.rigid[m])
+        j = j[(j != pair[0]) & (j != pair[1])]
+        if not j.size:
+            return np.full(len(x), np.nan)
+        witnesses = positions[start : start + len(x)][:, j]
+        # d0 is one noisy frame: d - d0 varies by the spread twice (+ 1 mm^2 for a spread near 0)
+        z = (np.linalg.norm(x[:, None] - witnesses, axis=2) - self.d0[m, j]) / np.sqrt(2.0 * self.spread[m, j] + 1.0)
+        return capped_cost(z)

@@ -1,0 +1,125 @@
+"""A track handed over to a long-lost marker, given back to the marker it continues: the traced
+OpenSim walking5 case (the left lateral condyle, lost for 140 frames, took the thigh marker's
+points while the thigh marker was read as occluded), on a rigid segment in motion."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rigid_scenes import SwingingSegment
+from service_fixtures import document_json, generated_capture
+from typer.testing import CliRunner
+
+import service.labeling.exchanged as exchanged_module
+from formulations.markers.state import MarkerState
+from formulations.markers.take_handover import Handover, step_sd, take_handovers
+from service.cli.app import app
+from service.io.recording import LabeledTrajectories
+from service.labeling.exchanged import EXCHANGED_CONFIDENCE, handed_back
+
+# A thigh-like plate: the owner (3) and, 7 mm from it, a close neighbour (5); the taker (4)
+# sits 150 mm from the owner.
+SEGMENT = np.array([[0, 0, 0], [80, 10, 0], [40, -60, 10], [160, 20, -10], [20, 110, 30], [165, 25, -8]], float)
+OWNER, TAKER, CLOSE = 3, 4, 5
+WALK = SwingingSegment(turn=(0.3, 0.2, 0.4), periods=(19, 23, 17), speed=4.0, sway=30.0, hinge=0, swing=0.6, swing_period=9)
+FRAMES, LOST_AT, HANDED_AT = 360, 40, 300
+
+
+def _take(seed: int, noise: float = 1.5) -> np.ndarray:
+    """``(FRAMES, 8, 3)``: the plate, a swinging marker and a far one, with noise."""
+    rng = np.random.default_rng(seed)
+    return np.stack([WALK.frame(t, SEGMENT) for t in range(FRAMES)]) + rng.normal(0, noise, (FRAMES, 8, 3))
+
+
+def _lost(take: np.ndarray, marker: int, drift_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Labels with ``marker`` unseen from ``LOST_AT`` on, and a fill that drifts ``drift_mm``."""
+    labels, fill = take.copy(), np.full_like(take, np.nan)
+    labels[LOST_AT:, marker] = np.nan
+    ramp = np.linspace(0.0, drift_mm, FRAMES - LOST_AT)[:, None] * np.array([0.6, 0.8, 0.0])
+    fill[LOST_AT:, marker] = take[LOST_AT:, marker] + ramp
+    return labels, fill
+
+
+def _handovers(labels: np.ndarray, fill: np.ndarray) -> list[tuple[int, int, int, int]]:
+    neighbours = MarkerState.from_first_frame(labels[0], n_neighbours=5).neighbours
+    return [(h.owner, h.taker, h.start, h.stop) for h in take_handovers(labels, labels[0], neighbours, fill)]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_track_taken_by_a_long_lost_marker_is_given_back(seed: int) -> None:
+    take = _take(seed)
+    labels, fill = _lost(take, TAKER, drift_mm=150.0)
+    labels[HANDED_AT:, TAKER], labels[HANDED_AT:, OWNER] = take[HANDED_AT:, OWNER], np.nan
+    fill[HANDED_AT:, OWNER] = take[HANDED_AT:, OWNER] + 5.0
+    assert _handovers(labels, fill) == [(OWNER, TAKER, HANDED_AT, FRAMES)]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_marker_that_really_comes_back_as_another_leaves_keeps_its_points(seed: int) -> None:
+    """The owner is occluded from 300 and the close neighbour, lost since 40, returns at 300 on
+    its own point, 7 mm from where the owner was heading and 40 mm from its own drifted fill:
+    the kinematics alone would hand it over; its first-frame distances to the plate say no."""
+    take = _take(seed)
+    labels, fill = _lost(take, CLOSE, drift_mm=40.0)
+    labels[HANDED_AT:, CLOSE], labels[HANDED_AT:, OWNER] = take[HANDED_AT:, CLOSE], np.nan
+    fill[HANDED_AT:, CLOSE] = np.nan
+    fill[HANDED_AT:, OWNER] = take[HANDED_AT:, OWNER]
+    assert _handovers(labels, fill) == []
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_right_labels_are_left_alone(seed: int) -> None:
+    take = _take(seed)
+    labels, fill = _lost(take, TAKER, drift_mm=150.0)
+    labels[HANDED_AT:, TAKER] = take[HANDED_AT:, TAKER]  # it really comes back, far from the owner
+    labels[HANDED_AT:, OWNER] = np.nan
+    fill[HANDED_AT:, TAKER], fill[HANDED_AT:, OWNER] = np.nan, take[HANDED_AT:, OWNER]
+    assert _handovers(take, np.full_like(take, np.nan)) == []
+    assert _handovers(labels, fill) == []
+
+
+@pytest.mark.parametrize("sigma", [0.5, 2.0, 4.0])
+def test_the_step_sd_is_that_of_the_constant_velocity_residual(sigma: float) -> None:
+    """x_t - 2 x_(t-1) + x_(t-2) of a constant-velocity track has sd sqrt(6) sigma per axis."""
+    rng = np.random.default_rng(7)
+    track = np.arange(2000)[:, None, None] * np.array([3.0, -1.0, 0.5]) + rng.normal(0, sigma, (2000, 1, 3))
+    assert step_sd(track)[0] == pytest.approx(np.sqrt(6) * sigma, rel=0.1)
+
+
+def test_every_per_label_array_follows_the_hand_over() -> None:
+    take = _take(0)
+    positions, fill = _lost(take, TAKER, drift_mm=150.0)
+    positions[HANDED_AT:, TAKER], positions[HANDED_AT:, OWNER] = take[HANDED_AT:, OWNER], np.nan
+    fill[HANDED_AT:, OWNER] = take[HANDED_AT:, OWNER]
+    occluded = ~np.isfinite(positions).all(axis=2)
+    point_index = np.where(occluded, -1, np.arange(8)[None])
+    point_index[HANDED_AT:, TAKER] = OWNER
+    labels = LabeledTrajectories(
+        names=[f"m{k}" for k in range(8)], positions=positions, occluded=occluded, rate=100.0,
+        point_index=point_index, filled=fill, confidence=np.full((FRAMES, 8), 0.9),
+    )
+    back, handovers = handed_back(labels, MarkerState.from_first_frame(take[0], n_neighbours=5))
+    assert handovers == [Handover(OWNER, TAKER, HANDED_AT, FRAMES)]
+    run = slice(HANDED_AT, FRAMES)
+    assert np.array_equal(back.positions[run, OWNER], take[run, OWNER])
+    assert (back.point_index[run, OWNER] == OWNER).all() and (back.point_index[run, TAKER] == -1).all()
+    assert back.occluded[run, TAKER].all() and not back.occluded[run, OWNER].any()
+    assert np.isnan(back.filled[run, OWNER]).all()
+    assert np.array_equal(back.filled[run, TAKER], np.repeat(fill[[HANDED_AT - 1], TAKER], FRAMES - HANDED_AT, axis=0))
+    assert (back.confidence[run, OWNER] == EXCHANGED_CONFIDENCE).all()
+    assert np.array_equal(back.positions[:HANDED_AT], positions[:HANDED_AT], equal_nan=True)
+
+
+def test_track_says_which_tracks_it_handed_back(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The summary reports the hand-overs undone (one is forced on a generated take, so that the
+    report, not the repair, is what is checked)."""
+    source, capture = tmp_path / "take.json", generated_capture(60)
+    source.write_text(document_json(capture))
+    monkeypatch.setattr(exchanged_module, "take_handovers", lambda *args: [Handover(1, 0, 20, 40)])
+    done = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "a.csv"), "--json", "--one-pass"])
+    assert done.exit_code == 0, done.output
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert summary["handed_back"] == [{"owner": capture.names[1], "taker": capture.names[0], "frames": [20, 40]}]
+    line = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "b.csv"), "--one-pass"], env={"COLUMNS": "400"})
+    assert "1 track handed back to the marker it continues (labels doubtful)" in line.stdout
