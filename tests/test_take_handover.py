@@ -79,6 +79,23 @@ def test_right_labels_are_left_alone(seed: int) -> None:
     assert _handovers(labels, fill) == []
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_returning_marker_taken_by_a_lost_neighbour_is_given_back_on_the_first_frames_say(seed: int) -> None:
+    """Both lost (the taker from 150, the owner from 200), the owner's point back at 300 but
+    held by the taker for 10 frames: no heading is sure (the owner's prediction drifted 80 mm),
+    the plate's distances say whose point it is."""
+    take = _take(seed)
+    labels, fill = take.copy(), np.full_like(take, np.nan)
+    for marker, lost_at, drift in ((TAKER, 150, [0.0, 90.0, 0.0]), (OWNER, 200, [0.0, 50.0, 60.0])):
+        labels[lost_at:, marker] = np.nan
+        fill[lost_at:, marker] = take[lost_at:, marker] + np.linspace(0.0, 1.0, FRAMES - lost_at)[:, None] * drift
+    back = slice(HANDED_AT, HANDED_AT + 10)
+    labels[back, TAKER], fill[back, TAKER] = take[back, OWNER], np.nan
+    assert _handovers(labels, fill) == [(OWNER, TAKER, HANDED_AT, HANDED_AT + 10)]
+    labels[back, TAKER] = take[back, TAKER]  # it really was the taker coming back
+    assert _handovers(labels, fill) == []
+
+
 @pytest.mark.parametrize("sigma", [0.5, 2.0, 4.0])
 def test_the_step_sd_is_that_of_the_constant_velocity_residual(sigma: float) -> None:
     """x_t - 2 x_(t-1) + x_(t-2) of a constant-velocity track has sd sqrt(6) sigma per axis."""

@@ -19,6 +19,14 @@ the take is labeled both tracks are known, and the hand-over shows as two jumps:
   of where T was heading (its labels continued by the windows' fill), and ``FAR_RATIO``
   times farther from it than from h_V(t).
 
+Where both were lost (V unlabeled in t - 1 too, T coming back in t) neither heading is sure:
+a returning marker's prediction has drifted (walking5 at 4 mm: the heel came back 101 mm from
+its own prediction and 22 mm from the lost malleolus's, which took its point for 33 frames).
+Then only the first frame judges, and only a near pair (T among V's ``NEAR`` first-frame
+neighbours): the points must cost the taker, against its witnesses, ``CLAIM_NATS`` more than
+the owner over the frames both have witnesses seen, at least ``MIN_RATE`` a frame, and twice
+the owner's mean (``FirstShape.claims``).
+
 Then T's labels from t, while T stays labeled and V does not, are V's: V gets them back, and
 T is occluded there (its fill held where it last was; the take's rigid fill refills it from
 donors). Earliest first, each judged on the labels the ones before left.
@@ -33,13 +41,15 @@ from numpy.typing import NDArray
 
 from formulations.markers.heading import track_heading
 from formulations.markers.noise import MAD_TO_SIGMA
-from formulations.markers.take_exchange import FIT_COST, capped_cost, rigid_pairs
+from formulations.markers.take_exchange import EXCHANGE_NATS, FIT_COST, MIN_RATE, capped_cost, rigid_pairs
 
 Array = NDArray[np.float64]
 
 CONTINUE_SDS = 3.4  # the 99 % radius of a 3D Gaussian, in per-axis sds
 FAR_RATIO = 3.0  # how much farther the taker's own heading must be than the owner's
 MIN_RESIDUALS = 10  # constant-velocity residuals (frames) a marker needs for its step sd
+NEAR = 6  # a returning marker takes a lost neighbour's point: one among its six nearest
+CLAIM_NATS = EXCHANGE_NATS  # as the exchange: frames are not independent (skin motion is slow)
 
 
 @dataclass(frozen=True)
@@ -68,9 +78,12 @@ def take_handovers(
     fill = np.full_like(positions, np.nan) if predicted is None else predicted.copy()
     scale = step_sd(positions)
     shape = FirstShape(*rigid_pairs(positions, first, neighbours), np.linalg.norm(first[:, None] - first[None], axis=2))
+    near = np.zeros((len(first), len(first)), bool)
+    near[np.repeat(np.arange(len(first)), min(NEAR, neighbours.shape[1])), neighbours[:, :NEAR].ravel()] = True
+    near |= near.T
     done: list[Handover] = []
     for _ in range(positions.shape[0] * positions.shape[1]):
-        found = _first_handover(working, fill, scale, shape)
+        found = _first_handover(working, fill, scale, shape, near)
         if found is None:
             break
         run = slice(found.start, found.stop)
@@ -96,7 +109,9 @@ def step_sd(positions: Array) -> Array:
     return sd
 
 
-def _first_handover(positions: Array, fill: Array, scale: Array, shape: FirstShape) -> Handover | None:
+def _first_handover(
+    positions: Array, fill: Array, scale: Array, shape: FirstShape, near: NDArray[np.bool_],
+) -> Handover | None:
     """The earliest hand-over the labels show (module doc), None when there is none."""
     labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)  # (F, N)
     continued = np.where(labeled[..., None], positions, fill)
@@ -106,7 +121,8 @@ def _first_handover(positions: Array, fill: Array, scale: Array, shape: FirstSha
     own_miss = np.linalg.norm(positions - taker_heading, axis=2)  # (F, N): each label from its own heading
     arrives = labeled[1:] & (~labeled[:-1] | ~(own_miss[1:] <= gate))  # (F - 1, N): T from frame t = 1..
     leaves = labeled[:-1] & ~labeled[1:]  # V labeled in t - 1, not in t
-    for t0 in (int(t) for t in np.flatnonzero(arrives.any(axis=1) & leaves.any(axis=1)) + 1):
+    returns, lost = labeled[1:] & ~labeled[:-1], ~labeled[:-1] & ~labeled[1:]
+    for t0 in (int(t) for t in np.flatnonzero(arrives.any(axis=1) & (leaves.any(axis=1) | lost.any(axis=1))) + 1):
         owners, takers = np.flatnonzero(leaves[t0 - 1]), np.flatnonzero(arrives[t0 - 1])
         x = positions[t0, takers]  # (T, 3)
         to_owner = np.linalg.norm(x[:, None] - owner_heading[t0, owners][None], axis=2)  # (T, V)
@@ -114,12 +130,21 @@ def _first_handover(positions: Array, fill: Array, scale: Array, shape: FirstSha
         fits = (to_owner <= gate[owners][None]) & (to_own > FAR_RATIO * to_owner) & ~(to_own <= gate[takers][:, None])
         order = np.argsort(np.where(fits, to_owner / gate[owners][None], np.inf), axis=None)[: int(fits.sum())]
         for k, v in zip(*np.unravel_index(order, fits.shape)):
-            taker, owner = int(takers[k]), int(owners[v])
-            after = labeled[t0:, taker] & ~labeled[t0:, owner]
-            stop = t0 + (int(np.argmin(after)) if not after.all() else len(after))
-            if shape.allows(positions, owner, taker, t0, stop):
-                return Handover(owner, taker, t0, stop)
+            found = _handed(positions, labeled, int(owners[v]), int(takers[k]), t0)
+            if shape.allows(positions, found.owner, found.taker, t0, found.stop):
+                return found
+        for taker in np.flatnonzero(returns[t0 - 1]):
+            for owner in np.flatnonzero(lost[t0 - 1] & near[taker]):
+                found = _handed(positions, labeled, int(owner), int(taker), t0)
+                if shape.claims(positions, found.owner, found.taker, t0, found.stop):
+                    return found
     return None
+
+
+def _handed(positions: Array, labeled: NDArray[np.bool_], owner: int, taker: int, start: int) -> Handover:
+    """The hand-over from ``start`` while the taker stays labeled and the owner does not."""
+    after = labeled[start:, taker] & ~labeled[start:, owner]
+    return Handover(owner, taker, start, start + (int(np.argmin(after)) if not after.all() else len(after)))
 
 
 @dataclass(frozen=True)
@@ -143,6 +168,16 @@ class FirstShape:
         if np.isfinite(as_owner).any():
             return bool(np.nanmean(as_owner) <= FIT_COST)
         return not np.isfinite(as_taker).any() or bool(np.nanmean(as_taker) > FIT_COST)
+
+    def claims(self, positions: Array, owner: int, taker: int, start: int, stop: int) -> bool:
+        """Whether the taker's points over [start, stop) are the owner's on the first frame's
+        say alone (module doc: both lost)."""
+        x = positions[start:stop, taker]
+        as_owner, as_taker = (self._cost(positions, m, x, start, (owner, taker)) for m in (owner, taker))
+        both = np.isfinite(as_owner) & np.isfinite(as_taker)
+        gain = float((as_taker[both] - as_owner[both]).sum())
+        return bool(both.any() and gain >= max(CLAIM_NATS, MIN_RATE * both.sum())
+                    and as_taker[both].mean() >= 2.0 * as_owner[both].mean())
 
     def _cost(self, positions: Array, m: int, x: Array, start: int, pair: tuple[int, int]) -> Array:
         """``(L,)`` mean capped z^2 / 2 of the points ``x`` against marker m's first-frame
