@@ -23,31 +23,23 @@ EXCHANGED_CONFIDENCE = 0.5  # the windows and the first frame's shape read these
 def exchanged_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[LabeledTrajectories, list[TakeExchange]]:
     """``labels`` with each exchange of ``take_exchanges`` applied to every per-label array,
     and the exchanges."""
-    predicted = labels.filled if labels.filled.size else None
-    exchanges = take_exchanges(labels.positions, first.position, first.neighbours, predicted)
-    if not exchanges:
-        return labels, exchanges
-    arrays = {name: getattr(labels, name).copy() for name in ("positions", "occluded", "point_index", "filled", "confidence")
-              if getattr(labels, name).size}
+    exchanges = take_exchanges(labels.positions, first.position, first.neighbours, _predicted(labels))
+    arrays = _per_label(labels)
     for e in exchanges:
         for values in arrays.values():
             values[e.start : e.stop, [e.a, e.b]] = values[e.start : e.stop, [e.b, e.a]]
         if "confidence" in arrays:
             arrays["confidence"][e.start : e.stop, [e.a, e.b]] = np.fmin(
                 arrays["confidence"][e.start : e.stop, [e.a, e.b]], EXCHANGED_CONFIDENCE)
-    return replace(labels, **arrays), exchanges
+    return (replace(labels, **arrays) if exchanges else labels), exchanges
 
 
 def handed_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[LabeledTrajectories, list[Handover]]:
     """``labels`` with each hand-over of ``take_handovers`` undone in every per-label array: the
     owner takes the labels back (doubtful, ``EXCHANGED_CONFIDENCE``), the taker is occluded
     there with its fill held; and the hand-overs."""
-    predicted = labels.filled if labels.filled.size else None
-    handovers = take_handovers(labels.positions, first.position, first.neighbours, predicted)
-    if not handovers:
-        return labels, handovers
-    arrays = {name: getattr(labels, name).copy() for name in ("positions", "occluded", "point_index", "filled", "confidence")
-              if getattr(labels, name).size}
+    handovers = take_handovers(labels.positions, first.position, first.neighbours, _predicted(labels))
+    arrays = _per_label(labels)
     for h in handovers:
         run = slice(h.start, h.stop)
         held = arrays["filled"][h.start - 1, h.taker].copy() if "filled" in arrays else None
@@ -59,10 +51,21 @@ def handed_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[Labele
             arrays["point_index"][run, h.taker] = -1
         if held is not None:
             arrays["filled"][run, h.owner] = np.nan
-            arrays["filled"][run, h.taker] = held if np.isfinite(held).all() else labels.positions[h.start - 1, h.taker]
+            arrays["filled"][run, h.taker] = held if np.isfinite(held).all() else arrays["positions"][h.start - 1, h.taker]
         if "confidence" in arrays:
             arrays["confidence"][run, h.owner] = np.fmin(arrays["confidence"][run, h.owner], EXCHANGED_CONFIDENCE)
-    return replace(labels, **arrays), handovers
+    return (replace(labels, **arrays) if handovers else labels), handovers
+
+
+def _predicted(labels: LabeledTrajectories) -> np.ndarray | None:
+    """The windows' fill where a marker has no label, None when the labels carry none."""
+    return labels.filled if labels.filled.size else None
+
+
+def _per_label(labels: LabeledTrajectories) -> dict[str, np.ndarray]:
+    """Copies of the per-label arrays the labels carry, by field name."""
+    names = ("positions", "occluded", "point_index", "filled", "confidence")
+    return {name: getattr(labels, name).copy() for name in names if getattr(labels, name).size}
 
 
 def exchange_summary(exchanges: list[TakeExchange], names: list[str]) -> list[dict]:
