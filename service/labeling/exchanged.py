@@ -9,6 +9,7 @@ Such a label is one the windows read otherwise: it is given back, and marked dou
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -62,7 +63,7 @@ def _predicted(labels: LabeledTrajectories) -> np.ndarray | None:
     return labels.filled if labels.filled.size else None
 
 
-def _per_label(labels: LabeledTrajectories) -> dict[str, np.ndarray]:
+def _per_label(labels: LabeledTrajectories) -> dict[str, Any]:
     """Copies of the per-label arrays the labels carry, by field name."""
     names = ("positions", "occluded", "point_index", "filled", "confidence")
     return {name: getattr(labels, name).copy() for name in names if getattr(labels, name).size}
