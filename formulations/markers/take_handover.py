@@ -83,7 +83,8 @@ def take_handovers(
     near |= near.T
     done: list[Handover] = []
     for _ in range(positions.shape[0] * positions.shape[1]):
-        found = _first_handover(working, fill, scale, shape, near)
+        # One sweep: the frames before a hand-over's start kept their labels and were judged.
+        found = _first_handover(working, fill, scale, shape, near, done[-1].start if done else 1)
         if found is None:
             break
         run = slice(found.start, found.stop)
@@ -110,9 +111,9 @@ def step_sd(positions: Array) -> Array:
 
 
 def _first_handover(
-    positions: Array, fill: Array, scale: Array, shape: FirstShape, near: NDArray[np.bool_],
+    positions: Array, fill: Array, scale: Array, shape: FirstShape, near: NDArray[np.bool_], after: int,
 ) -> Handover | None:
-    """The earliest hand-over the labels show (module doc), None when there is none."""
+    """The earliest hand-over the labels show from frame ``after`` on (module doc), None when there is none."""
     labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)  # (F, N)
     continued = np.where(labeled[..., None], positions, fill)
     owner_heading = np.stack([track_heading(positions[:, n]) for n in range(positions.shape[1])], axis=1)
@@ -122,7 +123,8 @@ def _first_handover(
     arrives = labeled[1:] & (~labeled[:-1] | ~(own_miss[1:] <= gate))  # (F - 1, N): T from frame t = 1..
     leaves = labeled[:-1] & ~labeled[1:]  # V labeled in t - 1, not in t
     returns, lost = labeled[1:] & ~labeled[:-1], ~labeled[:-1] & ~labeled[1:]
-    for t0 in (int(t) for t in np.flatnonzero(arrives.any(axis=1) & (leaves.any(axis=1) | lost.any(axis=1))) + 1):
+    candidates = np.flatnonzero(arrives.any(axis=1) & (leaves.any(axis=1) | lost.any(axis=1))) + 1
+    for t0 in (int(t) for t in candidates[candidates >= after]):
         owners, takers = np.flatnonzero(leaves[t0 - 1]), np.flatnonzero(arrives[t0 - 1])
         x = positions[t0, takers]  # (T, 3)
         to_owner = np.linalg.norm(x[:, None] - owner_heading[t0, owners][None], axis=2)  # (T, V)
