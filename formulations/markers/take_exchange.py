@@ -102,9 +102,7 @@ def take_exchanges(
     spread, rigid = rigid_pairs(positions, first, neighbours)
     d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
     n = len(first)
-    near = np.zeros((n, n), bool)
-    near[np.repeat(np.arange(n), min(NEAREST, neighbours.shape[1])), neighbours[:, :NEAREST].ravel()] = True
-    pairs = [(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(rigid & (near | near.T), 1)))]
+    pairs = [(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(rigid & near_pairs(neighbours, NEAREST), 1)))]
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
     judged = {pair: _judged(working, *pair, rigid, d0, spread) for pair in pairs}
@@ -120,6 +118,16 @@ def take_exchanges(
             if a in moved or b in moved or (rigid[a, moved] & rigid[b, moved]).any():
                 judged[a, b] = _judged(working, a, b, rigid, d0, spread)
     return done
+
+
+def near_pairs(neighbours: NDArray[np.int64], k: int) -> NDArray[np.bool_]:
+    """``(N, N)`` pairs where one marker is among the other's ``k`` nearest (``neighbours``
+    nearest first)."""
+    n = len(neighbours)
+    near = np.zeros((n, n), bool)
+    near[np.repeat(np.arange(n), min(k, neighbours.shape[1])), neighbours[:, :k].ravel()] = True
+    near |= near.T
+    return near
 
 
 def rigid_pairs(positions: Array, first: Array, neighbours: NDArray[np.int64]) -> tuple[Array, NDArray[np.bool_]]:

@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from formulations.markers.heading import track_heading
 from formulations.markers.noise import MAD_TO_SIGMA
-from formulations.markers.take_exchange import EXCHANGE_NATS, FIT_COST, MIN_RATE, capped_cost, rigid_pairs
+from formulations.markers.take_exchange import EXCHANGE_NATS, FIT_COST, MIN_RATE, capped_cost, near_pairs, rigid_pairs
 
 Array = NDArray[np.float64]
 
@@ -78,23 +78,26 @@ def take_handovers(
     fill = np.full_like(positions, np.nan) if predicted is None else predicted.copy()
     scale = step_sd(positions)
     shape = FirstShape(*rigid_pairs(positions, first, neighbours), np.linalg.norm(first[:, None] - first[None], axis=2))
-    near = np.zeros((len(first), len(first)), bool)
-    near[np.repeat(np.arange(len(first)), min(NEAR, neighbours.shape[1])), neighbours[:, :NEAR].ravel()] = True
-    near |= near.T
+    near = near_pairs(neighbours, NEAR)
     done: list[Handover] = []
     for _ in range(positions.shape[0] * positions.shape[1]):
         # One sweep: the frames before a hand-over's start kept their labels and were judged.
         found = _first_handover(working, fill, scale, shape, near, done[-1].start if done else 1)
         if found is None:
             break
-        run = slice(found.start, found.stop)
-        held = fill[found.start - 1, found.taker] if found.start else np.full(3, np.nan)
-        if not np.isfinite(held).all():
-            held = working[found.start - 1, found.taker]
+        run, held = slice(found.start, found.stop), held_fill(working, fill, found)
         working[run, found.owner], fill[run, found.owner] = working[run, found.taker], np.nan
         working[run, found.taker], fill[run, found.taker] = np.nan, held
         done.append(found)
     return done
+
+
+def held_fill(positions: Array, fill: Array, handover: Handover) -> Array:
+    """``(3,)`` where the taker is held while occluded over the hand-over: its fill in the frame
+    before, else its label there (it jumped from its own track)."""
+    before = fill[handover.start - 1, handover.taker]
+    held: Array = (before if np.isfinite(before).all() else positions[handover.start - 1, handover.taker]).copy()
+    return held
 
 
 def step_sd(positions: Array) -> Array:
@@ -132,18 +135,18 @@ def _first_handover(
         fits = (to_owner <= gate[owners][None]) & (to_own > FAR_RATIO * to_owner) & ~(to_own <= gate[takers][:, None])
         order = np.argsort(np.where(fits, to_owner / gate[owners][None], np.inf), axis=None)[: int(fits.sum())]
         for k, v in zip(*np.unravel_index(order, fits.shape)):
-            found = _handed(positions, labeled, int(owners[v]), int(takers[k]), t0)
+            found = _handed(labeled, int(owners[v]), int(takers[k]), t0)
             if shape.allows(positions, found.owner, found.taker, t0, found.stop):
                 return found
         for taker in np.flatnonzero(returns[t0 - 1]):
             for owner in np.flatnonzero(lost[t0 - 1] & near[taker]):
-                found = _handed(positions, labeled, int(owner), int(taker), t0)
+                found = _handed(labeled, int(owner), int(taker), t0)
                 if shape.claims(positions, found.owner, found.taker, t0, found.stop):
                     return found
     return None
 
 
-def _handed(positions: Array, labeled: NDArray[np.bool_], owner: int, taker: int, start: int) -> Handover:
+def _handed(labeled: NDArray[np.bool_], owner: int, taker: int, start: int) -> Handover:
     """The hand-over from ``start`` while the taker stays labeled and the owner does not."""
     after = labeled[start:, taker] & ~labeled[start:, owner]
     return Handover(owner, taker, start, start + (int(np.argmin(after)) if not after.all() else len(after)))
@@ -162,9 +165,7 @@ class FirstShape:
         """Whether the taker's points over [start, stop) may be the owner's: where both have
         witnesses seen, they fit the owner (mean cost at most ``FIT_COST``) at no more cost in
         sum than the taker; where only one has, they fit the owner or misfit the taker."""
-        x = positions[start:stop, taker]
-        as_owner, as_taker = (self._cost(positions, m, x, start, (owner, taker)) for m in (owner, taker))
-        both = np.isfinite(as_owner) & np.isfinite(as_taker)
+        as_owner, as_taker, both = self._costs(positions, owner, taker, start, stop)
         if both.any():
             return bool(as_owner[both].sum() <= as_taker[both].sum() and as_owner[both].mean() <= FIT_COST)
         if np.isfinite(as_owner).any():
@@ -174,12 +175,17 @@ class FirstShape:
     def claims(self, positions: Array, owner: int, taker: int, start: int, stop: int) -> bool:
         """Whether the taker's points over [start, stop) are the owner's on the first frame's
         say alone (module doc: both lost)."""
-        x = positions[start:stop, taker]
-        as_owner, as_taker = (self._cost(positions, m, x, start, (owner, taker)) for m in (owner, taker))
-        both = np.isfinite(as_owner) & np.isfinite(as_taker)
+        as_owner, as_taker, both = self._costs(positions, owner, taker, start, stop)
         gain = float((as_taker[both] - as_owner[both]).sum())
         return bool(both.any() and gain >= max(CLAIM_NATS, MIN_RATE * both.sum())
                     and as_taker[both].mean() >= 2.0 * as_owner[both].mean())
+
+    def _costs(self, positions: Array, owner: int, taker: int, start: int, stop: int) -> tuple[Array, Array, NDArray[np.bool_]]:
+        """The taker's points over [start, stop) costed as the owner's and as its own (``_cost``),
+        and the frames where both have witnesses seen."""
+        x = positions[start:stop, taker]
+        as_owner, as_taker = (self._cost(positions, m, x, start, (owner, taker)) for m in (owner, taker))
+        return as_owner, as_taker, np.isfinite(as_owner) & np.isfinite(as_taker)
 
     def _cost(self, positions: Array, m: int, x: Array, start: int, pair: tuple[int, int]) -> Array:
         """``(L,)`` mean capped z^2 / 2 of the points ``x`` against marker m's first-frame

@@ -15,7 +15,7 @@ import numpy as np
 
 from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, take_exchanges
-from formulations.markers.take_handover import Handover, take_handovers
+from formulations.markers.take_handover import Handover, held_fill, take_handovers
 from service.io.recording import LabeledTrajectories
 
 EXCHANGED_CONFIDENCE = 0.5  # the windows and the first frame's shape read these labels otherwise
@@ -43,7 +43,7 @@ def handed_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[Labele
     arrays = _per_label(labels)
     for h in handovers:
         run = slice(h.start, h.stop)
-        held = arrays["filled"][h.start - 1, h.taker].copy() if "filled" in arrays else None
+        held = held_fill(arrays["positions"], arrays["filled"], h) if "filled" in arrays else None
         for values in arrays.values():
             values[run, h.owner] = values[run, h.taker]
         arrays["positions"][run, h.taker] = np.nan
@@ -52,7 +52,7 @@ def handed_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[Labele
             arrays["point_index"][run, h.taker] = -1
         if held is not None:
             arrays["filled"][run, h.owner] = np.nan
-            arrays["filled"][run, h.taker] = held if np.isfinite(held).all() else arrays["positions"][h.start - 1, h.taker]
+            arrays["filled"][run, h.taker] = held
         if "confidence" in arrays:
             arrays["confidence"][run, h.owner] = np.fmin(arrays["confidence"][run, h.owner], EXCHANGED_CONFIDENCE)
     return (replace(labels, **arrays) if handovers else labels), handovers
