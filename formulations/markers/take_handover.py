@@ -34,6 +34,7 @@ donors). Earliest first, each judged on the labels the ones before left.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,15 +80,17 @@ def take_handovers(
     scale = step_sd(positions)
     shape = FirstShape(*rigid_pairs(positions, first, neighbours), np.linalg.norm(first[:, None] - first[None], axis=2))
     near = near_pairs(neighbours, NEAR)
+    headings = _Headings(working, fill, range(positions.shape[1]))
     done: list[Handover] = []
     for _ in range(positions.shape[0] * positions.shape[1]):
         # One sweep: the frames before a hand-over's start kept their labels and were judged.
-        found = _first_handover(working, fill, scale, shape, near, done[-1].start if done else 1)
+        found = _first_handover(working, fill, headings, scale, shape, near, done[-1].start if done else 1)
         if found is None:
             break
         run, held = slice(found.start, found.stop), held_fill(working, fill, found)
         working[run, found.owner], fill[run, found.owner] = working[run, found.taker], np.nan
         working[run, found.taker], fill[run, found.taker] = np.nan, held
+        headings.update(working, fill, (found.owner, found.taker))
         done.append(found)
     return done
 
@@ -113,14 +116,28 @@ def step_sd(positions: Array) -> Array:
     return sd
 
 
+class _Headings:
+    """Where each marker was heading in each frame (``(F, N, 3)``): ``owner`` from its labels
+    alone, ``taker`` from its labels continued by the fill; a hand-over changes two markers'."""
+
+    def __init__(self, positions: Array, fill: Array, markers: Iterable[int]) -> None:
+        self.owner, self.taker = np.empty_like(positions), np.empty_like(positions)
+        self.update(positions, fill, markers)
+
+    def update(self, positions: Array, fill: Array, markers: Iterable[int]) -> None:
+        for n in markers:
+            self.owner[:, n] = track_heading(positions[:, n])
+            labeled = np.isfinite(positions[:, n]).all(axis=1)
+            self.taker[:, n] = track_heading(np.where(labeled[:, None], positions[:, n], fill[:, n]))
+
+
 def _first_handover(
-    positions: Array, fill: Array, scale: Array, shape: FirstShape, near: NDArray[np.bool_], after: int,
+    positions: Array, fill: Array, headings: _Headings, scale: Array, shape: FirstShape, near: NDArray[np.bool_],
+    after: int,
 ) -> Handover | None:
     """The earliest hand-over the labels show from frame ``after`` on (module doc), None when there is none."""
     labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)  # (F, N)
-    continued = np.where(labeled[..., None], positions, fill)
-    owner_heading = np.stack([track_heading(positions[:, n]) for n in range(positions.shape[1])], axis=1)
-    taker_heading = np.stack([track_heading(continued[:, n]) for n in range(positions.shape[1])], axis=1)
+    owner_heading, taker_heading = headings.owner, headings.taker
     gate = CONTINUE_SDS * scale  # (N,)
     own_miss = np.linalg.norm(positions - taker_heading, axis=2)  # (F, N): each label from its own heading
     arrives = labeled[1:] & (~labeled[:-1] | ~(own_miss[1:] <= gate))  # (F - 1, N): T from frame t = 1..
