@@ -127,7 +127,7 @@ class _Headings:
     def update(self, positions: Array, fill: Array, markers: Iterable[int]) -> None:
         for n in markers:
             self.owner[:, n] = track_heading(positions[:, n])
-            labeled = np.isfinite(positions[:, n]).all(axis=1)
+            labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions[:, n]).all(axis=1), dtype=bool)
             self.taker[:, n] = track_heading(np.where(labeled[:, None], positions[:, n], fill[:, n]))
 
 
