@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 import service.labeling.exchanged as exchanged_module
 from formulations.markers.state import MarkerState
-from formulations.markers.take_handover import Handover, step_sd, take_handovers
+from formulations.markers.take_handover import Handover, _Headings, held_fill, step_sd, take_handovers
 from service.cli.app import app
 from service.io.recording import LabeledTrajectories
 from service.labeling.exchanged import EXCHANGED_CONFIDENCE, handed_back
@@ -140,3 +140,21 @@ def test_track_says_which_tracks_it_handed_back(tmp_path: Path, monkeypatch: pyt
     assert summary["handed_back"] == [{"owner": capture.names[1], "taker": capture.names[0], "frames": [20, 40]}]
     line = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "b.csv"), "--one-pass"], env={"COLUMNS": "400"})
     assert "1 track handed back to the marker it continues (labels doubtful)" in line.stdout
+
+
+def test_headings_updated_for_the_two_markers_a_hand_over_moves_equal_fresh_ones() -> None:
+    """The scan keeps each marker's headings and recomputes only the owner's and taker's after
+    a hand-over: they must equal headings computed afresh from the edited labels and fill."""
+    rng = np.random.default_rng(3)
+    labels = np.cumsum(rng.normal(0, 2, (120, 6, 3)), axis=0)
+    labels[rng.random((120, 6)) < 0.3] = np.nan
+    fill = np.where(np.isnan(labels), labels[0] + rng.normal(0, 5, labels.shape), np.nan)
+    headings = _Headings(labels, fill, range(6))
+    handover = Handover(owner=1, taker=4, start=50, stop=90)
+    run, held = slice(handover.start, handover.stop), held_fill(labels, fill, handover)
+    labels[run, 1], fill[run, 1] = labels[run, 4], np.nan
+    labels[run, 4], fill[run, 4] = np.nan, held
+    headings.update(labels, fill, (handover.owner, handover.taker))
+    fresh = _Headings(labels, fill, range(6))
+    np.testing.assert_array_equal(headings.owner, fresh.owner)
+    np.testing.assert_array_equal(headings.taker, fresh.taker)
