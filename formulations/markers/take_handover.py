@@ -125,6 +125,7 @@ class _Headings:
         self.update(positions, fill, markers)
 
     def update(self, positions: Array, fill: Array, markers: Iterable[int]) -> None:
+        """Recompute the headings of ``markers`` from ``positions`` and ``fill`` as they are now."""
         for n in markers:
             self.owner[:, n] = track_heading(positions[:, n])
             labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions[:, n]).all(axis=1), dtype=bool)
