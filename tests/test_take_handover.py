@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 import service.labeling.exchanged as exchanged_module
 from formulations.markers.state import MarkerState
-from formulations.markers.take_handover import Handover, _Headings, held_fill, step_sd, take_handovers
+from formulations.markers.take_handover import Handover, _Headings, hand_back, step_sd, take_handovers
 from service.cli.app import app
 from service.io.recording import LabeledTrajectories
 from service.labeling.exchanged import EXCHANGED_CONFIDENCE, handed_back
@@ -151,9 +151,7 @@ def test_headings_updated_for_the_two_markers_a_hand_over_moves_equal_fresh_ones
     fill = np.where(np.isnan(labels), labels[0] + rng.normal(0, 5, labels.shape), np.nan)
     headings = _Headings(labels, fill, range(6))
     handover = Handover(owner=1, taker=4, start=50, stop=90)
-    run, held = slice(handover.start, handover.stop), held_fill(labels, fill, handover)
-    labels[run, 1], fill[run, 1] = labels[run, 4], np.nan
-    labels[run, 4], fill[run, 4] = np.nan, held
+    hand_back(labels, fill, handover)
     headings.update(labels, fill, (handover.owner, handover.taker))
     fresh = _Headings(labels, fill, range(6))
     np.testing.assert_array_equal(headings.owner, fresh.owner)

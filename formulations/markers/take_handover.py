@@ -87,12 +87,18 @@ def take_handovers(
         found = _first_handover(working, fill, headings, scale, shape, near, done[-1].start if done else 1)
         if found is None:
             break
-        run, held = slice(found.start, found.stop), held_fill(working, fill, found)
-        working[run, found.owner], fill[run, found.owner] = working[run, found.taker], np.nan
-        working[run, found.taker], fill[run, found.taker] = np.nan, held
+        hand_back(working, fill, found)
         headings.update(working, fill, (found.owner, found.taker))
         done.append(found)
     return done
+
+
+def hand_back(positions: Array, fill: Array, handover: Handover) -> None:
+    """Undo ``handover`` in place: the owner takes the taker's labels over its run, and the
+    taker is unlabeled there with its fill held (``held_fill``)."""
+    run, held = slice(handover.start, handover.stop), held_fill(positions, fill, handover)
+    positions[run, handover.owner], fill[run, handover.owner] = positions[run, handover.taker], np.nan
+    positions[run, handover.taker], fill[run, handover.taker] = np.nan, held
 
 
 def held_fill(positions: Array, fill: Array, handover: Handover) -> Array:
