@@ -61,8 +61,13 @@ def track(
     shuffle: Annotated[bool, typer.Option(help="C3D/TRC input: shuffle each frame's points before labeling.")] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object of the figures on stdout.")] = False,
     subject: Annotated[Path | None, typer.Option(
-        "--model", help="Subject model .json (markerflow model): no labeled frame; INPUT's labels are discarded.",
+        "--model", help="Subject model .json (markerflow model): no labeled frame; INPUT's labels are discarded "
+        "(see --keep-labels).",
     )] = None,
+    keep_labels: Annotated[bool, typer.Option(
+        "--keep-labels", help="With --model: keep INPUT's labels at the --start frame (a partly labeled frame); "
+        "the model names only the markers absent there.",
+    )] = False,
     start: Annotated[int | None, typer.Option(
         help="First frame to label (default 0). A recording starts from its own labels there (markers absent there "
         "stay unlabeled); with --model, from the model's identification. A .c3d output keeps the frames outside "
@@ -83,7 +88,7 @@ def track(
     from service.cli.track import run_track
 
     _guard(lambda: run_track(
-        input, out, formulation, _window(window), shuffle, as_json, subject, start, end, second_pass,
+        input, out, formulation, _window(window), shuffle, as_json, subject, start, end, second_pass, keep_labels,
     ))
 
 

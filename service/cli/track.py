@@ -33,6 +33,7 @@ from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion
 def run_track(
     input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool, as_json: bool = False,
     model: Path | None = None, start: int | None = None, end: int | None = None, second_pass: bool | None = None,
+    keep_labels: bool = False,
 ) -> None:
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
 
@@ -42,8 +43,9 @@ def run_track(
 
     With ``model`` (a subject model JSON) no labeled frame is needed: a recording's labels are
     discarded, frames ``start .. end - 1`` are labeled from frame ``start`` identified by the
-    model (a capture JSON's labeled first frame, if it has one, is kept), and the output
-    carries the model's marker names, in the input's unit and frame numbering; a .c3d of a
+    model (a capture JSON's labeled first frame, if it has one, is kept; with ``keep_labels`` a
+    recording's labels at ``start`` are kept too, and the model names only the markers absent
+    there), and the output carries the model's marker names, in the input's unit and frame numbering; a .c3d of a
     .c3d that has every model marker is the input with those points replaced.
 
     ``formulation``, ``window`` and ``second_pass`` (``LabelingOptions.second_pass``)
@@ -54,14 +56,21 @@ def run_track(
     and a warning on stderr when many labels are doubtful.
     """
     check_writable_output(output)
-    capture, options, source, absent = _read_input(input, shuffle, None if model else (start, end))
+    if keep_labels and model is None:
+        raise InputError("--keep-labels keeps the --start frame's labels for a --model to complete: give --model")
+    span = None if model else (start, end)  # a model names the markers; a relabel starts from the labels at start
+    if keep_labels and input.suffix.lower() != ".json":  # a capture JSON's labels are kept anyway
+        span = (start or 0, end)
+    capture, options, source, absent = _read_input(input, shuffle, span)
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
     if model is not None:
         chosen = read_model(model)
         if input.suffix.lower() != ".json":
-            check_shared_names(capture.names, chosen, input.name)
-        keep_labels = input.suffix.lower() == ".json"
-        capture = with_model(capture, chosen, start or 0, end, keep_labels)
+            check_shared_names(capture.names + absent, chosen, input.name)
+        if span is not None:  # the span is read already; the model names the markers absent at its first frame
+            capture, absent = with_model(capture, chosen, 0, None, keep_labels=True), []
+        else:
+            capture = with_model(capture, chosen, start or 0, end, input.suffix.lower() == ".json")
         source, not_kept = _kept(source, model_names(chosen), output)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
