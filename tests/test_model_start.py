@@ -61,14 +61,21 @@ def test_held_out_frames_are_labeled_from_the_model_and_a_late_marker_is_acquire
 
 
 def test_capture_json_takes_a_model_in_place_of_the_first_frame() -> None:
-    _, positions, model = _take(1, frames=300)
+    chain_names, positions, model = _take(1, frames=300)
     body = {"rate": 100, "model": json.loads(model.to_json()), "points": positions[FIT:FIT + 5].tolist()}
     capture = read_capture_document(json.dumps(body), "c.json").capture()
     assert capture.model == model and capture.names == model_names(model)
     body["first_frame"] = positions[FIT].tolist()
-    with pytest.raises(InputError, match="model: give either a subject model or markers and first_frame"):
+    with pytest.raises(InputError, match="model: give markers and first_frame together"):
         read_capture_document(json.dumps(body), "c.json")
-    del body["first_frame"]
+    names = model_names(model)
+    labeled = positions[FIT, [chain_names.index(name) for name in names[:2]]]
+    body["markers"], body["first_frame"] = names[:2], labeled.tolist()  # partly labeled: kept
+    kept = read_capture_document(json.dumps(body), "c.json").capture()
+    assert kept.names == names and np.isnan(kept.first_frame[2:]).all()
+    np.testing.assert_array_equal(kept.first_frame[:2], labeled)
+    assert kept.unnamed_markers == len(names) - 2  # their points are unnamed until the model names them
+    del body["first_frame"], body["markers"]
     body["model"]["version"] = 7
     with pytest.raises(InputError, match="version 7 is not supported"):
         read_capture_document(json.dumps(body), "c.json")

@@ -96,6 +96,29 @@ def test_fitted_model_is_the_cli_s_and_labels_a_job(client, take, tmp_path: Path
     assert right.mean() >= 0.99
 
 
+def test_a_partly_labeled_first_frame_is_kept_and_the_model_names_the_rest(client, take, tmp_path: Path) -> None:
+    names, positions = take
+    model = _fit(client, _write(tmp_path / "rom.c3d", names, positions[:FIT])).json()
+    truth = positions[FIT:]
+    labeled = names[::2]  # the lab named every other marker of frame 0
+    points = [frame[np.random.default_rng(1).permutation(len(frame))].tolist() for frame in truth]
+    document = {"rate": 100, "model": model, "points": points, "window": 10, "markers": labeled,
+                "first_frame": truth[0, ::2].tolist()}
+    job = client.post("/v1/jobs", content=json.dumps(document), headers={"content-type": "application/json"})
+    assert job.status_code == 202, job.text
+    assert wait_for(client, job.json()["id"])["state"] == "done"
+    result = client.get(f"/v1/jobs/{job.json()['id']}/result").json()
+    order = [names.index(name) for name in result["markers"]]
+    right = np.linalg.norm(np.array(result["positions"], dtype=float) - truth[:, order], axis=2) < 1e-6
+    assert right.mean() >= 0.99
+    unknown = {**document, "markers": [*labeled[:-1], "NOSE"]}
+    _refused(client.post("/v1/jobs", content=json.dumps(unknown), headers={"content-type": "application/json"}),
+             422, f"markers.{len(labeled) - 1}: 'NOSE' is not a marker of the model")
+    half = {key: value for key, value in document.items() if key != "first_frame"}
+    _refused(client.post("/v1/jobs", content=json.dumps(half), headers={"content-type": "application/json"}),
+             422, "model: give markers and first_frame together")
+
+
 def test_static_take_needs_a_template(client, tmp_path: Path) -> None:
     names, still, centres = chain(6, segments=3, frames=60, motion=0.0)
     positions = np.concatenate([still, np.stack(centres, axis=1)], axis=1)

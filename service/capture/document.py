@@ -4,8 +4,8 @@
       "units": "mm",                       # of 3D points, first_frame and camera t: "mm" or "m"
       "rate": 120,
       "markers": ["LFHD", "RFHD", ...],
-      "first_frame": [[x, y, z], ...],     # labeled frame 0, one row per marker, or
-      "model": {"version": 1, ...},        # a subject model (markerflow model): frame 0 is identified
+      "first_frame": [[x, y, z], ...],     # labeled frame 0, one row per marker, and/or
+      "model": {"version": 1, ...},        # a subject model (markerflow model): it names what frame 0 leaves out
       "points": [[[x, y, z], ...], ...],   # 3D mode: unlabeled points per frame, or
       "cameras": [{"name": "cam1", "K": [[fx, 0, cx], [0, fy, cy], [0, 0, 1]],
                    "distortion": [k1, k2, p1, p2], "R": [[...], [...], [...]] or "rvec": [...],
@@ -18,8 +18,10 @@
       "unnamed_markers": 0                 # 3D points: markers in the points that "markers" leaves out (unnamed tracks)
     }
 
-Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only)
-``markers`` and ``first_frame`` are left out and the model's names are used. Every check names the field
+Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only) the
+model's names are used, and ``markers`` and ``first_frame`` may label some of them in frame 0
+(a partly labeled frame: the model names the rest), or be left out (frame 0 is identified).
+Every check names the field
 path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 with it.
 """
 
@@ -34,7 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
-from service.capture.model_input import model_names, parse_model
+from service.capture.model_input import model_names, parse_model, with_model
 from service.errors import InputError
 
 # 1e9 (1000 km in mm) bounds every number: sums of squares of larger finite values overflow
@@ -134,11 +136,18 @@ class CaptureDocument(BaseModel):
         return self
 
     def _check_model(self) -> None:
-        if self.first_frame is not None or self.markers is not None:
-            raise ValueError("model: give either a subject model or markers and first_frame, not both")
         if self.points is None:
             raise ValueError("model: labeling from a subject model needs points (3D mode)")
-        check_marker_names(model_names(parse_model(json.dumps(self.model), "model")), "model (marker {i})")
+        names = model_names(parse_model(json.dumps(self.model), "model"))
+        check_marker_names(names, "model (marker {i})")
+        if (self.first_frame is None) != (self.markers is None):
+            raise ValueError("model: give markers and first_frame together (a partly labeled frame 0), or neither")
+        if self.first_frame is not None and self.markers is not None:
+            if len(self.first_frame) != len(self.markers):
+                raise ValueError(f"first_frame has {len(self.first_frame)} rows for {len(self.markers)} markers")
+            unknown = [(i, name) for i, name in enumerate(self.markers) if name not in names]
+            if unknown:
+                raise ValueError(f"markers.{unknown[0][0]}: {unknown[0][1]!r} is not a marker of the model")
 
     def _check_detections(self, detections: dict[str, list[list[Pixel]]]) -> None:
         if not self.cameras:
@@ -171,12 +180,13 @@ class CaptureDocument(BaseModel):
     def capture(self) -> Capture:
         """The capture in millimetres; cameras without detections see nothing."""
         scale = MM_PER_UNIT[self.units]
+        first_frame = np.asarray(self.first_frame or [], dtype=float).reshape(-1, 3) * scale
         if self.model is not None and self.points is not None:
             model = parse_model(json.dumps(self.model), "model")
             frames = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
-            names = model_names(model)
-            return Capture(names, np.full((len(names), 3), np.nan), self.rate, points=frames, model=model)
-        first_frame = np.asarray(self.first_frame, dtype=float).reshape(-1, 3) * scale
+            labeled = Capture(list(self.markers or []), first_frame, self.rate, points=frames,
+                              unnamed_markers=self.unnamed_markers)
+            return with_model(labeled, model, keep_labels=True)
         if self.points is not None:
             points = [np.asarray(frame, dtype=float).reshape(-1, 3) * scale for frame in self.points]
             return Capture(list(self.markers or []), first_frame, self.rate, points=points,
