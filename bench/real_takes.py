@@ -3,11 +3,14 @@
 Each take is relabeled from its own labels at S, the first frame with the most markers
 labeled (0 when frame 0 has them all), as a user would:
 `markerflow track TAKE --out OUT.c3d --json --start S --end E` (markers absent at S stay
-unlabeled and count as missing). With `--model`, a take whose frame 0 lacks a marker is
+unlabeled and count as missing; `--half` starts those lacking a marker in frame 0 at their
+middle frame instead, where the `--model` rows start). With `--model`, a take whose frame 0 lacks a marker is
 instead labeled from a subject model fitted on its first half (``fit_subject``, what
 `markerflow model` runs): `markerflow track TAKE --model M.json --start H [--end E]` labels
-the second half. Each output is read back and compared, marker by marker and frame by frame,
-with the file's own labels:
+the second half; with `--model --keep-labels` the file's labels at H are kept too
+(`track --keep-labels`: the model names only the markers absent there). Each output is read
+back and compared, marker by marker and frame by frame, with the file's own labels (a
+marker the model lacks counts as missing where present):
 
 - correct: the marker took its own point;
 - wrong: it took a point, but another marker's (its own was present);
@@ -23,7 +26,7 @@ Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); th
 Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
 ``seconds`` of `--json`.
 
-    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--model]
+    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--model [--keep-labels] | --half]
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ sys.path.insert(0, str(ROOT))
 
 from formulations.errors import FormulationError  # noqa: E402
 from formulations.subject.fit import fit_subject  # noqa: E402
+from service.capture.model_input import model_names  # noqa: E402
 from service.evaluation.label_jumps import label_jumps  # noqa: E402
 from service.evaluation.matrix import DATA, RECORDINGS  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
@@ -80,16 +84,22 @@ class Row:
                 f"{self.frames / self.seconds:.0f} |")
 
 
-def score(truth: Recording, output: Recording, rows: slice, row: Row) -> None:
-    """Count correct/wrong/missing/extra over the truth's frames ``rows`` (output aligned by frame and name)."""
+def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: list[str] | None = None) -> None:
+    """Count correct/wrong/missing/extra over the truth's frames ``rows`` (output aligned by frame and name).
+
+    ``labeled``: the markers markerflow labeled (a model's); the file's others, which a .c3d
+    output keeps as the input had them, count as missing where present."""
     theirs = output.positions if output.n_frames == truth.n_frames else None
     if theirs is None:  # an output holding only the labeled frames
         theirs = np.full(truth.positions.shape[:1] + (output.n_markers, 3), np.nan)
         theirs[rows][: output.n_frames] = output.positions[: rows.stop - rows.start]
     missing_out = output.missing() if output.n_frames == truth.n_frames else np.isnan(theirs).any(axis=2)
     jumped = label_jumps(truth)[rows]
-    for j, name in enumerate(output.names):
-        i = truth.names.index(name)
+    for i, name in enumerate(truth.names):
+        if name not in output.names or (labeled is not None and name not in labeled):
+            row.missing += int((~truth.missing()[rows, i]).sum())
+            continue
+        j = output.names.index(name)
         own, took = ~truth.missing()[rows, i], ~missing_out[rows, j]
         same = np.linalg.norm(theirs[rows, j] - truth.positions[rows, i], axis=1) <= SAME_POINT_MM
         row.correct += int((own & took & same).sum())
@@ -112,12 +122,15 @@ def run(command: list[str], row: Row) -> dict | None:
     return summary
 
 
-def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool) -> Row:
+def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool, keep_labels: bool = False,
+            at_half: bool = False) -> Row:
     truth = read_labeled(path)
     missing = truth.missing()
     out = folder / f"{name}.c3d"
     if not missing[0].any() or not from_model:
         start = int(np.argmax((~missing).sum(axis=1)))  # 0 when frame 0 has every marker
+        if at_half and missing[0].any():
+            start = truth.n_frames // 2  # where the --model rows start
         end = min(truth.n_frames, start + cap) if cap else truth.n_frames
         row = Row(name, f"frame {start}", end - start, truth.n_markers)
         command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
@@ -126,7 +139,7 @@ def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool) -> 
         return row
     half = truth.n_frames // 2
     end = min(truth.n_frames, half + cap) if cap else truth.n_frames
-    row = Row(name, f"model of 0-{half - 1}", end - half, truth.n_markers)
+    row = Row(name, f"model of 0-{half - 1}{' + labels' if keep_labels else ''}", end - half, truth.n_markers)
     present = np.where(missing[:, :, None], np.nan, truth.positions)
     try:
         model = fit_subject(list(truth.names), present[:half]).model
@@ -136,9 +149,9 @@ def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool) -> 
     model_path = folder / f"{name}.json"
     model_path.write_text(model.to_json())
     command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--model", str(model_path),
-               "--start", str(half), "--end", str(end)]
+               "--start", str(half), "--end", str(end), *(["--keep-labels"] if keep_labels else [])]
     if run(command, row) is not None:
-        score(truth, read_labeled(out), slice(half, end), row)
+        score(truth, read_labeled(out), slice(half, end), row, model_names(model))
     return row
 
 
@@ -147,6 +160,9 @@ def main() -> None:
     parser.add_argument("--only", nargs="*", help="recording names (service.evaluation.matrix)")
     parser.add_argument("--cap", type=int, default=0, help="label at most this many frames of each take")
     parser.add_argument("--model", action="store_true", help="label a take without a full frame 0 from a model of its first half")
+    parser.add_argument("--keep-labels", action="store_true", help="with --model: keep the file's labels at the start frame")
+    parser.add_argument("--half", action="store_true", help="without --model: start a take lacking a marker in frame 0 "
+                        "at its middle frame, as the --model rows do")
     args = parser.parse_args()
     print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | wall s | frames/s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
@@ -154,7 +170,8 @@ def main() -> None:
         for recording in RECORDINGS:
             if args.only and recording.name not in args.only:
                 continue
-            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder), args.model).cells(), flush=True)
+            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder), args.model,
+                                  args.keep_labels, args.half).cells(), flush=True)
 
 
 if __name__ == "__main__":
