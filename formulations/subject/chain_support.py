@@ -49,7 +49,9 @@ def chain_support(geometry: ModelGeometry, by_segment: list[list[Hypothesis]], p
             first = by_segment[s][0]
             best = _points(first)
             for k, h in enumerate(by_segment[s]):
-                if h.inliers < first.inliers or len(_points(h) & best) < 2:
+                if h.inliers < first.inliers:
+                    break  # best first (``segment_hypotheses``): no later reading has more inliers
+                if len(_points(h) & best) < 2:
                     continue
                 free = unclaimed.copy()
                 free[h.point[h.point >= 0]] = False
