@@ -82,7 +82,7 @@ def with_model(
         for row, name in enumerate(capture.names):
             if name in names:
                 first[names.index(name)] = labeled[row]
-        if capture.names:
-            unnamed = unnamed or int(np.isnan(first).any(axis=1).sum())
+        if capture.names:  # and the labeled markers the model lacks: their points are never named
+            unnamed = (unnamed or int(np.isnan(first).any(axis=1).sum())) + sum(n not in names for n in capture.names)
     return replace(capture, names=names, first_frame=first, points=capture.points[start:stop], model=model,
                    unnamed_markers=unnamed)
