@@ -119,6 +119,28 @@ def test_a_partly_labeled_first_frame_is_kept_and_the_model_names_the_rest(clien
              422, "model: give markers and first_frame together")
 
 
+def test_an_upload_with_a_model_keeps_its_partly_labeled_frame_0(client, take, tmp_path: Path) -> None:
+    names, positions = take
+    model = _fit(client, _write(tmp_path / "rom.c3d", names, positions[:FIT])).text
+    held = positions[FIT:].copy()
+    held[:8, 3] = np.nan  # S0M3 absent from frame 0 and the seven after it
+    upload = _write(tmp_path / "held.c3d", names, held).read_bytes()
+    refused = client.post("/v1/jobs", files={"file": ("held.c3d", upload)}, data={"window": "10"})
+    _refused(refused, 422, "file: marker S0M3 has no position in the first frame (send a subject model")
+    job = client.post("/v1/jobs", files={"file": ("held.c3d", upload), "model": ("subject.json", model)},
+                      data={"window": "10"})
+    assert job.status_code == 202, job.text
+    assert wait_for(client, job.json()["id"])["state"] == "done"
+    result = client.get(f"/v1/jobs/{job.json()['id']}/result").json()
+    order = [names.index(name) for name in result["markers"]]
+    right = np.linalg.norm(np.array(result["positions"], dtype=float) - held[:, order], axis=2) < 1e-3
+    seen = np.isfinite(held[:, order]).all(axis=2)
+    assert right[seen].mean() >= 0.99
+    assert right[10:, result["markers"].index("S0M3")].all()  # named by the model once back
+    other = client.post("/v1/jobs", files={"file": ("held.c3d", upload), "model": ("subject.json", "[1, 2]")})
+    _refused(other, 422, "model: a subject model is a JSON object")
+
+
 def test_static_take_needs_a_template(client, tmp_path: Path) -> None:
     names, still, centres = chain(6, segments=3, frames=60, motion=0.0)
     positions = np.concatenate([still, np.stack(centres, axis=1)], axis=1)

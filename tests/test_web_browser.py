@@ -13,9 +13,12 @@ from urllib.parse import urlparse
 import numpy as np
 import pytest
 from service_fixtures import document_json, generated_capture, serving
+from test_subject_model import chain
 
+from formulations.subject.fit import fit_subject
 from service.capture.capture import LabelingOptions
 from service.io.formats import read_labeled, write_labeled
+from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.spans import window_spans
 from service.server.settings import Settings
@@ -172,5 +175,25 @@ def test_api_docs_render_with_the_network_blocked(browser, base_url, path, opera
         assert page.get_by_text("/v1/jobs", exact=False).first.is_visible() or path == "/redoc"
         # ReDoc's sidebar credit is an image from its CDN; nothing else may leave the machine.
         assert set(outside) <= {REDOC_CREDIT}, outside
+    finally:
+        context.close()
+
+
+def test_a_c3d_with_a_model_keeps_its_partly_labeled_frame_0(browser, base_url, tmp_path):
+    """The form's model goes with a .c3d too: frame 0 lacks a marker, the model names it."""
+    names, positions, _ = chain(3, frames=160)
+    (tmp_path / "subject.json").write_text(fit_subject(names, positions[:120]).model.to_json())
+    held = positions[120:].copy()
+    held[:5, 2] = np.nan
+    write_labeled(tmp_path / "held.c3d", LabeledTrajectories(names, held, np.isnan(held).any(axis=2), 100.0))
+    context, page = _signed_in(browser, base_url, BOB)
+    try:
+        page.get_by_label("Capture file").set_input_files(tmp_path / "held.c3d")
+        page.get_by_label("Subject model (JSON, optional)").set_input_files(tmp_path / "subject.json")
+        page.get_by_label("Window (frames)").fill("10")
+        page.get_by_role("button", name="Submit").click()
+        page.wait_for_url(re.compile(r"/jobs/[0-9a-f]{32}$"))
+        page.locator("#state:not([data-state=queued]):not([data-state=running])").wait_for()
+        assert page.locator("#state").inner_text() == "done", page.locator("dl.facts").inner_text()
     finally:
         context.close()

@@ -35,6 +35,8 @@ UPLOAD_SCHEMA = {
         "formulation": {"type": "string", "description": "A name, or a JSON object {\"name\": ..., parameters}.",
                         "default": "lp-l1"},
         "window": {"type": "integer", "minimum": 2, "default": 20},
+        "model": {"type": "string", "format": "binary", "description": "Subject model JSON (markerflow model): "
+                  "frame 0's labels are kept and the model names the markers they leave out."},
     },
 }
 
@@ -58,7 +60,7 @@ async def read_submission(request: Request, limits: Limits, upload: bool) -> Sub
     if media == "application/json":
         return await run_in_threadpool(_document, await request.body(), limits)
     if upload and media == "multipart/form-data":
-        async with request.form(max_files=1, max_fields=len(UPLOAD_FIELDS)) as form:
+        async with request.form(max_files=2, max_fields=len(UPLOAD_FIELDS)) as form:
             return await run_in_threadpool(upload_submission, form, limits)
     accepted = "application/json or multipart/form-data" if upload else "application/json"
     raise HTTPException(415, f"content-type: send {accepted}, not {media or 'nothing'}")

@@ -29,10 +29,11 @@ from service.io.recording import Recording
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.spans import window_spans
 from service.server.limits import check_limits
+from service.server.model_submission import document_with_model, model_field
 from service.server.prescan import check_depth
 from service.server.settings import Limits
 
-UPLOAD_FIELDS = ("file", "formulation", "window")
+UPLOAD_FIELDS = ("file", "formulation", "window", "model")
 UPLOAD_SUFFIXES = (".c3d", ".trc")
 
 
@@ -74,13 +75,18 @@ def labeled_upload(form: FormData, fields: tuple[str, ...], suffixes: tuple[str,
 
 
 def upload_submission(form: FormData, limits: Limits) -> Submission:
-    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object) and ``window``."""
+    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object), ``window``
+    and ``model`` (a subject model JSON: frame 0 may then be partly labeled, ``model_submission``)."""
     upload, filename = labeled_upload(form, UPLOAD_FIELDS, UPLOAD_SUFFIXES, "file")
     options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
+    model = model_field(form.get("model"))
     recording = read_upload(upload, filename, limits)
+    if model is not None:
+        return _checked(document_with_model(recording, model, options, filename.name), filename.name, limits)
     absent = np.flatnonzero(recording.missing()[0])
     if len(absent):
-        raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame")
+        raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame "
+                         "(send a subject model as 'model' to label from a partly labeled frame)")
     try:
         document = CaptureDocument.of(capture_from_recording(recording), options)
     except ValidationError as error:

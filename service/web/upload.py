@@ -45,8 +45,11 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     name = Path(upload.filename).name
     formulation = _formulation(_text(form, "formulation") or "lp-l1", _text(form, "parameters"))
     window = _text(form, "window") or "20"
+    model = form.get("model")
+    model = model if MODEL_OPTION and isinstance(model, UploadFile) and model.filename else None
     if Path(name).suffix.lower() in UPLOAD_SUFFIXES:
-        fields = FormData([("file", upload), ("formulation", formulation), ("window", window)])
+        extra = [("model", model)] if model is not None else []
+        fields = FormData([("file", upload), ("formulation", formulation), ("window", window), *extra])
         return upload_submission(fields, limits)
     if Path(name).suffix.lower() != ".json":
         raise InputError(f"file: {name} is not a capture document (.json) or a labeled .c3d/.trc file")
@@ -61,8 +64,7 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     association = _text(form, "association")
     if association:
         document["association"] = association
-    model = form.get("model")
-    if MODEL_OPTION and isinstance(model, UploadFile) and model.filename:
+    if model is not None:
         document["model"] = _json_file(model, "model")
     return replace(document_submission(json.dumps(document).encode(), limits), source=name)
 
