@@ -4,6 +4,7 @@ place is labeled from them) and the model names only the markers absent there.""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import ezc3d
@@ -34,16 +35,21 @@ def _take(tmp_path: Path, hide: tuple[int, int] | None = None) -> tuple[Path, Pa
     if hide is not None:
         given[FIT: FIT + hide[1], hide[0]] = np.nan
     source = tmp_path / "take.c3d"
+    _write(source, names, given)
+    return source, subject, names, given
+
+
+def _write(source: Path, names: list[str], positions: np.ndarray) -> None:
+    """A C3D in mm, NaN samples written missing (negative residual)."""
     c3d = ezc3d.c3d()
     c3d["parameters"]["POINT"]["RATE"]["value"] = np.array([100.0])
     c3d["parameters"]["POINT"]["LABELS"]["value"] = names
     c3d["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
-    points = np.ones((4, len(names), FRAMES))
-    points[:3] = np.nan_to_num(given, nan=0.0).transpose(2, 1, 0)
+    points = np.ones((4, len(names), len(positions)))
+    points[:3] = np.nan_to_num(positions, nan=0.0).transpose(2, 1, 0)
     c3d["data"]["points"] = points
-    c3d["data"]["meta_points"]["residuals"] = np.where(np.isnan(given[..., 0]), -1.0, 0.0).T[None]
+    c3d["data"]["meta_points"]["residuals"] = np.where(np.isnan(positions[..., 0]), -1.0, 0.0).T[None]
     c3d.write(str(source))
-    return source, subject, names, given
 
 
 def _labeled_right(tmp_path: Path, source: Path, subject: Path, names: list[str], given: np.ndarray,
@@ -83,3 +89,21 @@ def test_keep_labels_needs_a_model(tmp_path: Path) -> None:
     assert result.exit_code != 0
     assert "--keep-labels" in result.output and "--model" in result.output
     assert "Traceback" not in result.output
+
+
+def test_labels_the_model_does_not_fit_are_named_in_a_warning(tmp_path: Path) -> None:
+    source, subject, names, given = _take(tmp_path)
+    out, moved = tmp_path / "out.csv", names.index("S1M2")
+    plain = CliRunner().invoke(app, ["track", str(source), "--model", str(subject), "--start", str(FIT),
+                                     "--out", str(out), "--keep-labels", "--json"])
+    assert plain.exit_code == 0 and '"model_misfits": []' in plain.output
+    assert "do not fit" not in plain.output
+    replaced = given.copy()
+    replaced[:, moved] += np.array([0.0, 80.0, 0.0])  # the lab put S1M2 8 cm from where the model has it
+    _write(source, names, replaced)
+    warned = CliRunner().invoke(app, ["track", str(source), "--model", str(subject), "--start", str(FIT),
+                                      "--out", str(out), "--keep-labels", "--json"])
+    assert warned.exit_code == 0, warned.output
+    segment = json.loads(next(line for line in warned.output.splitlines() if line.startswith("{")))["model_misfits"]
+    assert len(segment) == 1 and segment[0]["off_mm"] > segment[0]["tolerance_mm"]
+    assert f"warning: the labels of frame {FIT} do not fit 1 of the model's segments ({segment[0]['segment']} " in warned.output

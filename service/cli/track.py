@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +27,13 @@ from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
-from service.labeling.take_warnings import FastMarker, fast_markers, fast_motion_warning, scale_warning
+from service.labeling.take_warnings import (
+    FastMarker,
+    fast_markers,
+    fast_motion_warning,
+    model_misfit_warning,
+    scale_warning,
+)
 
 
 def run_track(
@@ -87,6 +93,7 @@ def run_track(
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
     summary["handed_back"] = handover_summary(labeling.handovers, capture.names)
+    summary["model_misfits"] = [asdict(misfit) for misfit in labeling.model_misfits]
     if as_json:
         print(json.dumps(summary, allow_nan=False))
     else:
@@ -106,6 +113,7 @@ def run_track(
     warn(unnamed_warning(None if span is None else UnnamedSpan(**span), capture.rate, start or 0))
     warn(not_kept)
     warn(_absent_warning(absent, start or 0))
+    warn(model_misfit_warning(labeling.model_misfits, start or 0))
 
 
 def track_summary(

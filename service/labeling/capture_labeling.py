@@ -30,6 +30,7 @@ from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.take_exchange import TakeExchange
 from formulations.markers.take_handover import Handover
+from formulations.subject.contradiction import SegmentMisfit, labeled_misfits
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_tracks import joint_tracks
 from formulations.subject.pose_fill import pose_fill
@@ -83,10 +84,12 @@ class CaptureLabeling:
         self.handovers: list[Handover] = []  # tracks given back to their owners, likewise
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
+        self.model_misfits: list[SegmentMisfit] = []  # segments the user's labels say the model gets wrong
         model = capture.model
         if model is not None and capture.points is not None:
             if not np.isfinite(capture.first_frame).all():  # identified, not labeled: the take may correct the model
                 model = learn_from_take(model, capture.points[: options.window])
+            self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
             inner = _association(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
             self._association: Association = ModelChain(inner, model, capture.points)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from formulations.subject.contradiction import SegmentMisfit
 from service.labeling.coincident import COINCIDENT_MM, sampled_distances
 
 FAST_RATIO = 0.5  # s > d / 2: the last position is nearer the neighbour's than the marker's own
@@ -116,3 +117,14 @@ def _median_or_nan(values: np.ndarray) -> np.ndarray:
 
 def _most_common(indices: np.ndarray) -> int:
     return int(np.bincount(indices).argmax())
+
+
+def model_misfit_warning(misfits: list[SegmentMisfit], frame: int) -> str | None:
+    """One line naming the model's segments the labeled frame ``frame`` does not fit, or None."""
+    if not misfits:
+        return None
+    worst = ", ".join(f"{m.segment} {m.off_mm:.0f} mm (tolerance {m.tolerance_mm:.0f})" for m in misfits[:4])
+    return (f"warning: the labels of frame {frame} do not fit {len(misfits)} of the model's segments ({worst}"
+            f"{' ...' if len(misfits) > 4 else ''}): the model may not describe this take (markers placed "
+            "otherwise, or segments lumped by a trial with little motion) and its steering can cost labels; "
+            "compare with labeling without --model")
