@@ -106,11 +106,19 @@ def test_a_partly_labeled_first_frame_is_kept_and_the_model_names_the_rest(clien
                 "first_frame": truth[0, ::2].tolist()}
     job = client.post("/v1/jobs", content=json.dumps(document), headers={"content-type": "application/json"})
     assert job.status_code == 202, job.text
+    assert job.json()["warnings"] == []
     assert wait_for(client, job.json()["id"])["state"] == "done"
     result = client.get(f"/v1/jobs/{job.json()['id']}/result").json()
     order = [names.index(name) for name in result["markers"]]
     right = np.linalg.norm(np.array(result["positions"], dtype=float) - truth[:, order], axis=2) < 1e-6
     assert right.mean() >= 0.99
+    misplaced = truth[0].copy()
+    misplaced[names.index("S2M1")] += [0.0, 0.0, 80.0]  # labeled where the model has no marker
+    off = {**document, "markers": names, "first_frame": misplaced.tolist()}
+    warned = client.post("/v1/jobs", content=json.dumps(off), headers={"content-type": "application/json"})
+    assert warned.status_code == 202, warned.text
+    [warning] = warned.json()["warnings"]
+    assert warning.startswith("warning: the labels of frame 0 do not fit 1 of the model's segments")
     unknown = {**document, "markers": [*labeled[:-1], "NOSE"]}
     _refused(client.post("/v1/jobs", content=json.dumps(unknown), headers={"content-type": "application/json"}),
              422, f"markers.{len(labeled) - 1}: 'NOSE' is not a marker of the model")

@@ -127,4 +127,4 @@ def model_misfit_warning(misfits: list[SegmentMisfit], frame: int) -> str | None
     return (f"warning: the labels of frame {frame} do not fit {len(misfits)} of the model's segments ({worst}"
             f"{' ...' if len(misfits) > 4 else ''}): the model may not describe this take (markers placed "
             "otherwise, or segments lumped by a trial with little motion) and its steering can cost labels; "
-            "compare with labeling without --model")
+            "compare with a labeling without the model")

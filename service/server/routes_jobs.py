@@ -68,13 +68,13 @@ async def submit_job(
                                        idempotency_key)
     if new:
         await run_in_threadpool(request.app.state.executor.submit, job.id)
-    return _accepted(response, job)
+    return _accepted(response, job, list(submission.warnings))
 
 
-def _accepted(response: Response, job: Job) -> JobAccepted:
+def _accepted(response: Response, job: Job, warnings: list[str] | None = None) -> JobAccepted:
     base = f"/v1/jobs/{job.id}"
     response.headers["Location"] = base
-    return JobAccepted(**JobSummary.of(job).model_dump(),
+    return JobAccepted(**JobSummary.of(job).model_dump(), warnings=warnings or [],
                        links={"status": base, "events": f"{base}/events", "result": f"{base}/result"})
 
 

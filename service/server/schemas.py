@@ -75,6 +75,8 @@ class JobStatus(JobSummary):
 
 class JobAccepted(JobSummary):
     links: dict[str, str] = Field(description="Status, events and result URLs of the job.")
+    warnings: list[str] = Field(default_factory=list, description="What the check of this submission found doubtful "
+                                "(a subject model its labeled frame does not fit); none for a repeated Idempotency-Key.")
 
 
 class JobPage(BaseModel):

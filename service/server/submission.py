@@ -28,6 +28,7 @@ from service.io.isolated import ReaderBounds, read_isolated
 from service.io.recording import Recording
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.spans import window_spans
+from service.labeling.take_warnings import model_misfit_warning
 from service.server.limits import check_limits
 from service.server.model_submission import document_with_model, model_field
 from service.server.prescan import check_depth
@@ -39,11 +40,13 @@ UPLOAD_SUFFIXES = (".c3d", ".trc")
 
 @dataclass(frozen=True)
 class Submission:
-    """A checked capture: the document, where it came from, and its window count."""
+    """A checked capture: the document, where it came from, its window count, and the warnings
+    its check raised (a subject model the labeled frame does not fit)."""
 
     document: CaptureDocument
     source: str
     n_windows: int
+    warnings: tuple[str, ...] = ()
 
     def stored(self) -> bytes:
         return self.document.model_dump_json().encode()
@@ -102,8 +105,10 @@ def _checked(document: CaptureDocument, source: str, limits: Limits) -> Submissi
     # A validated document has either points or detections.
     head = {"points": document.points[:2]} if document.points is not None else {
         "detections": {camera: frames[:2] for camera, frames in (document.detections or {}).items()}}
-    CaptureLabeling(document.model_copy(update=head).capture(), document.options())
-    return Submission(document, source, len(window_spans(document.n_frames, document.window)))
+    labeling = CaptureLabeling(document.model_copy(update=head).capture(), document.options())
+    warning = model_misfit_warning(labeling.model_misfits, 0)
+    return Submission(document, source, len(window_spans(document.n_frames, document.window)),
+                      (warning,) if warning else ())
 
 
 def check_formulation(formulation: str | dict) -> None:
