@@ -3,12 +3,12 @@
 Each take is relabeled from its own labels at S, the first frame with the most markers
 labeled (0 when frame 0 has them all), as a user would:
 `markerflow track TAKE --out OUT.c3d --json --start S --end E` (markers absent at S stay
-unlabeled and count as missing; `--half` starts those lacking a marker in frame 0 at their
-middle frame instead, where the `--model` rows start). With `--model`, a take whose frame 0 lacks a marker is
-instead labeled from a subject model fitted on its first half (``fit_subject``, what
-`markerflow model` runs): `markerflow track TAKE --model M.json --start H [--end E]` labels
-the second half; with `--model --keep-labels` the file's labels at H are kept too
-(`track --keep-labels`: the model names only the markers absent there). Each output is read
+unlabeled and count as missing). `--half` starts a take lacking a marker in frame 0 at its
+middle frame H instead. With `--model`, such a take is labeled with a subject model fitted
+on the frames before its start (``fit_subject``, what `markerflow model` runs; its first half
+with `--half`): `markerflow track TAKE --model M.json --start S [--end E]` identifies the
+start frame from the model; with `--keep-labels` too, the file's labels there are kept and
+the model names only the markers absent there (`track --keep-labels`). Each output is read
 back and compared, marker by marker and frame by frame, with the file's own labels (a
 marker the model lacks counts as missing where present):
 
@@ -26,7 +26,7 @@ Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); th
 Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
 ``seconds`` of `--json`.
 
-    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--model [--keep-labels] | --half]
+    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--half] [--model [--keep-labels]]
 """
 
 from __future__ import annotations
@@ -122,36 +122,53 @@ def run(command: list[str], row: Row) -> dict | None:
     return summary
 
 
-def relabel(name: str, path: Path, cap: int, folder: Path, from_model: bool, keep_labels: bool = False,
-            at_half: bool = False) -> Row:
+@dataclass(frozen=True)
+class Route:
+    """How a take lacking a marker in frame 0 is labeled (a take with every marker in frame 0
+    is relabeled from frame 0 by every route).
+
+    at_half: start at the middle frame H instead of S, the frame with the most markers labeled.
+    model: fit a subject model on the frames before the start (``track --model``), identify the
+        start frame from it unless ``keep_labels`` (``track --keep-labels``).
+    """
+
+    at_half: bool = False
+    model: bool = False
+    keep_labels: bool = False
+
+    def label(self, start: int) -> str:
+        if not self.model:
+            return f"frame {start}"
+        return f"model of 0-{start - 1}{' + labels' if self.keep_labels else ''}"
+
+
+def relabel(name: str, path: Path, cap: int, folder: Path, route: Route) -> Row:
     truth = read_labeled(path)
     missing = truth.missing()
     out = folder / f"{name}.c3d"
-    if not missing[0].any() or not from_model:
-        start = int(np.argmax((~missing).sum(axis=1)))  # 0 when frame 0 has every marker
-        if at_half and missing[0].any():
-            start = truth.n_frames // 2  # where the --model rows start
-        end = min(truth.n_frames, start + cap) if cap else truth.n_frames
-        row = Row(name, f"frame {start}", end - start, truth.n_markers)
-        command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
+    partial = bool(missing[0].any())
+    start = int(np.argmax((~missing).sum(axis=1)))  # 0 when frame 0 has every marker
+    if partial and route.at_half:
+        start = truth.n_frames // 2
+    end = min(truth.n_frames, start + cap) if cap else truth.n_frames
+    command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
+    if not (partial and route.model and start > 0):  # no frame before the start: nothing to fit a model on
+        row = Row(name, Route().label(start), end - start, truth.n_markers)
         if run(command, row) is not None:
             score(truth, read_labeled(out), slice(start, end), row)
         return row
-    half = truth.n_frames // 2
-    end = min(truth.n_frames, half + cap) if cap else truth.n_frames
-    row = Row(name, f"model of 0-{half - 1}{' + labels' if keep_labels else ''}", end - half, truth.n_markers)
+    row = Row(name, route.label(start), end - start, truth.n_markers)
     present = np.where(missing[:, :, None], np.nan, truth.positions)
     try:
-        model = fit_subject(list(truth.names), present[:half]).model
+        model = fit_subject(list(truth.names), present[:start]).model
     except FormulationError as error:
         row.failure = f"model fit refused: {error}"[:140]
         return row
     model_path = folder / f"{name}.json"
     model_path.write_text(model.to_json())
-    command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--model", str(model_path),
-               "--start", str(half), "--end", str(end), *(["--keep-labels"] if keep_labels else [])]
+    command += ["--model", str(model_path), *(["--keep-labels"] if route.keep_labels else [])]
     if run(command, row) is not None:
-        score(truth, read_labeled(out), slice(half, end), row, model_names(model))
+        score(truth, read_labeled(out), slice(start, end), row, model_names(model))
     return row
 
 
@@ -159,10 +176,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="*", help="recording names (service.evaluation.matrix)")
     parser.add_argument("--cap", type=int, default=0, help="label at most this many frames of each take")
-    parser.add_argument("--model", action="store_true", help="label a take without a full frame 0 from a model of its first half")
+    parser.add_argument("--model", action="store_true", help="label a take without a full frame 0 from a model of the "
+                        "frames before its start (its first half with --half)")
     parser.add_argument("--keep-labels", action="store_true", help="with --model: keep the file's labels at the start frame")
-    parser.add_argument("--half", action="store_true", help="without --model: start a take lacking a marker in frame 0 "
-                        "at its middle frame, as the --model rows do")
+    parser.add_argument("--half", action="store_true", help="start a take lacking a marker in frame 0 at its middle frame")
     args = parser.parse_args()
     print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | wall s | frames/s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
@@ -170,8 +187,8 @@ def main() -> None:
         for recording in RECORDINGS:
             if args.only and recording.name not in args.only:
                 continue
-            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder), args.model,
-                                  args.keep_labels, args.half).cells(), flush=True)
+            route = Route(args.half, args.model, args.keep_labels)
+            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder), route).cells(), flush=True)
 
 
 if __name__ == "__main__":

@@ -69,11 +69,13 @@ def run_track(
         span = (start or 0, end)
     capture, options, source, absent = _read_input(input, shuffle, span)
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
+    unknown: list[str] = []  # markers labeled at start that the model lacks (--keep-labels)
     if model is not None:
         chosen = read_model(model)
         if input.suffix.lower() != ".json":
             check_shared_names(capture.names + absent, chosen, input.name)
         if span is not None:  # the span is read already; the model names the markers absent at its first frame
+            unknown = [name for name in capture.names if name not in model_names(chosen)]
             capture, absent = with_model(capture, chosen, 0, None, keep_labels=True), []
         else:
             capture = with_model(capture, chosen, start or 0, end, input.suffix.lower() == ".json")
@@ -113,6 +115,7 @@ def run_track(
     warn(unnamed_warning(None if span is None else UnnamedSpan(**span), capture.rate, start or 0))
     warn(not_kept)
     warn(_absent_warning(absent, start or 0))
+    warn(_unknown_warning(unknown, start or 0))
     warn(model_misfit_warning(labeling.model_misfits, start or 0))
 
 
@@ -187,6 +190,15 @@ def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | 
         return None
     span = unnamed_span(result.occluded, np.array([len(p) for p in capture.points]), capture.rate)
     return None if span is None else vars(span)
+
+
+def _unknown_warning(unknown: list[str], start: int) -> str | None:
+    """The markers labeled at ``start`` that the model lacks: labeling from the model drops them."""
+    if not unknown:
+        return None
+    return (f"warning: {len(unknown)} markers labeled at frame {start} are not in the model and are not labeled: "
+            f"{', '.join(unknown[:12])}{' ...' if len(unknown) > 12 else ''} (fit the model on frames where they "
+            "are seen, or label without --model)")
 
 
 def _absent_warning(absent: list[str], start: int) -> str | None:
