@@ -168,7 +168,9 @@ def relabel(name: str, path: Path, cap: int, folder: Path, route: Route) -> Row:
     model_path.write_text(model.to_json())
     command += ["--model", str(model_path), *(["--keep-labels"] if route.keep_labels else [])]
     if run(command, row) is not None:
-        score(truth, read_labeled(out), slice(start, end), row, model_names(model))
+        # with its labels kept, the start frame's markers the model lacks are labeled too (as singles)
+        kept = [n for i, n in enumerate(truth.names) if route.keep_labels and not missing[start, i]]
+        score(truth, read_labeled(out), slice(start, end), row, [*model_names(model), *kept])
     return row
 
 

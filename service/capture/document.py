@@ -20,7 +20,8 @@
 
 Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only) the
 model's names are used, and ``markers`` and ``first_frame`` may label some of them in frame 0
-(a partly labeled frame: the model names the rest), or be left out (frame 0 is identified).
+(a partly labeled frame: the model names the rest; a marker it lacks is added to it as a
+single measured in frame 0), or be left out (frame 0 is identified).
 Every check names the field
 path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 with it.
 """
@@ -145,9 +146,7 @@ class CaptureDocument(BaseModel):
         if self.first_frame is not None and self.markers is not None:
             if len(self.first_frame) != len(self.markers):
                 raise ValueError(f"first_frame has {len(self.first_frame)} rows for {len(self.markers)} markers")
-            unknown = [(i, name) for i, name in enumerate(self.markers) if name not in names]
-            if unknown:
-                raise ValueError(f"markers.{unknown[0][0]}: {unknown[0][1]!r} is not a marker of the model")
+            check_marker_names(self.markers, "markers.{i}")  # those the model lacks become its singles
 
     def _check_detections(self, detections: dict[str, list[list[Pixel]]]) -> None:
         if not self.cameras:

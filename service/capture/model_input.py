@@ -9,6 +9,7 @@ import numpy as np
 
 from formulations.errors import FormulationError
 from formulations.subject.geometry import ModelGeometry
+from formulations.subject.labeled_singles import with_labeled_singles
 from formulations.subject.model import SubjectModel
 from service.capture.capture import Capture
 from service.capture.span import frame_span
@@ -62,8 +63,8 @@ def with_model(
     capture: Capture, model: SubjectModel, start: int = 0, end: int | None = None, keep_labels: bool = False,
 ) -> Capture:
     """The capture's frames ``start .. end - 1`` (3D points) under the model's names, frame ``start``
-    unlabeled; with ``keep_labels`` (and ``start`` 0) the capture's labeled first frame is kept
-    for the markers the model knows, and the model names the rest. Until it does, their points
+    unlabeled; with ``keep_labels`` (and ``start`` 0) the capture's labeled first frame is kept,
+    markers the model lacks added to it as singles measured there, and the model names the rest. Until it does, their points
     are unnamed tracks that labeled markers do not take (``Capture.unnamed_markers``, unless
     the capture says how many): the real 03_rolling's frames 1152-1751 labeled from its labels at
     1152 and a model of frames 0-1151 were 72.6 % right with them, 59.3 % without.
@@ -74,15 +75,18 @@ def with_model(
     if capture.points is None:
         raise InputError("labeling from a subject model needs 3D points (camera mode needs a labeled first frame)")
     stop = frame_span(start, end, capture.n_frames)
+    kept = keep_labels and start == 0
+    labeled = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
+    if kept and capture.names:  # labeled markers the model lacks become singles of it (``labeled_singles``)
+        model, _ = with_labeled_singles(model, capture.names, labeled)
     names = model_names(model)
     first = np.full((len(names), 3), np.nan)
     unnamed = capture.unnamed_markers
-    if keep_labels and start == 0:
-        labeled = np.asarray(capture.first_frame, dtype=float)
+    if kept:
         for row, name in enumerate(capture.names):
             if name in names:
                 first[names.index(name)] = labeled[row]
-        if capture.names:  # and the labeled markers the model lacks: their points are never named
+        if capture.names:  # and the labeled markers still lacking (nothing posed): their points are never named
             unnamed = (unnamed or int(np.isnan(first).any(axis=1).sum())) + sum(n not in names for n in capture.names)
     return replace(capture, names=names, first_frame=first, points=capture.points[start:stop], model=model,
                    unnamed_markers=unnamed)

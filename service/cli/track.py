@@ -15,7 +15,7 @@ from service.capture.capture import Capture, LabelingOptions
 from service.capture.document import read_capture_document
 from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
-from service.capture.model_input import check_shared_names, model_names, read_model, with_model
+from service.capture.model_input import check_shared_names, read_model, with_model
 from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, out, warn, warn_doubtful, window_progress
 from service.errors import InputError
@@ -75,11 +75,11 @@ def run_track(
         if input.suffix.lower() != ".json":
             check_shared_names(capture.names + absent, chosen, input.name)
         if span is not None:  # the span is read already; the model names the markers absent at its first frame
-            unknown = [name for name in capture.names if name not in model_names(chosen)]
-            capture, absent = with_model(capture, chosen, 0, None, keep_labels=True), []
+            labeled, (capture, absent) = capture.names, (with_model(capture, chosen, 0, None, keep_labels=True), [])
+            unknown = [name for name in labeled if name not in capture.names]
         else:
             capture = with_model(capture, chosen, start or 0, end, input.suffix.lower() == ".json")
-        source, not_kept = _kept(source, model_names(chosen), output)
+        source, not_kept = _kept(source, capture.names, output)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:
@@ -193,7 +193,8 @@ def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | 
 
 
 def _unknown_warning(unknown: list[str], start: int) -> str | None:
-    """The markers labeled at ``start`` that the model lacks: labeling from the model drops them."""
+    """The markers labeled at ``start`` that the model lacks and no posed segment could measure
+    (``labeled_singles``): labeling from the model drops them."""
     if not unknown:
         return None
     return (f"warning: {len(unknown)} markers labeled at frame {start} are not in the model and are not labeled: "

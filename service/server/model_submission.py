@@ -2,8 +2,8 @@
 names the rest, as ``markerflow track --model M --keep-labels`` does.
 
 The upload's ``model`` field is the model JSON, as a file part or a text field. The markers
-frame 0 labels that the model knows start from their labels (a partly labeled frame is
-fine); the model names the markers absent there and those it knows that the file lacks. A
+frame 0 labels start from their labels (a partly labeled frame is fine; one the model lacks
+becomes its single, ``labeled_singles``); the model names the markers absent there. A
 file frame 0 labels nothing of is identified from the model alone. A file sharing fewer than
 half its marker names with the model is refused (another marker set).
 """
@@ -18,7 +18,7 @@ from starlette.datastructures import UploadFile
 from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument, describe_validation_error
 from service.capture.from_recording import capture_from_recording
-from service.capture.model_input import check_shared_names, model_names, parse_model
+from service.capture.model_input import check_shared_names, parse_model
 from service.errors import InputError
 from service.io.recording import Recording
 from service.server.prescan import check_depth
@@ -47,9 +47,9 @@ def document_with_model(recording: Recording, model: dict, options: LabelingOpti
     """The upload as a capture document labeled from ``model`` and the labels of its frame 0."""
     subject = parse_model(json.dumps(model), "model")
     check_shared_names(recording.names, subject, f"file: {source}")
-    names, absent = model_names(subject), recording.missing()[0]
+    absent = recording.missing()[0]
     capture = capture_from_recording(recording)  # points shuffled; frame 0's labels
-    labeled = [i for i, name in enumerate(capture.names) if name in names and not absent[i]]
+    labeled = [i for i, name in enumerate(capture.names) if not absent[i]]  # the model's singles if it lacks them
     points = capture.points or []
     fields: dict = {"rate": capture.rate, "points": [frame.tolist() for frame in points], "model": model,
                     "formulation": options.formulation, "window": options.window,
