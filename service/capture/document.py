@@ -21,9 +21,8 @@
 Frame 0 of ``points``/``detections`` is the labeled frame; with ``model`` (3D points only) the
 model's names are used, and ``markers`` and ``first_frame`` may label some of them in frame 0
 (a partly labeled frame: the model names the rest; a marker it lacks is added to it as a
-single measured in frame 0), or be left out (frame 0 is identified).
-Every check names the field
-path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 with it.
+single measured in frame 0), or be left out (frame 0 is identified). Every check names the
+field path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 422 with it.
 """
 
 from __future__ import annotations

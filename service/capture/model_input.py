@@ -64,10 +64,11 @@ def with_model(
 ) -> Capture:
     """The capture's frames ``start .. end - 1`` (3D points) under the model's names, frame ``start``
     unlabeled; with ``keep_labels`` (and ``start`` 0) the capture's labeled first frame is kept,
-    markers the model lacks added to it as singles measured there, and the model names the rest. Until it does, their points
-    are unnamed tracks that labeled markers do not take (``Capture.unnamed_markers``, unless
-    the capture says how many): the real 03_rolling's frames 1152-1751 labeled from its labels at
-    1152 and a model of frames 0-1151 were 72.6 % right with them, 59.3 % without.
+    markers the model lacks added to it as singles measured there, and the model names the
+    rest. Until it does, their points are unnamed tracks that labeled markers do not take
+    (``Capture.unnamed_markers``, unless the capture says how many): the real 03_rolling's
+    frames 1152-1751 labeled from its labels at 1152 and a model of frames 0-1151 were 72.6 %
+    right with them, 59.3 % without.
 
     Raises:
         InputError: A camera capture, or an empty or out-of-range span.

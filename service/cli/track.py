@@ -51,8 +51,8 @@ def run_track(
     discarded, frames ``start .. end - 1`` are labeled from frame ``start`` identified by the
     model (a capture JSON's labeled first frame, if it has one, is kept; with ``keep_labels`` a
     recording's labels at ``start`` are kept too, and the model names only the markers absent
-    there), and the output carries the model's marker names, in the input's unit and frame numbering; a .c3d of a
-    .c3d that has every model marker is the input with those points replaced.
+    there), and the output carries the model's marker names, in the input's unit and frame
+    numbering; a .c3d of a .c3d that has every model marker is the input with those points replaced.
 
     ``formulation``, ``window`` and ``second_pass`` (``LabelingOptions.second_pass``)
     override a JSON document's own options when given.
@@ -64,18 +64,19 @@ def run_track(
     check_writable_output(output)
     if keep_labels and model is None:
         raise InputError("--keep-labels keeps the --start frame's labels for a --model to complete: give --model")
-    span = None if model else (start, end)  # a model names the markers; a relabel starts from the labels at start
+    labels_at = None if model else (start, end)  # a model names the markers; a relabel starts from the labels at start
     if keep_labels and input.suffix.lower() != ".json":  # a capture JSON's labels are kept anyway
-        span = (start or 0, end)
-    capture, options, source, absent = _read_input(input, shuffle, span)
+        labels_at = (start or 0, end)
+    capture, options, source, absent = _read_input(input, shuffle, labels_at)
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
     unknown: list[str] = []  # markers labeled at start that the model lacks (--keep-labels)
     if model is not None:
         chosen = read_model(model)
         if input.suffix.lower() != ".json":
             check_shared_names(capture.names + absent, chosen, input.name)
-        if span is not None:  # the span is read already; the model names the markers absent at its first frame
-            labeled, (capture, absent) = capture.names, (with_model(capture, chosen, 0, None, keep_labels=True), [])
+        if labels_at is not None:  # the span is read already; the model names the markers absent at its first frame
+            labeled = capture.names
+            capture, absent = with_model(capture, chosen, 0, None, keep_labels=True), []
             unknown = [name for name in labeled if name not in capture.names]
         else:
             capture = with_model(capture, chosen, start or 0, end, input.suffix.lower() == ".json")
