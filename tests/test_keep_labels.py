@@ -9,6 +9,7 @@ from pathlib import Path
 
 import ezc3d
 import numpy as np
+import pytest
 from test_model_output import FIT, FRAMES
 from test_subject_model import chain
 from typer.testing import CliRunner
@@ -16,6 +17,7 @@ from typer.testing import CliRunner
 from formulations.subject.fit import fit_subject
 from service.cli.app import app
 from service.io.formats import read_labeled
+from service.labeling import capture_labeling
 
 
 def _take(tmp_path: Path, hide: tuple[int, int] | None = None) -> tuple[Path, Path, list[str], np.ndarray]:
@@ -117,3 +119,14 @@ def test_a_labeled_marker_the_model_lacks_is_labeled_as_its_single(tmp_path: Pat
     kept = _labeled_right(tmp_path, source, subject, names, given, "--keep-labels")
     assert kept[:, names.index("EXTRA")].mean() > 0.95
     assert kept.mean() > 0.97
+
+
+def test_the_take_relearns_the_model_only_when_nothing_is_labeled(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Learning segments from the take is for an identified start; a labeled one places its segments."""
+    source, subject, names, given = _take(tmp_path, (9, 15))
+    learned: list[int] = []
+    monkeypatch.setattr(capture_labeling, "learn_from_take", lambda model, frames: learned.append(1) or model)
+    _labeled_right(tmp_path, source, subject, names, given, "--keep-labels")
+    assert learned == []
+    _labeled_right(tmp_path, source, subject, names, given)
+    assert learned == [1]
