@@ -70,7 +70,8 @@ def track(
     )] = False,
     start: Annotated[int | None, typer.Option(
         help="First frame to label (default 0). A recording starts from its own labels there (markers absent there "
-        "stay unlabeled); with --model, from the model's identification. A .c3d output keeps the frames outside "
+        "stay unlabeled); with --model, from the model's identification (or its labels there, --keep-labels). "
+        "A .c3d output keeps the frames outside "
         "--start/--end, unlabeled; a .trc or .csv output holds the labeled frames only.",
     )] = None,
     end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
