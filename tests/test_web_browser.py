@@ -197,3 +197,22 @@ def test_a_c3d_with_a_model_keeps_its_partly_labeled_frame_0(browser, base_url, 
         assert page.locator("#state").inner_text() == "done", page.locator("dl.facts").inner_text()
     finally:
         context.close()
+
+
+def test_the_job_page_says_when_the_labels_do_not_fit_the_model(browser, base_url, tmp_path):
+    """A .c3d whose frame 0 puts a marker 8 cm from where the model has it: the page warns, as the API does."""
+    names, positions, _ = chain(3, frames=160)
+    (tmp_path / "subject.json").write_text(fit_subject(names, positions[:120]).model.to_json())
+    held = positions[120:].copy()
+    held[:, names.index("S1M2")] += [0.0, 80.0, 0.0]  # the lab placed it elsewhere this time
+    write_labeled(tmp_path / "moved.c3d", LabeledTrajectories(names, held, np.isnan(held).any(axis=2), 100.0))
+    context, page = _signed_in(browser, base_url, BOB)
+    try:
+        page.get_by_label("Capture file").set_input_files(tmp_path / "moved.c3d")
+        page.get_by_label("Subject model (JSON, optional)").set_input_files(tmp_path / "subject.json")
+        page.get_by_role("button", name="Submit").click()
+        page.wait_for_url(re.compile(r"/jobs/[0-9a-f]{32}$"))
+        note = page.get_by_role("note")
+        assert note.inner_text().startswith("warning: the labels of frame 0 do not fit 1 of the model's segments")
+    finally:
+        context.close()

@@ -13,9 +13,13 @@ from functools import lru_cache
 
 import numpy as np
 
-from service.capture.document import CaptureDocument
+from formulations.subject.contradiction import labeled_misfits
+from formulations.subject.geometry import ModelGeometry
+from service.capture.document import MM_PER_UNIT, CaptureDocument
+from service.capture.model_input import parse_model
 from service.io.recording import LabeledTrajectories
 from service.labeling.stats import DOUBTFUL_BELOW, WindowStats, certificate_figures, doubtful_labels
+from service.labeling.take_warnings import model_misfit_warning
 from service.server.results import stored_windows_trajectories, trajectories_from_bytes
 from service.server.store import Job, JobStore, StoredWindow, store_for
 
@@ -31,6 +35,8 @@ class JobOptions:
     association: str | None  # None for 3D points
     markers: int | None  # None: the subject model's markers
     frames: int
+    model: bool = False  # a subject model came with the capture
+    warnings: tuple[str, ...] = ()  # what the labeled frame says of the subject model sent with it
 
 
 @dataclass(frozen=True)
@@ -58,7 +64,19 @@ def options_of(document: bytes) -> JobOptions:
     frames = next(iter(fields["detections"].values()), []) if cameras else fields["points"]
     return JobOptions(formulation=formulation if isinstance(formulation, str) else json.dumps(formulation),
                       window=fields["window"], association=fields["association"] if cameras else None,
-                      markers=len(fields["markers"]) if fields.get("markers") is not None else None, frames=len(frames))
+                      markers=len(fields["markers"]) if fields.get("markers") is not None else None, frames=len(frames),
+                      model=fields.get("model") is not None, warnings=_model_warnings(fields))
+
+
+def _model_warnings(fields: dict) -> tuple[str, ...]:
+    """The model-misfit warning ``POST /v1/jobs`` answered, for a document with a model and labels."""
+    if fields.get("model") is None or not fields.get("markers"):
+        return ()
+    geometry = ModelGeometry.of(parse_model(json.dumps(fields["model"]), "model"))
+    labeled = np.asarray(fields["first_frame"], dtype=float) * MM_PER_UNIT[fields.get("units", "mm")]
+    positions = geometry.in_model_order(fields["markers"], labeled[None])[0]
+    warning = model_misfit_warning(labeled_misfits(geometry, positions), 0)
+    return (warning,) if warning else ()
 
 
 @lru_cache(maxsize=CACHED_JOBS)
