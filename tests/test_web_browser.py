@@ -179,20 +179,30 @@ def test_api_docs_render_with_the_network_blocked(browser, base_url, path, opera
         context.close()
 
 
-def test_a_c3d_with_a_model_keeps_its_partly_labeled_frame_0(browser, base_url, tmp_path):
-    """The form's model goes with a .c3d too: frame 0 lacks a marker, the model names it."""
+def _chain_take(tmp_path) -> tuple[list[str], np.ndarray]:
+    """A chain's names and its frames 120-159, after subject.json is fitted on frames 0-119."""
     names, positions, _ = chain(3, frames=160)
     (tmp_path / "subject.json").write_text(fit_subject(names, positions[:120]).model.to_json())
-    held = positions[120:].copy()
+    return names, positions[120:].copy()
+
+
+def _submit_with_model(page, tmp_path, names: list[str], held: np.ndarray) -> None:
+    """Upload ``held`` as a .c3d with subject.json through the form, window 10; wait for the job's page."""
+    write_labeled(tmp_path / "take.c3d", LabeledTrajectories(names, held, np.isnan(held).any(axis=2), 100.0))
+    page.get_by_label("Capture file").set_input_files(tmp_path / "take.c3d")
+    page.get_by_label("Subject model (JSON, optional)").set_input_files(tmp_path / "subject.json")
+    page.get_by_label("Window (frames)").fill("10")
+    page.get_by_role("button", name="Submit").click()
+    page.wait_for_url(re.compile(r"/jobs/[0-9a-f]{32}$"))
+
+
+def test_a_c3d_with_a_model_keeps_its_partly_labeled_frame_0(browser, base_url, tmp_path):
+    """The form's model goes with a .c3d too: frame 0 lacks a marker, the model names it."""
+    names, held = _chain_take(tmp_path)
     held[:5, 2] = np.nan
-    write_labeled(tmp_path / "held.c3d", LabeledTrajectories(names, held, np.isnan(held).any(axis=2), 100.0))
     context, page = _signed_in(browser, base_url, BOB)
     try:
-        page.get_by_label("Capture file").set_input_files(tmp_path / "held.c3d")
-        page.get_by_label("Subject model (JSON, optional)").set_input_files(tmp_path / "subject.json")
-        page.get_by_label("Window (frames)").fill("10")
-        page.get_by_role("button", name="Submit").click()
-        page.wait_for_url(re.compile(r"/jobs/[0-9a-f]{32}$"))
+        _submit_with_model(page, tmp_path, names, held)
         page.locator("#state:not([data-state=queued]):not([data-state=running])").wait_for()
         assert page.locator("#state").inner_text() == "done", page.locator("dl.facts").inner_text()
     finally:
@@ -201,17 +211,11 @@ def test_a_c3d_with_a_model_keeps_its_partly_labeled_frame_0(browser, base_url, 
 
 def test_the_job_page_says_when_the_labels_do_not_fit_the_model(browser, base_url, tmp_path):
     """A .c3d whose frame 0 puts a marker 8 cm from where the model has it: the page warns, as the API does."""
-    names, positions, _ = chain(3, frames=160)
-    (tmp_path / "subject.json").write_text(fit_subject(names, positions[:120]).model.to_json())
-    held = positions[120:].copy()
+    names, held = _chain_take(tmp_path)
     held[:, names.index("S1M2")] += [0.0, 80.0, 0.0]  # the lab placed it elsewhere this time
-    write_labeled(tmp_path / "moved.c3d", LabeledTrajectories(names, held, np.isnan(held).any(axis=2), 100.0))
     context, page = _signed_in(browser, base_url, BOB)
     try:
-        page.get_by_label("Capture file").set_input_files(tmp_path / "moved.c3d")
-        page.get_by_label("Subject model (JSON, optional)").set_input_files(tmp_path / "subject.json")
-        page.get_by_role("button", name="Submit").click()
-        page.wait_for_url(re.compile(r"/jobs/[0-9a-f]{32}$"))
+        _submit_with_model(page, tmp_path, names, held)
         note = page.get_by_role("note")
         assert note.inner_text().startswith("warning: the labels of frame 0 do not fit 1 of the model's segments")
     finally:
