@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from formulations.subject.geometry import ModelGeometry
+from formulations.subject.geometry import ModelGeometry, SegmentGeometry
 from formulations.subject.segment_pose import RIGID_WITHIN, segment_poses
 
 Array = NDArray[np.float64]
@@ -24,11 +24,9 @@ Array = NDArray[np.float64]
 
 def contradicting(geometry: ModelGeometry, positions: Array, factor: float = RIGID_WITHIN) -> NDArray[np.bool_]:
     """``(S,)`` segments of ``positions`` ``(N, 3)`` (NaN: not labeled) that contradict the model."""
-    placed = segment_poses(geometry, positions[None]).place(geometry)[0]
-    excess = np.linalg.norm(placed - positions, axis=1) > factor * geometry.tolerance
-    own = [len(s.markers) >= 3 and np.isfinite(positions[s.markers]).all(axis=1).sum() >= 3 for s in geometry.segments]
-    found: NDArray[np.bool_] = np.array([o and bool(excess[s.markers].any()) for o, s in zip(own, geometry.segments)])
-    return found.astype(bool).reshape(len(geometry.segments))
+    _, ratio = _residual_ratio(geometry, positions)
+    return np.array([_judged(s, ratio) and bool((ratio[s.markers] > factor).any()) for s in geometry.segments],
+                    dtype=bool).reshape(len(geometry.segments))
 
 
 @dataclass(frozen=True)
@@ -42,23 +40,35 @@ class SegmentMisfit:
 
 
 def labeled_misfits(geometry: ModelGeometry, positions: Array) -> list[SegmentMisfit]:
-    """The segments (three or more labeled markers) of a labeled frame ``positions`` ``(N, 3)``
-    (NaN: not labeled) with a residual beyond its marker's tau_p, worst first.
+    """The segments of a labeled frame ``positions`` ``(N, 3)`` (NaN: not labeled) that
+    contradict the model at ``factor`` 1, worst (in units of tau_p) first.
 
     A frame the user labeled is right, so such a segment says the model does not describe the
     take: a marker placed otherwise, or markers grouped from a trial with too little motion to
-    separate them (03_rolling's first 562 frames gave 10-marker segments, 60 mm off at frame
-    562, where a model of 1,152 frames fits within 14 mm).
+    separate them (03_rolling's first 562 frames gave 10-marker segments: its head 45 mm off at
+    frame 562, tolerance 33; no segment is off at the other starts measured, README).
     """
-    placed = segment_poses(geometry, positions[None]).place(geometry)[0]
-    ratio = np.linalg.norm(placed - positions, axis=1) / geometry.tolerance  # NaN where unlabeled or unposed
+    placed, ratio = _residual_ratio(geometry, positions)
     misfits = []
     for segment in geometry.segments:
-        labeled = np.isfinite(ratio[segment.markers])
-        if len(segment.markers) < 3 or labeled.sum() < 3:
+        if not _judged(segment, ratio):
             continue
-        worst = segment.markers[labeled][np.argmax(ratio[segment.markers][labeled])]
+        worst = segment.markers[np.nanargmax(ratio[segment.markers])]
         if ratio[worst] > 1.0:
             off = float(np.linalg.norm(placed[worst] - positions[worst]))
             misfits.append(SegmentMisfit(segment.name, off, float(geometry.tolerance[worst])))
     return sorted(misfits, key=lambda m: -m.off_mm / m.tolerance_mm)
+
+
+def _residual_ratio(geometry: ModelGeometry, positions: Array) -> tuple[Array, Array]:
+    """Where each marker's segment puts it (Kabsch on its labels, ``segment_poses``) and ``(N,)``
+    its residual in units of its tau_p; NaN where unlabeled or unposed."""
+    placed = segment_poses(geometry, positions[None]).place(geometry)[0]
+    ratio: Array = np.linalg.norm(placed - positions, axis=1) / geometry.tolerance
+    return placed, ratio
+
+
+def _judged(segment: SegmentGeometry, ratio: Array) -> bool:
+    """A segment of three or more markers, three of them labeled (and so posed): its labels can
+    contradict its constellation."""
+    return len(segment.markers) >= 3 and int(np.isfinite(ratio[segment.markers]).sum()) >= 3
