@@ -23,24 +23,21 @@ from formulations.subject.segment_pose import segment_poses
 Array = NDArray[np.float64]
 
 
-def with_labeled_singles(
-    model: SubjectModel, names: list[str], positions: Array, nearest: int = 2,
-) -> tuple[SubjectModel, list[str]]:
+def with_labeled_singles(model: SubjectModel, names: list[str], positions: Array, nearest: int = 2) -> SubjectModel:
     """``model`` with a single for each marker of ``names`` it lacks that ``positions`` ``(N, 3)``
-    (mm, NaN: not labeled) labels, and the labeled markers it lacks that no posed segment can
-    measure (the frame poses none)."""
+    (mm, NaN: not labeled) labels; unchanged when the frame poses no segment to measure from."""
     geometry = ModelGeometry.of(model)
     lacking = [k for k, name in enumerate(names) if name not in geometry.names and np.isfinite(positions[k]).all()]
     if not lacking:
-        return model, []
+        return model
     poses = segment_poses(geometry, geometry.in_model_order(names, np.asarray(positions, dtype=float)[None]))
     posed = np.flatnonzero(poses.posed[0])
     if not len(posed):
-        return model, [names[k] for k in lacking]
+        return model
     singles = []
     for k in lacking:
         reach = np.linalg.norm(poses.origin[0, posed] - positions[k], axis=1)
         near = np.argsort(reach)[:nearest]
         singles.append(SingleMarker(names[k], [geometry.segments[posed[i]].name for i in near],
                                     [round(float(reach[i]), 3) for i in near], [0.0] * len(near)))
-    return replace(model, singles=[*model.singles, *singles]), []
+    return replace(model, singles=[*model.singles, *singles])

@@ -79,7 +79,7 @@ def with_model(
     kept = keep_labels and start == 0
     labeled = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
     if kept and capture.names:  # labeled markers the model lacks become singles of it (``labeled_singles``)
-        model, _ = with_labeled_singles(model, capture.names, labeled)
+        model = with_labeled_singles(model, capture.names, labeled)
     names = model_names(model)
     first = np.full((len(names), 3), np.nan)
     unnamed = capture.unnamed_markers
