@@ -100,15 +100,20 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
 def _checked(document: CaptureDocument, source: str, limits: Limits) -> Submission:
     check_limits(document, limits)
     check_formulation(document.formulation)
-    # The library checks its options (formulation, window, association) itself; on the
-    # first two frames that costs nothing in either input mode.
+    return Submission(document, source, len(window_spans(document.n_frames, document.window)),
+                      labeling_warnings(document))
+
+
+def labeling_warnings(document: CaptureDocument) -> tuple[str, ...]:
+    """What the library finds doubtful in a document (a subject model its labeled frame does
+    not fit), after checking its options (formulation, window, association) itself: on the
+    first two frames, which costs nothing in either input mode."""
     # A validated document has either points or detections.
     head = {"points": document.points[:2]} if document.points is not None else {
         "detections": {camera: frames[:2] for camera, frames in (document.detections or {}).items()}}
     labeling = CaptureLabeling(document.model_copy(update=head).capture(), document.options())
     warning = model_misfit_warning(labeling.model_misfits, 0)
-    return Submission(document, source, len(window_spans(document.n_frames, document.window)),
-                      (warning,) if warning else ())
+    return (warning,) if warning else ()
 
 
 def check_formulation(formulation: str | dict) -> None:

@@ -13,15 +13,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from formulations.subject.contradiction import labeled_misfits
-from formulations.subject.geometry import ModelGeometry
-from service.capture.document import MM_PER_UNIT, CaptureDocument
-from service.capture.model_input import parse_model
+from service.capture.document import CaptureDocument
 from service.io.recording import LabeledTrajectories
 from service.labeling.stats import DOUBTFUL_BELOW, WindowStats, certificate_figures, doubtful_labels
-from service.labeling.take_warnings import model_misfit_warning
 from service.server.results import stored_windows_trajectories, trajectories_from_bytes
 from service.server.store import Job, JobStore, StoredWindow, store_for
+from service.server.submission import labeling_warnings
 
 CACHED_JOBS = 256
 
@@ -69,14 +66,11 @@ def options_of(document: bytes) -> JobOptions:
 
 
 def _model_warnings(fields: dict) -> tuple[str, ...]:
-    """The model-misfit warning ``POST /v1/jobs`` answered, for a document with a model and labels."""
+    """The warnings ``POST /v1/jobs`` answered, for a document with a model and labels (checked
+    again on its first two frames, as the submission was)."""
     if fields.get("model") is None or not fields.get("markers"):
         return ()
-    geometry = ModelGeometry.of(parse_model(json.dumps(fields["model"]), "model"))
-    labeled = np.asarray(fields["first_frame"], dtype=float) * MM_PER_UNIT[fields.get("units", "mm")]
-    positions = geometry.in_model_order(fields["markers"], labeled[None])[0]
-    warning = model_misfit_warning(labeled_misfits(geometry, positions), 0)
-    return (warning,) if warning else ()
+    return labeling_warnings(CaptureDocument.model_validate({**fields, "points": fields["points"][:2]}))
 
 
 @lru_cache(maxsize=CACHED_JOBS)
