@@ -88,8 +88,9 @@ class CaptureLabeling:
         model = capture.model
         if model is not None and capture.points is not None:
             # Identified, nothing labeled: the take may correct the model. Labels already place
-            # their segments, and relearning beside them cost 03_rolling's second half (labels of
-            # frame 1152 kept, model of 0-1151) 10 points: 69.45 % without, 59.48 % with.
+            # their segments; relearning beside them cost 03_rolling's second half (labels of
+            # frame 1152 kept, model of 0-1151) 10 points (69.45 % without, 59.48 % with) and
+            # changed no label of the basket sprint, racing, BTS or the OpenSim walks (README).
             if not np.isfinite(capture.first_frame).any():
                 model = learn_from_take(model, capture.points[: options.window])
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
