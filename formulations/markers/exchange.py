@@ -45,6 +45,10 @@ swaps 1,645 -> 1,584; seeds 1-2 (170 rows) 97.119 -> 97.211 %; ``unnamed-3`` see
 96.214 -> 96.130 %. Barring unseen markers from free points outright, or allowing only
 points inside their gate, was tried and lost more than it gained (README, Recovery).
 
+Nor does an unseen marker take a free point whose track was seen beside it
+(``coexistence``): a track followed back to the frame the marker was last seen in, and
+somewhere else then, is another object, however well it fits the marker's distances.
+
 Each marker is judged above against its neighbours where they are now, the partner left
 out; a change that also moves the partner can break their own distance, which that test
 never sees. So each change that passes is judged again as a whole: with every marker where
@@ -75,7 +79,7 @@ EXCHANGE_RATIO = 0.5  # ... and halve the deviation of the markers it moves
 NONE_MM = 40.0  # holding no track: worse than any fitting track, better than a wrong one
 _TRACK_FIELDS = (
     "position", "velocity", "velocity_known", "unseen", "streak", "anchor", "anchor_neighbours", "anchor_valid",
-    "anchor_carried",
+    "anchor_carried", "seen_at",
 )
 
 
@@ -94,7 +98,7 @@ def shape_deviations(state: MarkerState, positions: np.ndarray) -> np.ndarray:
 
 def repair_exchanges(
     state: MarkerState, unclaimed: np.ndarray, confidence: np.ndarray | None = None,
-    continued: np.ndarray | None = None,
+    continued: np.ndarray | None = None, coexisting: np.ndarray | None = None,
 ) -> tuple[MarkerState, int]:
     """The state with exchanged tracks given back (module doc), and how many markers moved.
 
@@ -104,6 +108,8 @@ def repair_exchanges(
         confidence: ``(N,)`` probability that each marker's label is right; None: all sure.
         continued: ``(U,)`` the unclaimed points a point of the next frame continues
             (``continued_points``); an unseen marker takes no other (module doc). None: any.
+        coexisting: ``(N, U)`` True where an unclaimed point's track was seen beside the
+            marker (``coexistence.coexisted``): that marker does not take it. None: none was.
     """
     n, visible = len(state.position), np.flatnonzero(state.visible)
     tracks = np.concatenate([state.position[visible], unclaimed.reshape(-1, 3)])
@@ -113,6 +119,8 @@ def repair_exchanges(
     cost = np.hstack([np.where(np.isfinite(shape), shape, 1e6), np.full((n, n), 1e6)])
     if continued is not None:  # an unseen marker is re-acquired on a track, not on a flash
         cost[np.ix_(~state.visible, len(visible) + np.flatnonzero(~continued))] = 1e6
+    if coexisting is not None:
+        cost[:, len(visible):len(tracks)][coexisting] = 1e6
     np.fill_diagonal(cost[:, len(tracks):], NONE_MM)
     rows, cols = linear_sum_assignment(cost)
     before = np.full(n, -1)
@@ -195,12 +203,12 @@ def reassigned(state: MarkerState, visible: np.ndarray, tracks: np.ndarray, trac
             for name in _TRACK_FIELDS:
                 fields[name][m] = getattr(state, name)[visible[t]]
         else:  # a point nobody took: seen now, its motion unknown
-            fields["position"][m] = fields["anchor"][m] = tracks[t]
+            fields["position"][m] = fields["anchor"][m] = fields["seen_at"][m] = tracks[t]
             fields["velocity"][m], fields["velocity_known"][m] = 0.0, False
             fields["unseen"][m], fields["streak"][m] = 0, 1
             fields["anchor_neighbours"][m] = state.position[state.neighbours[m]]
             fields["anchor_valid"][m] = state.visible[state.neighbours[m]]
             fields["anchor_carried"][m] = False
     dropped = np.flatnonzero((track < 0) & state.visible)
-    fields["unseen"][dropped], fields["streak"][dropped] = 1, 0
+    fields["unseen"][dropped], fields["streak"][dropped], fields["seen_at"][dropped] = 1, 0, np.nan
     return replace(state, **fields)

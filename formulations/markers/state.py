@@ -14,6 +14,7 @@ from formulations.markers.rigid import follow_neighbours
 # A displacement further than this many sds of a marker's motion residual (3D) from its
 # neighbours' is a jump of its prediction, not a velocity: the guide's gates are 5 sds wide.
 JUMP_SIGMAS = 5.0
+SURE_STREAK = 3  # frames in a row a marker's point must have been its own to vouch for where it was
 RIGID_SD_MM = 10.0  # as ShapeReacquisition.max_sd_mm: one segment's skin markers keep their distances
 
 
@@ -36,6 +37,8 @@ class MarkerState:
             anchor position is a sure prediction).
             While a marker is occluded, the rigid motion of its neighbours since that frame
             carries it along.
+        seen_at: ``(N, 3)`` the point each marker last took (never carried); NaN where unknown
+            (placed by a model, dropped by a repair) or held under ``SURE_STREAK`` frames in a row.
         distance_mean, distance_var: ``(N, K)`` running mean and variance of each
             marker-neighbour distance (mm, mm^2). Neighbours on the same rigid segment keep
             their distance and are trusted most: Ringer & Lasenby's (2004) grouping by the
@@ -70,6 +73,7 @@ class MarkerState:
     anchor_neighbours: np.ndarray
     anchor_valid: np.ndarray
     anchor_carried: np.ndarray
+    seen_at: np.ndarray
     distance_mean: np.ndarray
     distance_var: np.ndarray
     motion_var: np.ndarray
@@ -94,7 +98,7 @@ class MarkerState:
             position=position, velocity=np.zeros_like(position), velocity_known=np.zeros(n, bool),
             unseen=np.zeros(n, int), streak=np.ones(n, int), neighbours=neighbours, anchor=position.copy(),
             anchor_neighbours=position[neighbours], anchor_valid=np.ones(neighbours.shape, bool),
-            anchor_carried=np.zeros(neighbours.shape, bool),
+            anchor_carried=np.zeros(neighbours.shape, bool), seen_at=position.copy(),
             distance_mean=np.linalg.norm(position[:, None] - position[neighbours], axis=2),
             distance_var=np.full(neighbours.shape, 100.0),
             motion_var=np.full(n, MOTION_VAR_PRIOR_MM2), motion_samples=np.zeros(n, int),
@@ -106,8 +110,7 @@ class MarkerState:
     @property
     def visible(self) -> np.ndarray:
         """``(N,)`` seen at the template frame."""
-        visible: np.ndarray = self.unseen == 0
-        return visible
+        return np.asarray(self.unseen == 0)
 
     def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
         """The state one frame later.
@@ -151,17 +154,14 @@ class MarkerState:
         drift_var, drift_samples = learn_drift(
             self.drift_var, self.drift_samples, residual, seen & ~self.visible, self.unseen, self.motion_var,
         )
-        # A marker carried by a firm rigid fit re-anchors at its prediction when a neighbour
-        # it followed is lost: the rest carry it on from where it is now, not from where it
-        # was lost (the lost neighbour may have been the only one on its segment). A loose
-        # fit is not locked in: its error would compound.
+        # A marker carried by a firm rigid fit re-anchors at its prediction when a neighbour it
+        # followed is lost (it may have been the only one on its segment): the rest carry it on
+        # from there. A loose fit is not locked in: its error would compound.
         anchored = seen | (carried & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
-        # Distances learn from seen pairs, and from a seen marker and one a firm rigid fit
-        # carries (it moves with its neighbours, so what it learns to be rigid with stays
-        # rigid with them when they too are lost). Not from a marker only loosely followed:
-        # when the neighbours it followed were the wrong ones (its rigid ones lost with it),
-        # its position drifts, and learning from it taught the shape the drift, so the shape
-        # could no longer find the marker (``shape_reacquire``).
+        # Distances learn from seen pairs and from a seen marker and one a firm rigid fit
+        # carries (it moves with its neighbours), not from one only loosely followed: its
+        # neighbours may be the wrong ones (its rigid ones lost with it), and the shape would
+        # learn its drift and no longer find it (``shape_reacquire``).
         known = seen | carried
         # A carried position counts as an anchor only while its own prediction is sure to
         # within what a rigid pair's distance varies by: not in fast motion.
@@ -175,6 +175,8 @@ class MarkerState:
             anchor_neighbours=np.where(anchored[:, None, None], position[self.neighbours], self.anchor_neighbours),
             anchor_valid=np.where(anchored[:, None], seen[self.neighbours], self.anchor_valid),
             anchor_carried=np.where(anchored[:, None], sure_carry[self.neighbours], self.anchor_carried),
+            seen_at=np.where(seen[:, None], np.where((self.streak >= SURE_STREAK - 1)[:, None], observed, np.nan),
+                             self.seen_at),
             distance_mean=np.where(both, self.distance_mean + rate * deviation, self.distance_mean),
             distance_var=np.where(both, (1 - rate) * (self.distance_var + rate * deviation**2), self.distance_var),
             motion_var=motion_var, motion_samples=motion_samples,

@@ -75,7 +75,7 @@ def recover(
     lost[np.array(drop, dtype=np.int64)] = True
     lost[chosen] = False
     return replace(state, unseen=np.where(lost, np.maximum(state.unseen, 1), state.unseen),
-                   streak=np.where(lost, 0, state.streak)), repaired
+                   streak=np.where(lost, 0, state.streak), seen_at=np.where(lost[:, None], np.nan, state.seen_at)), repaired
 
 
 def _reorder(geometry: ModelGeometry, segment: int, labels: Array, take: list[int], at: list[Array], drop: list[int]) -> bool:

@@ -42,6 +42,7 @@ def model_start_state(
     return replace(
         state, neighbours=neighbours, unseen=unseen, streak=named.astype(int),
         anchor_neighbours=position[neighbours], anchor_valid=named[neighbours], distance_mean=mean, distance_var=var,
+        seen_at=np.where(named[:, None], position, np.nan),
     )
 
 
@@ -58,6 +59,7 @@ def acquire(state: MarkerState, markers: NDArray[np.int64], positions: Array) ->
         streak=np.where(seen, 1, state.streak), anchor=np.where(seen[:, None], position, state.anchor),
         anchor_neighbours=np.where(seen[:, None, None], position[state.neighbours], state.anchor_neighbours),
         anchor_valid=np.where(seen[:, None], visible[state.neighbours], state.anchor_valid),
+        seen_at=np.where(seen[:, None], position, state.seen_at),
     )
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
+from formulations.markers.coexistence import back_tracks, coexisted
 from formulations.markers.exchange import continued_points, repair_exchanges
 from formulations.markers.guide import assign_nearest
 from formulations.markers.mirror import repair_mirrors
@@ -107,11 +108,16 @@ class CloudChain:
         """``repair_exchanges`` at the template, an unseen marker taking only free points the
         next frame continues within the unnamed tracks' one-frame reach (``chain_radii``)."""
         unclaimed = _unclaimed(self.cloud.points[template], state)
+        reach, link_radius = chain_radii(state, self.gating.gate)
         continued = None
         if template + 1 < self.cloud.n_frames:
-            reach, _ = chain_radii(state, self.gating.gate)
             continued = continued_points(unclaimed, self.cloud.points[template + 1], reach)
-        repaired, _ = repair_exchanges(state, unclaimed, confidence, continued)
+        lost_for = int(state.unseen[~state.visible].max(initial=0))
+        earlier = [self.cloud.points[f] for f in range(template - 1, max(template - 1 - lost_for, -1), -1)]
+        coexisting = coexisted(state.unseen, state.seen_at, back_tracks(unclaimed, earlier, reach, link_radius))
+        if confidence is not None:  # a doubtful marker's last point may not have been its own
+            coexisting &= (confidence >= DOUBTFUL_BELOW)[:, None]
+        repaired, _ = repair_exchanges(state, unclaimed, confidence, continued, coexisting)
         return repaired
 
     def _around(self, template: int, last: int) -> WindowSurround:

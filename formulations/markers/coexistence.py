@@ -1,0 +1,72 @@
+"""Coexistence: a point track seen beside a marker is not that marker.
+
+A marker unseen for u frames was last seen at frame t - u, at its anchor a. A point of the
+template frame t that no marker holds is followed back frame by frame (``back_tracks``:
+constant velocity, as the unnamed tracks are followed forward, ``markers.unnamed``). If
+its track reaches frame t - u at a point other than a, that track and the marker were two
+objects at once: whatever the point is (a marker the labeled frame does not name, another
+lost marker, a steady reflection), it is not the marker's.
+
+Shape alone cannot tell it: on real 03_rolling (from frame 562) LR_TAM, hidden at 892, was
+handed at template 904 the point of LR_FAL, a marker absent from the labeled frame whose
+point had been followed unlabeled since frame 615 beside LR_TAM's own, 108 mm away; both
+sit on the shank, so LR_FAL's point fits LR_TAM's neighbour distances, and LR_TAM kept it
+to the end of the take.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+SAME_POINT_MM = 1e-3  # the track passes through the marker's own point there
+
+
+def back_tracks(points: np.ndarray, earlier: list[np.ndarray], reach: float, link_radius: float) -> np.ndarray:
+    """``(P, L, 3)``: the track of each of ``points`` (``(P, 3)``, template frame) in each of
+    the ``L`` frames ``earlier`` (``earlier[0]`` the frame before the template, going back),
+    NaN from where it breaks.
+
+    The first step back links to the nearest point within ``reach`` (no velocity yet); each
+    later one to the nearest within ``link_radius`` of where the track's last step puts it;
+    either only where no other point is within ``link_radius`` more (``_unambiguous``).
+    """
+    track = np.full((len(points), len(earlier), 3), np.nan)
+    last, step = np.array(points, float).reshape(-1, 3), np.full((len(points), 3), np.nan)  # a copy: it moves
+    alive = np.ones(len(points), bool)
+    for k, frame in enumerate(earlier):
+        if not alive.any() or not len(frame):
+            break
+        stepped = np.isfinite(step).all(axis=1)
+        predicted = np.where(stepped[:, None], last + np.nan_to_num(step), last)
+        rows = np.flatnonzero(alive)
+        nearest, found = _unambiguous(cdist(predicted[rows], frame), np.where(stepped[rows], link_radius, reach), link_radius)
+        alive[rows[~found]] = False
+        rows, point = rows[found], frame[nearest[found]]
+        step[rows], last[rows] = point - last[rows], point
+        track[rows, k] = point
+    return track
+
+
+def _unambiguous(distance: np.ndarray, radius: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of ``distance`` (tracks x points), the nearest point, and whether it links: within
+    the row's ``radius``, and no other point within ``margin`` more. Where two points could
+    continue a track, following either may jump to another marker's track (fast gloves 30 mm
+    apart), and the test would then bar a marker from its own point."""
+    if distance.shape[1] == 0:
+        return np.zeros(len(distance), int), np.zeros(len(distance), bool)
+    order = np.argsort(distance, axis=1)[:, :2]
+    first = distance[np.arange(len(distance)), order[:, 0]]
+    second = distance[np.arange(len(distance)), order[:, 1]] if distance.shape[1] > 1 else np.full(len(distance), np.inf)
+    return order[:, 0], (first <= radius) & (second > first + margin)
+
+
+def coexisted(unseen: np.ndarray, anchor: np.ndarray, tracks: np.ndarray) -> np.ndarray:
+    """``(N, P)`` True where the track of point p (``back_tracks``) was somewhere other than
+    marker n's ``anchor`` in the frame it was last seen, ``unseen[n]`` frames back."""
+    back = np.asarray(unseen, int) - 1  # index into ``tracks``' frames: 0 is one frame back
+    reached = (back >= 0) & (back < tracks.shape[1])
+    there = tracks[:, np.clip(back, 0, max(tracks.shape[1] - 1, 0))].transpose(1, 0, 2) if tracks.shape[1] else (
+        np.full((len(unseen), len(tracks), 3), np.nan))
+    off = np.linalg.norm(there - anchor[:, None], axis=2)
+    return np.asarray(reached[:, None] & np.isfinite(off) & (off > SAME_POINT_MM))
