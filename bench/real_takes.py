@@ -4,7 +4,10 @@ Each take is relabeled from its own labels at S, the first frame with the most m
 labeled (0 when frame 0 has them all), as a user would:
 `markerflow track TAKE --out OUT.c3d --json --start S --end E` (markers absent at S stay
 unlabeled and count as missing). `--half` starts a take lacking a marker in frame 0 at its
-middle frame H instead. With `--model`, such a take is labeled with a subject model fitted
+middle frame H instead; `--starts K` at K frames spread evenly over it (at 1/(K+1) .. K/(K+1)
+of its length, `--cap` frames from each, 600 unless given): one take's labels are a chain in
+which one early decision, right or wrong, decides what is lost later, so a rule is judged on
+many starts, not on one run. With `--model`, such a take is labeled with a subject model fitted
 on the frames before its start (``fit_subject``, what `markerflow model` runs; its first half
 with `--half`): `markerflow track TAKE --model M.json --start S [--end E]` identifies the
 start frame from the model; with `--keep-labels` too, the file's labels there are kept and
@@ -26,7 +29,7 @@ Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); th
 Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
 ``seconds`` of `--json`.
 
-    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--half] [--model [--keep-labels]]
+    .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--half | --starts K] [--model [--keep-labels]]
 """
 
 from __future__ import annotations
@@ -127,12 +130,13 @@ class Route:
     """How a take lacking a marker in frame 0 is labeled (a take with every marker in frame 0
     is relabeled from frame 0 by every route).
 
-    at_half: start at the middle frame H instead of S, the frame with the most markers labeled.
+    at: start at this fraction of the take's length instead of S, the frame with the most
+        markers labeled (``--half``: 0.5).
     model: fit a subject model on the frames before the start (``track --model``), identify the
         start frame from it unless ``keep_labels`` (``track --keep-labels``).
     """
 
-    at_half: bool = False
+    at: float | None = None
     model: bool = False
     keep_labels: bool = False
 
@@ -148,8 +152,8 @@ def relabel(name: str, path: Path, cap: int, folder: Path, route: Route) -> Row:
     out = folder / f"{name}.c3d"
     partial = bool(missing[0].any())
     start = int(np.argmax((~missing).sum(axis=1)))  # 0 when frame 0 has every marker
-    if partial and route.at_half:
-        start = truth.n_frames // 2
+    if partial and route.at is not None:
+        start = int(truth.n_frames * route.at)
     end = min(truth.n_frames, start + cap) if cap else truth.n_frames
     command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end)]
     if not (partial and route.model and start > 0):  # no frame before the start: nothing to fit a model on
@@ -182,15 +186,25 @@ def main() -> None:
                         "frames before its start (its first half with --half)")
     parser.add_argument("--keep-labels", action="store_true", help="with --model: keep the file's labels at the start frame")
     parser.add_argument("--half", action="store_true", help="start a take lacking a marker in frame 0 at its middle frame")
+    parser.add_argument("--starts", type=int, default=0, help="start a take lacking a marker in frame 0 at this many "
+                        "frames spread over it (--cap frames from each, 600 unless given)")
     args = parser.parse_args()
+    fractions = [(k + 1) / (args.starts + 1) for k in range(args.starts)] if args.starts else [0.5 if args.half else None]
+    cap = args.cap or (600 if args.starts else 0)
     print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | wall s | frames/s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    means = []
     with tempfile.TemporaryDirectory() as folder:
         for recording in RECORDINGS:
             if args.only and recording.name not in args.only:
                 continue
-            route = Route(args.half, args.model, args.keep_labels)
-            print(relabel(recording.name, DATA / recording.path, args.cap, Path(folder), route).cells(), flush=True)
+            rows = [relabel(recording.name, DATA / recording.path, cap, Path(folder), Route(at, args.model, args.keep_labels))
+                    for at in (fractions if bool(read_labeled(DATA / recording.path).missing()[0].any()) else [None])]
+            print("\n".join(row.cells() for row in rows), flush=True)
+            scored = [row.correct / (row.correct + row.wrong + row.missing) for row in rows if not row.failure]
+            if len(rows) > 1 and scored:
+                means.append(f"{recording.name}: mean {100 * np.mean(scored):.2f} % over {len(scored)} starts")
+    print("\n".join(means))
 
 
 if __name__ == "__main__":
