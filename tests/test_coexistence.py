@@ -5,9 +5,11 @@ import pytest
 from rigid_scenes import SwingingSegment
 
 import service.labeling.cloud as cloud_chain
+from formulations.markers.cloud_candidates import CloudGating, cloud_candidates
 from formulations.markers.coexistence import back_tracks, coexisted
 from formulations.markers.exchange import repair_exchanges
 from formulations.markers.state import MarkerState
+from formulations.markers.unnamed import WindowSurround
 from service.io.recording import UnlabeledCloud
 
 STEP = np.array([4.0, 1.0, 0.0])
@@ -90,3 +92,27 @@ def test_a_lost_marker_is_not_handed_the_point_of_an_unnamed_marker_seen_beside_
     doubtful = np.ones(len(state.position))
     doubtful[LOST] = 0.5  # a doubtful marker's last point may not have been its own: no bar
     assert chain._exchanges_repaired(state, TEMPLATE, doubtful).visible[LOST]
+
+
+def _window_with_unnamed_track(coexisting: np.ndarray | None) -> np.ndarray:
+    """Candidates of a window of five frames: three still markers, the third unseen for a
+    frame, and a point no marker holds 20 mm from it and 10 mm from the second, there at the
+    template and after."""
+    named = np.array([[0.0, 0.0, 0.0], [20.0, 210.0, 0.0], [0.0, 200.0, 0.0]])
+    state = MarkerState.from_first_frame(named)
+    state = state.advance(named, np.ones(3, bool)).advance(named, np.array([True, True, False]))
+    track = named[2] + [20.0, 0.0, 0.0]
+    frames = [np.vstack([named, track]) for _ in range(5)]
+    around = WindowSurround(frames[0], frames[0], frames[:2], known=1, coexisting=coexisting)
+    window = cloud_candidates(state, frames, CloudGating(), None, around)
+    return window.candidates.object[window.point == 3]
+
+
+def test_a_window_offers_a_seeded_unnamed_track_to_no_marker_seen_apart_from_it():
+    takers = _window_with_unnamed_track(None)
+    assert 2 in takers  # the setup: the unseen marker may take the track
+    assert 1 not in takers  # seen at the template beside it
+    apart = np.zeros((3, 4), bool)
+    apart[2, 3] = True  # the third marker was last seen apart from the track of template point 3
+    takers = _window_with_unnamed_track(apart)
+    assert 2 not in takers

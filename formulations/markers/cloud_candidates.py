@@ -19,6 +19,12 @@ positions of the marker's neighbours j against their learned means dbar_nj, weig
 a_j = 1 / (var_nj + 1) over neighbours tracked in the previous frame (Ringer & Lasenby
 2004: markers on one segment keep their distances). It is what stops a marker from
 inheriting the track of an occluded neighbour.
+
+A track of points no marker holds that is seeded at the template (``markers.unnamed``) was
+seen beside every marker seen there, and beside an unseen marker whose last point the track
+passed elsewhere (``coexistence``): no such marker is a candidate for its points
+(``_beside_seeds``). Priced alone, a lost marker pays one dear step onto such a track and
+then saves a miss every frame, while the track's own miss is free.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
+from scipy.spatial.distance import cdist
 
 from formulations.markers.guide import Gate, GuideTrack, guide_track
 from formulations.markers.likelihood import marker_likelihood
@@ -113,6 +120,9 @@ def cloud_candidates(
         points.append(np.fromiter((p for i in inside for p in i), dtype=int, count=counts.sum()))
         frame_of.append(np.full(counts.sum(), f + 1))
     obj, frame, point = (np.concatenate(a) if a else np.zeros(0, int) for a in (objects, frame_of, points))
+    if around is not None and unnamed.seeded.any():
+        keep = ~_beside_seeds(state, unnamed, around, frames, obj, frame, point)
+        obj, frame, point = obj[keep], frame[keep], point[keep]
     named = len(obj)
     u, f_u = np.nonzero(unnamed.point >= 0)
     obj, frame, point = np.r_[obj, len(state.position) + u], np.r_[frame, f_u + 1], np.r_[point, unnamed.point[u, f_u]]
@@ -140,6 +150,23 @@ def cloud_candidates(
         likelihood=likelihood,
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)
+
+
+def _beside_seeds(state: MarkerState, unnamed: UnnamedChains, around: WindowSurround, frames: list[np.ndarray],
+                  obj: np.ndarray, frame: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """True for the named candidates on a seeded unnamed track's points whose marker was seen
+    apart from it: at the template, or where it was last seen (``around.coexisting``)."""
+    u_seeded = np.flatnonzero(unnamed.seeded)
+    apart = np.repeat(state.visible[:, None], len(u_seeded), axis=1)
+    if around.coexisting is not None and len(around.template):
+        k = cdist(unnamed.template_location[u_seeded], around.template).argmin(axis=1)
+        apart |= around.coexisting[:, k]
+    owner = np.full((len(frames), max(len(c) for c in frames) + 1), -1)
+    rows = unnamed.point[u_seeded]
+    f_s, c_s = np.nonzero(rows.T >= 0)
+    owner[f_s, rows[c_s, f_s]] = c_s
+    held = owner[frame - 1, point]
+    return np.asarray((held >= 0) & apart[obj, np.maximum(held, 0)])
 
 
 def _shape_deviation(

@@ -102,12 +102,15 @@ class WindowSurround:
         after: Points of the frames after the window, where a birth in its last frames may
             be followed to ``MIN_BIRTH_POINTS`` (its candidates stay in the window).
         known: Unnamed markers known to be in the take (left out of its labeled frame).
+        coexisting: ``(N, K)`` True where named marker n, unseen, was last seen apart from
+            the track of template point k (``coexistence``); None: not known.
     """
 
     template: np.ndarray
     before: np.ndarray
     after: list[np.ndarray]
     known: int = 0
+    coexisting: np.ndarray | None = None
 
 
 def unnamed_chains(

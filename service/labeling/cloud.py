@@ -87,7 +87,10 @@ class CloudChain:
         state, _ = repair_mirrors(state, np.asarray(self.first_frame, dtype=float))
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
-        gated = cloud_candidates(state, frames, self.gating, resources, self._around(template, last))
+        around = self._around(template, last)
+        if around.known:
+            around = replace(around, coexisting=self._coexisting(state, template, around.template, confidence))
+        gated = cloud_candidates(state, frames, self.gating, resources, around)
         problem, node_candidate = build_window(gated.candidates, self.weights)
         if self.layout_weight > 0:
             problem = _with_layout(problem, state, self.layout_neighbours, self.layout_weight)
@@ -108,17 +111,24 @@ class CloudChain:
         """``repair_exchanges`` at the template, an unseen marker taking only free points the
         next frame continues within the unnamed tracks' one-frame reach (``chain_radii``)."""
         unclaimed = _unclaimed(self.cloud.points[template], state)
-        reach, link_radius = chain_radii(state, self.gating.gate)
         continued = None
         if template + 1 < self.cloud.n_frames:
-            continued = continued_points(unclaimed, self.cloud.points[template + 1], reach)
-        lost_for = int(state.unseen[~state.visible].max(initial=0))
-        earlier = [self.cloud.points[f] for f in range(template - 1, max(template - 1 - lost_for, -1), -1)]
-        coexisting = coexisted(state.unseen, state.seen_at, back_tracks(unclaimed, earlier, reach, link_radius))
-        if confidence is not None:  # a doubtful marker's last point may not have been its own
-            coexisting &= (confidence >= DOUBTFUL_BELOW)[:, None]
+            continued = continued_points(unclaimed, self.cloud.points[template + 1], chain_radii(state, self.gating.gate)[0])
+        coexisting = self._coexisting(state, template, unclaimed, confidence)
         repaired, _ = repair_exchanges(state, unclaimed, confidence, continued, coexisting)
         return repaired
+
+    def _coexisting(self, state: MarkerState, template: int, points: np.ndarray, confidence: np.ndarray | None,
+                    ) -> np.ndarray:
+        """``(N, P)``: marker n, unseen, was last seen apart from the track of point p of the
+        template frame (``coexistence``), its label then not doubtful."""
+        reach, link_radius = chain_radii(state, self.gating.gate)
+        lost_for = int(state.unseen[~state.visible].max(initial=0))
+        earlier = [self.cloud.points[f] for f in range(template - 1, max(template - 1 - lost_for, -1), -1)]
+        coexisting = coexisted(state.unseen, state.seen_at, back_tracks(points, earlier, reach, link_radius))
+        if confidence is not None:  # a doubtful marker's last point may not have been its own
+            coexisting &= (confidence >= DOUBTFUL_BELOW)[:, None]
+        return coexisting
 
     def _around(self, template: int, last: int) -> WindowSurround:
         """The points next to the window, for its unnamed tracks (``markers.unnamed``)."""
