@@ -86,12 +86,13 @@ def test_a_lost_marker_is_not_handed_the_point_of_an_unnamed_marker_seen_beside_
     chain, state = _lost_marker_at_template()
     with monkeypatch.context() as without:  # the setup fails without the test: the shape hands it over
         without.setattr(cloud_chain, "coexisted", lambda unseen, seen_at, tracks: np.zeros((len(unseen), len(tracks)), bool))
-        handed = chain._exchanges_repaired(state, TEMPLATE, None)
+        handed, _ = chain._exchanges_repaired(state, TEMPLATE, None)
         assert handed.visible[LOST]
-    assert not chain._exchanges_repaired(state, TEMPLATE, None).visible[LOST]
+    kept, apart = chain._exchanges_repaired(state, TEMPLATE, None)
+    assert not kept.visible[LOST] and apart[LOST].sum() == 1  # UNNAMED's point, the one free point
     doubtful = np.ones(len(state.position))
     doubtful[LOST] = 0.5  # a doubtful marker's last point may not have been its own: no bar
-    assert chain._exchanges_repaired(state, TEMPLATE, doubtful).visible[LOST]
+    assert chain._exchanges_repaired(state, TEMPLATE, doubtful)[0].visible[LOST]
 
 
 def _window_with_unnamed_track(coexisting: np.ndarray | None) -> np.ndarray:

@@ -55,10 +55,9 @@ def _unambiguous(distance: np.ndarray, radius: np.ndarray, margin: float) -> tup
     apart), and the test would then bar a marker from its own point."""
     if distance.shape[1] == 0:
         return np.zeros(len(distance), int), np.zeros(len(distance), bool)
-    order = np.argsort(distance, axis=1)[:, :2]
-    first = distance[np.arange(len(distance)), order[:, 0]]
-    second = distance[np.arange(len(distance)), order[:, 1]] if distance.shape[1] > 1 else np.full(len(distance), np.inf)
-    return order[:, 0], (first <= radius) & (second > first + margin)
+    nearest = distance.argmin(axis=1)
+    two = np.partition(distance, 1, axis=1)[:, :2] if distance.shape[1] > 1 else np.c_[distance, np.full(len(distance), np.inf)]
+    return nearest, (two[:, 0] <= radius) & (two[:, 1] > two[:, 0] + margin)
 
 
 def coexisted(unseen: np.ndarray, anchor: np.ndarray, tracks: np.ndarray) -> np.ndarray:

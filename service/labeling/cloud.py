@@ -83,13 +83,13 @@ class CloudChain:
     def pose(
         self, state: MarkerState, template: int, last: int, confidence: np.ndarray | None = None,
     ) -> tuple[WindowProblem, CloudInverse]:
-        state = self._exchanges_repaired(state, template, confidence)
+        state, coexisting = self._exchanges_repaired(state, template, confidence)
         state, _ = repair_mirrors(state, np.asarray(self.first_frame, dtype=float))
         frames = self.cloud.points[template + 1 : last + 1]
         resources = self.cloud.resources[template + 1 : last + 1] if self.cloud.resources is not None else None
-        around = self._around(template, last)
-        if around.known:
-            around = replace(around, coexisting=self._coexisting(state, template, around.template, confidence))
+        # the repair's judgement of the free points serves the window's unnamed tracks: a
+        # marker it moved is seen now, and those are barred from a seeded track anyway
+        around = replace(self._around(template, last), coexisting=coexisting)
         gated = cloud_candidates(state, frames, self.gating, resources, around)
         problem, node_candidate = build_window(gated.candidates, self.weights)
         if self.layout_weight > 0:
@@ -107,28 +107,34 @@ class CloudChain:
         state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
-    def _exchanges_repaired(self, state: MarkerState, template: int, confidence: np.ndarray | None) -> MarkerState:
+    def _exchanges_repaired(self, state: MarkerState, template: int, confidence: np.ndarray | None,
+                            ) -> tuple[MarkerState, np.ndarray]:
         """``repair_exchanges`` at the template, an unseen marker taking only free points the
-        next frame continues within the unnamed tracks' one-frame reach (``chain_radii``)."""
-        unclaimed = _unclaimed(self.cloud.points[template], state)
+        next frame continues within the unnamed tracks' one-frame reach (``chain_radii``)
+        and none whose track it was seen apart from; and that ``(N, K)`` judgement over the
+        template's points (False on the points seen markers hold)."""
+        points = self.cloud.points[template]
+        free = _unclaimed(points, state)
         continued = None
         if template + 1 < self.cloud.n_frames:
-            continued = continued_points(unclaimed, self.cloud.points[template + 1], chain_radii(state, self.gating.gate)[0])
-        coexisting = self._coexisting(state, template, unclaimed, confidence)
-        repaired, _ = repair_exchanges(state, unclaimed, confidence, continued, coexisting)
-        return repaired
+            continued = continued_points(points[free], self.cloud.points[template + 1], chain_radii(state, self.gating.gate)[0])
+        coexisting = np.zeros((len(state.position), len(points)), bool)
+        coexisting[:, free] = self._coexisting(state, template, points[free], confidence)
+        repaired, _ = repair_exchanges(state, points[free], confidence, continued, coexisting[:, free])
+        return repaired, coexisting
 
     def _coexisting(self, state: MarkerState, template: int, points: np.ndarray, confidence: np.ndarray | None,
                     ) -> np.ndarray:
         """``(N, P)``: marker n, unseen, was last seen apart from the track of point p of the
         template frame (``coexistence``), its label then not doubtful."""
+        # a doubtful marker's last point may not have been its own
+        judged = np.isfinite(state.seen_at).all(axis=1) & (True if confidence is None else confidence >= DOUBTFUL_BELOW)
+        lost_for = int(state.unseen[judged].max(initial=0))
+        if lost_for == 0 or not len(points):
+            return np.zeros((len(state.position), len(points)), bool)
         reach, link_radius = chain_radii(state, self.gating.gate)
-        lost_for = int(state.unseen[~state.visible].max(initial=0))
         earlier = [self.cloud.points[f] for f in range(template - 1, max(template - 1 - lost_for, -1), -1)]
-        coexisting = coexisted(state.unseen, state.seen_at, back_tracks(points, earlier, reach, link_radius))
-        if confidence is not None:  # a doubtful marker's last point may not have been its own
-            coexisting &= (confidence >= DOUBTFUL_BELOW)[:, None]
-        return coexisting
+        return coexisted(state.unseen, state.seen_at, back_tracks(points, earlier, reach, link_radius)) & judged[:, None]
 
     def _around(self, template: int, last: int) -> WindowSurround:
         """The points next to the window, for its unnamed tracks (``markers.unnamed``)."""
@@ -158,14 +164,12 @@ class CloudChain:
 
 
 def _unclaimed(points: np.ndarray, state: MarkerState) -> np.ndarray:
-    """The template frame's points that no visible marker holds."""
-    if len(points) == 0:
-        return np.zeros((0, 3))
+    """``(K,)`` True for the template frame's points that no visible marker holds."""
     held = state.position[state.visible]
-    if len(held) == 0:
-        return np.asarray(points)
+    if len(points) == 0 or len(held) == 0:
+        return np.ones(len(points), bool)
     nearest = np.min(np.linalg.norm(points[:, None] - held[None], axis=2), axis=1)
-    return np.asarray(points)[nearest > 1e-6]
+    return np.asarray(nearest > 1e-6)
 
 
 def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> tuple[MarkerState, np.ndarray]:
