@@ -1,11 +1,14 @@
 """Coexistence: a point track seen beside a marker is not that marker.
 
-A marker unseen for u frames was last seen at frame t - u, at its anchor a. A point of the
+A marker unseen for u frames was last seen at frame t - u, on the point a it took then
+(``MarkerState.seen_at``; not its anchor, which a rigid fit carries). A point of the
 template frame t that no marker holds is followed back frame by frame (``back_tracks``:
 constant velocity, as the unnamed tracks are followed forward, ``markers.unnamed``). If
 its track reaches frame t - u at a point other than a, that track and the marker were two
 objects at once: whatever the point is (a marker the labeled frame does not name, another
-lost marker, a steady reflection), it is not the marker's.
+lost marker, a steady reflection), it is not the marker's. The test trusts the marker's
+last label, so its caller leaves out markers whose label is doubtful or whose last point
+was held for fewer than ``SURE_STREAK`` frames (``seen_at`` NaN).
 
 Shape alone cannot tell it: on real 03_rolling (from frame 562) LR_TAM, hidden at 892, was
 handed at template 904 the point of LR_FAL, a marker absent from the labeled frame whose
@@ -60,12 +63,12 @@ def _unambiguous(distance: np.ndarray, radius: np.ndarray, margin: float) -> tup
     return nearest, (two[:, 0] <= radius) & (two[:, 1] > two[:, 0] + margin)
 
 
-def coexisted(unseen: np.ndarray, anchor: np.ndarray, tracks: np.ndarray) -> np.ndarray:
+def coexisted(unseen: np.ndarray, seen_at: np.ndarray, tracks: np.ndarray) -> np.ndarray:
     """``(N, P)`` True where the track of point p (``back_tracks``) was somewhere other than
-    marker n's ``anchor`` in the frame it was last seen, ``unseen[n]`` frames back."""
+    marker n's point ``seen_at`` in the frame it was last seen, ``unseen[n]`` frames back."""
     back = np.asarray(unseen, int) - 1  # index into ``tracks``' frames: 0 is one frame back
     reached = (back >= 0) & (back < tracks.shape[1])
     there = tracks[:, np.clip(back, 0, max(tracks.shape[1] - 1, 0))].transpose(1, 0, 2) if tracks.shape[1] else (
         np.full((len(unseen), len(tracks), 3), np.nan))
-    off = np.linalg.norm(there - anchor[:, None], axis=2)
+    off = np.linalg.norm(there - seen_at[:, None], axis=2)
     return np.asarray(reached[:, None] & np.isfinite(off) & (off > SAME_POINT_MM))
