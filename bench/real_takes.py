@@ -146,8 +146,8 @@ class Route:
         return f"model of 0-{start - 1}{' + labels' if self.keep_labels else ''}"
 
 
-def relabel(name: str, path: Path, cap: int, folder: Path, route: Route) -> Row:
-    truth = read_labeled(path)
+def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, route: Route) -> Row:
+    """Relabel the take at ``path`` (read as ``truth``) by ``route`` and score it."""
     missing = truth.missing()
     out = folder / f"{name}.c3d"
     partial = bool(missing[0].any())
@@ -198,8 +198,10 @@ def main() -> None:
         for recording in RECORDINGS:
             if args.only and recording.name not in args.only:
                 continue
-            rows = [relabel(recording.name, DATA / recording.path, cap, Path(folder), Route(at, args.model, args.keep_labels))
-                    for at in (fractions if bool(read_labeled(DATA / recording.path).missing()[0].any()) else [None])]
+            path = DATA / recording.path
+            truth = read_labeled(path)  # a take with every marker in frame 0 starts there on every route
+            rows = [relabel(recording.name, path, truth, cap, Path(folder), Route(at, args.model, args.keep_labels))
+                    for at in (fractions if bool(truth.missing()[0].any()) else [None])]
             print("\n".join(row.cells() for row in rows), flush=True)
             scored = [row.correct / (row.correct + row.wrong + row.missing) for row in rows if not row.failure]
             if len(rows) > 1 and scored:
