@@ -18,7 +18,12 @@ By default a chain a lost object took after a miss is weighed as its return agai
 newcomer (``Lifecycle(returns_compete=True)``, ``formulations.boxes.returns``), for every
 formulation; ``--no-newcomer-test`` leaves it to the window's costs.
 
-    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood] [--no-newcomer-test]
+By default each object's boxes while it was held occluded between two sightings are written
+too (``BoxTracks.with_occluded``), for every formulation; ``--no-occluded`` writes only the
+boxes taken.
+
+    .venv/bin/python bench/mot_table.py [--window 5] [--formulations lp-l1,ilp,nn-hungarian] [--likelihood]
+        [--no-newcomer-test] [--no-occluded]
 """
 
 from __future__ import annotations
@@ -61,6 +66,8 @@ def main() -> None:
     parser.add_argument("--likelihood", action="store_true", help="negative log-likelihood arc costs")
     parser.add_argument("--no-newcomer-test", action="store_true",
                         help="Lifecycle(returns_compete=False): the window's costs alone decide a lost object's return")
+    parser.add_argument("--no-occluded", action="store_true",
+                        help="write only the boxes taken, not each object's boxes while held occluded")
     args = parser.parse_args()
     print("| sequence | tracker | HOTA | MOTA | IDF1 | ID sw. | frames/s |")
     print("|---|---|---|---|---|---|---|")
@@ -71,7 +78,7 @@ def main() -> None:
                 run = track_boxes(detections, formulation, window=args.window, likelihood=args.likelihood,
                                   lifecycle=Lifecycle(returns_compete=not args.no_newcomer_test))
                 result = Path(folder) / f"{name}-{formulation}.txt"
-                write_tracks(result, run.tracks)
+                write_tracks(result, run.tracks if args.no_occluded else run.tracks.with_occluded())
                 s = mot_scores(result, gt, seqinfo)
                 fps = detections.n_frames / run.seconds
                 print(f"| {name} | {formulation} | {s.hota:.3f} | {s.mota:.3f} | {s.idf1:.3f} | {s.id_switches} | {fps:.0f} |",

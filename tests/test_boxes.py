@@ -22,7 +22,8 @@ from service.errors import InputError
 def test_mot_result_round_trip(tmp_path):
     rng = np.random.default_rng(0)
     tracks = BoxTracks(frame=rng.integers(1, 20, 30), track_id=rng.integers(1, 5, 30),
-                       box=rng.uniform(1, 300, (30, 4)).round(2), confidence=np.ones(30), n_frames=20)
+                       box=rng.uniform(1, 300, (30, 4)).round(2), confidence=np.ones(30), n_frames=20,
+                       occluded=np.zeros(30, bool))
     path = tmp_path / "result.txt"
     write_tracks(path, tracks)
     rows = read_rows(path)

@@ -68,3 +68,18 @@ def test_the_newcomer_test_is_on_by_default_and_can_be_turned_off(tmp_path):
         assert summary["newcomer_test"] == (not flag)
         tracks[bool(flag)] = summary["tracks"]
     assert tracks == {False: 4, True: 3}  # A, B and the two standing; B handed to A without the test
+
+
+@pytest.mark.skipif(not DETECTIONS.exists(), reason="needs ../shared/data (TUD-Campus detections)")
+def test_occluded_boxes_are_written_unless_turned_off(tmp_path):
+    counts = {}
+    for flag in ([], ["--no-occluded"]):
+        result = tmp_path / f"r{len(flag)}.txt"
+        run = runner.invoke(app, ["boxes", str(DETECTIONS), "--out", str(result), "--json", *flag])
+        assert run.exit_code == 0, run.output
+        summary = json.loads(run.stdout)
+        rows = np.loadtxt(result, delimiter=",", ndmin=2)
+        assert len(rows) == summary["tracked_boxes"] + summary["occluded_boxes"]
+        assert (rows[:, 6] == 0).sum() == summary["occluded_boxes"]
+        counts[bool(flag)] = summary["occluded_boxes"]
+    assert counts[True] == 0 < counts[False]

@@ -153,7 +153,8 @@ def track_boxes(
         t0 += m
     tracked = np.flatnonzero(owner)
     tracks = BoxTracks(frame=frame[tracked], track_id=owner[tracked], box=detections.box[tracked],
-                       confidence=detections.confidence[tracked], n_frames=detections.n_frames)
+                       confidence=detections.confidence[tracked], n_frames=detections.n_frames,
+                       occluded=np.zeros(len(tracked), bool))
     return BoxTracking(tracks, windows, integral, time.perf_counter() - start)
 
 

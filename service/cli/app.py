@@ -179,13 +179,17 @@ def boxes(
         "--newcomer-test/--no-newcomer-test",
         help="Weigh boxes a lost object takes back against a new person (off: the window's costs alone decide).",
     )] = True,
+    occluded: Annotated[bool, typer.Option(
+        "--occluded/--no-occluded",
+        help="Also write each object's boxes while it was held occluded between two sightings (confidence 0).",
+    )] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object of the figures on stdout.")] = False,
 ) -> None:
     """Track the boxes of one camera (Jiang's window LP) and write MOTChallenge results."""
     from service.cli.boxes import run_boxes
 
     _guard(lambda: run_boxes(
-        detections, out, formulation, seqinfo, images, _window(window) or 5, as_json, newcomer_test,
+        detections, out, formulation, seqinfo, images, _window(window) or 5, as_json, newcomer_test, occluded,
     ))
 
 

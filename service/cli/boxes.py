@@ -16,9 +16,10 @@ from service.errors import InputError
 
 
 def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | None, images: Path | None,
-              window: int, as_json: bool, newcomer_test: bool = True) -> None:
+              window: int, as_json: bool, newcomer_test: bool = True, occluded: bool = True) -> None:
     """Read ``detections``, track them window by window, write ``output``, print the figures;
-    ``newcomer_test``: ``Lifecycle.returns_compete``."""
+    ``newcomer_test``: ``Lifecycle.returns_compete``; ``occluded``: also write each object's
+    boxes while it was held occluded between two sightings (``BoxTracks.with_occluded``)."""
     check_writable_folder(output.parent if str(output.parent) else Path("."))
     info = read_seqinfo(seqinfo) if seqinfo is not None else None
     boxes = read_detections(detections, info)
@@ -30,9 +31,11 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
         histograms = box_histograms(boxes, images, info.image_ext if info is not None else None)
     run = track_boxes(boxes, solver, window=window, histograms=histograms,
                       lifecycle=Lifecycle(returns_compete=newcomer_test))
-    write_tracks(output, run.tracks)
+    tracks = run.tracks.with_occluded() if occluded else run.tracks
+    write_tracks(output, tracks)
     summary = {
         "frames": boxes.n_frames, "detections": len(boxes.frame), "tracked_boxes": len(run.tracks.frame),
+        "occluded_boxes": int(tracks.occluded.sum()),
         "tracks": int(len(set(run.tracks.track_id.tolist()))), "formulation": formulation, "window": window,
         "integral_window_fraction": run.integral_windows / run.windows if run.windows else None,
         "seconds": round(run.seconds, 3), "frames_per_second": round(boxes.n_frames / max(run.seconds, 1e-9), 1),
