@@ -5,25 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from service_fixtures import document_json, generated_capture, nan_array, serving
+import test_service_api
+from service_fixtures import document_json, generated_capture, nan_array
 from test_service_api import JSON, _assert_consistent, _solve, _solved_directly
 
-from service.capture.capture import Capture, LabelingOptions
+from service.capture.capture import LabelingOptions
 from service.labeling.capture_labeling import CaptureLabeling
-from service.server.settings import Settings
 
-
-@pytest.fixture(scope="module")
-def client(tmp_path_factory):
-    db = tmp_path_factory.mktemp("solve") / "jobs.db"
-    with serving(Settings(db=f"sqlite:///{db}", max_parallel_jobs=1)) as client:
-        yield client
-
-
-@pytest.fixture(scope="module")
-def cluttered() -> Capture:
-    """One 20-frame window in heavy clutter whose LP optimum is fractional (a nonzero gap)."""
-    return generated_capture(frames=20, seed=22, noise_mm=10.0, ghosts_per_frame=100.0)
+# The same fixtures as the jobs' tests: a served app (one per module) and a fractional window.
+client = test_service_api.client
+cluttered = test_service_api.cluttered
 
 
 def test_solve_answers_one_window_with_its_certificate(client):
