@@ -66,9 +66,10 @@ def _unambiguous(distance: np.ndarray, radius: np.ndarray, margin: float) -> tup
 def coexisted(unseen: np.ndarray, seen_at: np.ndarray, tracks: np.ndarray) -> np.ndarray:
     """``(N, P)`` True where the track of point p (``back_tracks``) was somewhere other than
     marker n's point ``seen_at`` in the frame it was last seen, ``unseen[n]`` frames back."""
+    if tracks.shape[1] == 0:  # followed back no frame: nothing was seen beside anyone
+        return np.zeros((len(unseen), len(tracks)), bool)
     back = np.asarray(unseen, int) - 1  # index into ``tracks``' frames: 0 is one frame back
     reached = (back >= 0) & (back < tracks.shape[1])
-    there = tracks[:, np.clip(back, 0, max(tracks.shape[1] - 1, 0))].transpose(1, 0, 2) if tracks.shape[1] else (
-        np.full((len(unseen), len(tracks), 3), np.nan))
+    there = tracks[:, np.clip(back, 0, tracks.shape[1] - 1)].transpose(1, 0, 2)
     off = np.linalg.norm(there - seen_at[:, None], axis=2)
     return np.asarray(reached[:, None] & np.isfinite(off) & (off > SAME_POINT_MM))
