@@ -66,7 +66,8 @@ def test_output_keeps_the_inputs_numbering_unit_analogs_and_parameters(tmp_path:
     assert "is a new C3D of the labels alone" not in printed
 
     assert written["header"]["points"]["first_frame"] == FIRST
-    assert written["data"]["points"].shape == given["data"]["points"].shape
+    own = given["data"]["points"].shape[1]  # the input's points, then its samples before --start, unlabeled (*N)
+    assert written["data"]["points"][:, :own].shape == given["data"]["points"].shape
     assert list(written["parameters"]["POINT"]["UNITS"]["value"]) == ["m"]
     assert written["parameters"]["POINT"]["RATE"]["value"][0] == 100.0
     assert written["parameters"]["LAB"]["SESSION"]["value"] == ["pre-op"]
@@ -76,8 +77,8 @@ def test_output_keeps_the_inputs_numbering_unit_analogs_and_parameters(tmp_path:
     np.testing.assert_allclose(written["data"]["analogs"][:, :2], given["data"]["analogs"], atol=1e-6)
 
     point_labels = [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]]
-    assert point_labels == [*names, "EXTRA"]
-    out_points, in_points = written["data"]["points"][:3], given["data"]["points"][:3]
+    assert point_labels[:own] == [*names, "EXTRA"] and all(label.startswith("*") for label in point_labels[own:])
+    out_points, in_points = written["data"]["points"][:3, :own], given["data"]["points"][:3]
     np.testing.assert_allclose(out_points[:, -1], in_points[:, -1], atol=1e-6)  # EXTRA untouched
     residual = written["data"]["meta_points"]["residuals"][0]
     assert (residual[: len(names), :FIT] < 0).all()  # before --start: not labeled
@@ -112,12 +113,13 @@ def test_real_take_keeps_its_numbering_and_parameters(tmp_path: Path) -> None:
     given = ezc3d.c3d(str(CMU_85_02))
     written = ezc3d.c3d(str(_track(tmp_path, CMU_85_02, model.to_json(), start, end)[0]))
     assert written["header"]["points"]["first_frame"] == given["header"]["points"]["first_frame"]
-    assert written["data"]["points"].shape == given["data"]["points"].shape
+    own = given["data"]["points"].shape[1]  # then the input's samples outside the span, unlabeled (*N)
+    assert written["data"]["points"][:, :own].shape == given["data"]["points"].shape
     for group in ("TRIAL", "SUBJECTS", "EVENT_CONTEXT", "FORCE_PLATFORM"):
         assert written["parameters"][group].keys() == given["parameters"][group].keys()
     assert written["parameters"]["POINT"]["UNITS"]["value"] == given["parameters"]["POINT"]["UNITS"]["value"]
-    labeled = written["data"]["meta_points"]["residuals"][0, :, start:end] >= 0
-    points = written["data"]["points"][:3, :, start:end]
+    labeled = written["data"]["meta_points"]["residuals"][0, :own, start:end] >= 0
+    points = written["data"]["points"][:3, :own, start:end]
     same = np.linalg.norm(points - given["data"]["points"][:3, :, start:end], axis=0) < 1e-3
     assert labeled.mean() >= 0.8 and same[labeled].all()
-    assert (written["data"]["meta_points"]["residuals"][0, :, :start] < 0).all()
+    assert (written["data"]["meta_points"]["residuals"][0, :own, :start] < 0).all()

@@ -64,10 +64,14 @@ def test_start_relabels_from_the_takes_own_labels_and_keeps_the_whole_file(tmp_p
     assert f"1 markers absent at frame {START} are not labeled" in stderr and names[5] in stderr
     given = ezc3d.c3d(str(source))
     written, points, labeled = _labels(out)
+    n = len(names)  # the input's points, then its samples outside the span kept unlabeled (*N)
+    points, labeled, unlabeled = points[:, :n], labeled[:n], points[:, n:]
+    outside = np.r_[0:START, END : truth.shape[2]]
+    assert np.isfinite(unlabeled[:, :, outside]).all(axis=0).sum() == np.isfinite(truth[:, :, outside]).all(axis=0).sum()
 
     assert written["header"]["points"]["first_frame"] == FIRST
     assert points.shape == truth.shape  # every input frame, numbered as in the input
-    assert [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]] == names
+    assert [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]][:n] == names
     assert [str(label).strip() for label in written["parameters"]["ANALOG"]["LABELS"]["value"]][:2] == ["EMG1", "FZ"]
     np.testing.assert_allclose(written["data"]["analogs"][:, :2], given["data"]["analogs"], atol=1e-6)
 
@@ -137,11 +141,12 @@ def test_real_take_from_a_frame_with_absent_markers(tmp_path: Path) -> None:
     given = ezc3d.c3d(str(VICON))
     written, points, labeled = _labels(out)
     truth = given["data"]["points"][:3]
+    points, labeled = points[:, : truth.shape[1]], labeled[: truth.shape[1]]  # then the unlabeled *N
     present = np.isfinite(truth).all(axis=0) & ~(truth == 0).all(axis=0)
     absent = np.flatnonzero(~present[:, start])
     names = [str(label).strip() for label in given["parameters"]["POINT"]["LABELS"]["value"]]
     assert len(absent) == 2 and all(names[m] in stderr for m in absent)
-    assert written["data"]["points"].shape == given["data"]["points"].shape
+    assert written["data"]["points"][:, : truth.shape[1]].shape == given["data"]["points"].shape
     assert written["header"]["points"]["first_frame"] == given["header"]["points"]["first_frame"]
     np.testing.assert_array_equal(written["data"]["analogs"][:, :38], given["data"]["analogs"])
     assert not labeled[:, :start].any() and not labeled[:, end:].any() and not labeled[absent].any()

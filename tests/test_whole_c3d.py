@@ -48,7 +48,12 @@ def _assert_input_kept(source: Path, out: Path) -> tuple[ezc3d.c3d, ezc3d.c3d]:
         assert np.array_equal(before["data"]["analogs"], after["data"]["analogs"][:, :own])
     added = [str(label).strip() for label in after["parameters"]["ANALOG"]["LABELS"]["value"]][own:]
     assert all(label.endswith("_confidence") for label in added)
-    assert before["header"]["points"] == after["header"]["points"]
+    # the input points no marker took come after the input's own, as unlabeled trajectories *N
+    points_before, points_after = dict(before["header"]["points"]), dict(after["header"]["points"])
+    unlabeled = [str(label) for label in after["parameters"]["POINT"]["LABELS"]["value"]][points_before["size"]:]
+    assert all(label.startswith("*") for label in unlabeled)
+    assert points_after.pop("size") == points_before.pop("size") + len(unlabeled)
+    assert points_before == points_after
     for group in set(KEPT_GROUPS) & set(before["parameters"]):
         for name, parameter in before["parameters"][group].items():
             if name == "__METADATA__" or (group, name) == ("ANALOG", "USED"):
@@ -59,15 +64,27 @@ def _assert_input_kept(source: Path, out: Path) -> tuple[ezc3d.c3d, ezc3d.c3d]:
             if group == "ANALOG" and value.ndim == 1 and len(value) == own:  # one entry per channel
                 kept = kept[:own]
             assert np.array_equal(value, kept), (group, name)
-    for name in ("RATE", "UNITS", "LABELS", "USED", "FRAMES"):
+    for name in ("RATE", "UNITS", "FRAMES"):
         assert np.array_equal(np.asarray(before["parameters"]["POINT"][name]["value"]),
                               np.asarray(after["parameters"]["POINT"][name]["value"])), name
+    labels = [str(label) for label in after["parameters"]["POINT"]["LABELS"]["value"]]
+    assert labels[: len(labels) - len(unlabeled)] == [str(label) for label in before["parameters"]["POINT"]["LABELS"]["value"]]
+    assert int(after["parameters"]["POINT"]["USED"]["value"][0]) == len(labels)
+    assert _present_samples(after) == _present_samples(before)  # nothing the input carried is lost
     return before, after
+
+
+def _present_samples(c3d: ezc3d.c3d) -> int:
+    """Samples a C3D holds: residual not negative and not the (0, 0, 0) gap."""
+    points, residuals = c3d["data"]["points"][:3], c3d["data"]["meta_points"]["residuals"][0]
+    return int(np.sum((residuals >= 0) & np.isfinite(points).all(axis=0) & (points != 0).any(axis=0)))
 
 
 def _assert_points_where_labeled(before: ezc3d.c3d, after: ezc3d.c3d, labeled: np.ndarray, atol: float) -> None:
     """``labeled`` ``(frames, markers)``: the input's sample there, residual -1 and NaN elsewhere."""
-    points, residuals = after["data"]["points"][:3].transpose(2, 1, 0), after["data"]["meta_points"]["residuals"][0].T
+    own = before["header"]["points"]["size"]  # the unlabeled points *N come after the input's
+    points = after["data"]["points"][:3, :own].transpose(2, 1, 0)
+    residuals = after["data"]["meta_points"]["residuals"][0, :own].T
     np.testing.assert_allclose(points[labeled], before["data"]["points"][:3].transpose(2, 1, 0)[labeled], rtol=0, atol=atol)
     assert (residuals[~labeled] == -1).all() and np.isnan(points[~labeled]).all()
     assert (residuals[labeled] >= 0).all()
@@ -134,8 +151,9 @@ def test_tennis_in_metres_stays_in_metres(tmp_path: Path) -> None:
     before, after = _assert_input_kept(TENNIS, tmp_path / "x.c3d")
     assert after["parameters"]["POINT"]["UNITS"]["value"] == ["m"]
     # In metres: a mm value written unconverted would be off by a factor of 1000.
-    points = after["data"]["points"][:3].transpose(2, 1, 0)
-    _assert_input_samples(points, before["data"]["points"][:3].transpose(2, 1, 0), atol=1e-9)
+    points = after["data"]["points"][:3].transpose(2, 1, 0)  # the labeled points, then the unlabeled *N
+    _assert_input_samples(points[:, : before["header"]["points"]["size"]], before["data"]["points"][:3].transpose(2, 1, 0),
+                          atol=1e-9)
     assert (after["data"]["meta_points"]["residuals"][0].T[np.isnan(points).any(axis=2)] == -1).all()
 
 

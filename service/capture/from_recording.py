@@ -13,14 +13,15 @@ import numpy as np
 from service.capture.capture import Capture
 from service.capture.span import frame_span
 from service.errors import InputError
-from service.io.recording import Recording
+from service.io.recording import Recording, is_unlabeled
 
 
 def capture_from_recording(recording: Recording, shuffle: bool = True, seed: int = 0) -> Capture:
     """Each frame's present points without their labels; the recording's frame 0 labeled.
 
     Missing samples (NaN, or (0, 0, 0)) are dropped; the fixed seed makes the shuffle,
-    and so the labeling, a function of the file alone.
+    and so the labeling, a function of the file alone. Unlabeled trajectories (``*N``,
+    ``is_unlabeled``) are not markers: only their points are in the frames.
     """
     rng = np.random.default_rng(seed)
     present = ~recording.missing()
@@ -28,7 +29,13 @@ def capture_from_recording(recording: Recording, shuffle: bool = True, seed: int
     for f in range(recording.n_frames):
         points = recording.positions[f][present[f]]
         frames.append(points[rng.permutation(len(points))] if shuffle else points)
-    return Capture(list(recording.names), recording.positions[0], recording.rate, points=frames)
+    named = marker_columns(recording.names)
+    return Capture([recording.names[i] for i in named], recording.positions[0][named], recording.rate, points=frames)
+
+
+def marker_columns(names: list[str]) -> list[int]:
+    """The columns that name markers: all but the unlabeled trajectories ``*N``."""
+    return [i for i, name in enumerate(names) if not is_unlabeled(name)]
 
 
 def capture_from_span(
@@ -44,13 +51,17 @@ def capture_from_span(
         InputError: A span outside the take (``frame_span``), or no marker present at ``start``.
     """
     stop = frame_span(start, end, recording.n_frames)
-    present = ~recording.missing()[start]
+    named = marker_columns(recording.names)
+    if not named:
+        raise InputError(f"no marker is named: its {recording.n_markers} points are all unlabeled trajectories (*N); "
+                         "--model names them from a subject model")
+    present = ~recording.missing()[start][named]
     if not present.any():
         raise InputError(f"--start {start}: no marker is labeled in that frame{_hint(recording)}")
     span = capture_from_recording(Recording(recording.names, recording.positions[start:stop], recording.rate),
                                   shuffle, seed)
-    names = [n for n, p in zip(recording.names, present) if p]
-    absent = [n for n, p in zip(recording.names, present) if not p]
+    names = [n for n, p in zip(span.names, present) if p]
+    absent = [n for n, p in zip(span.names, present) if not p]
     return replace(span, names=names, first_frame=span.first_frame[present], unnamed_markers=len(absent)), absent
 
 
@@ -60,16 +71,18 @@ def require_complete_first_frame(recording: Recording, source: str) -> None:
     Raises:
         InputError: A marker is missing in frame 0; the line names it and the fullest frame.
     """
-    absent = np.flatnonzero(recording.missing()[0])
+    named = marker_columns(recording.names)
+    absent = [named[i] for i in np.flatnonzero(recording.missing()[0][named])]
     if len(absent):
         raise InputError(
             f"{source}: marker '{recording.names[absent[0]]}' has no position in the first frame "
-            f"({len(absent)} of {recording.n_markers} absent); --start S labels from frame S{_hint(recording)}"
+            f"({len(absent)} of {len(named)} absent); --start S labels from frame S{_hint(recording)}"
         )
 
 
 def _hint(recording: Recording) -> str:
     """Where the take's labels are fullest: the frame a user would start from."""
-    present = (~recording.missing()).sum(axis=1)
+    named = marker_columns(recording.names)
+    present = (~recording.missing()[:, named]).sum(axis=1)
     best = int(np.argmax(present))
-    return f" (frame {best} has the most markers labeled: {present[best]} of {recording.n_markers})"
+    return f" (frame {best} has the most markers labeled: {present[best]} of {len(named)})"

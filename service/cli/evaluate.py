@@ -37,7 +37,7 @@ def run_eval(
         chosen = formulation_from_spec(formulation)
     else:
         chosen = resolve_formulation(scenario.formulation_table, str(scenario_path))
-    truth = read_labeled(trajectories)
+    truth = read_labeled(trajectories).without_unlabeled()  # unlabeled trajectories *N name no marker
     result: Evaluation | CameraEvaluation
     with window_progress(f"labeling {trajectories.name}") as progress:
         if model is not None:

@@ -30,7 +30,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         check_writable_output(centres)
     if markerset is not None and centres is not None:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
-    names, positions, rate = _pool([read_labeled(path) for path in inputs])
+    names, positions, rate = _pool([read_labeled(path).without_unlabeled() for path in inputs])  # *N: no marker
     try:
         if markerset is not None:
             fit = SubjectFit(fit_template(load_template(markerset), names, positions), Grouping([], [], []), {})

@@ -24,6 +24,7 @@ from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.exchanged import exchange_summary, handover_summary
+from service.labeling.leftover_points import leftover_summary
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
@@ -137,6 +138,7 @@ def track_summary(
     (``service.labeling.coincident``).
     ``unnamed_span`` is the longest stretch where no marker is labeled though points are
     there (``service.labeling.lost_subject``: start, frames, points), or None.
+    ``unlabeled_points`` and ``unlabeled_trajectories``: what ``service.labeling.leftover_points`` kept.
     ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share, its
     rigid pairs' disagreement with the first frame, and the one kept), None when no second
     pass applied; ``exchanged_back``, the pairs whose labels the first frame's shape gave
@@ -157,6 +159,7 @@ def track_summary(
         "fast_markers": [vars(fast) for fast in fast_markers(result.names, result.positions)],
         "coincident_markers": [list(pair) for pair in coincident_pairs(result.names, result.positions)],
         "unnamed_span": _unnamed(capture, result),
+        **leftover_summary(result),
         "seconds": seconds,
         "formulation": formulation,
         "output": str(output),

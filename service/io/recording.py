@@ -2,12 +2,20 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from service.errors import InputError
+
+UNLABELED_PREFIX = "*"  # Vicon's names of unlabeled trajectories: *0, *1, ...
+
+
+def is_unlabeled(name: str) -> bool:
+    """A point named ``*N``: an unlabeled trajectory (a fragment no one named), not a marker."""
+    return re.fullmatch(r"\*\d+", name) is not None
 
 
 @dataclass(frozen=True)
@@ -62,6 +70,11 @@ class Recording:
     def n_markers(self) -> int:
         return self.positions.shape[1]
 
+    def without_unlabeled(self) -> Recording:
+        """The markers alone: the unlabeled trajectories ``*N`` (``is_unlabeled``) left out."""
+        keep = [i for i, name in enumerate(self.names) if not is_unlabeled(name)]
+        return replace(self, names=[self.names[i] for i in keep], positions=self.positions[:, keep])
+
     def missing(self) -> np.ndarray:
         """``(frames, markers)`` bool: NaN samples, or (0, 0, 0) as some exporters write gaps."""
         p = self.positions
@@ -108,6 +121,9 @@ class LabeledTrajectories:
         view_names: The cameras ``best_view`` indexes; empty without cameras.
         confidence: ``(frames, markers)`` probability that each label is right (1 in the
             given first frame, NaN where no window labeled the frame). Empty when unknown.
+        unlabeled: ``(frames, channels, 3)`` the input points no marker took, chained into
+            unlabeled trajectories (``service.labeling.leftover_points``), NaN elsewhere;
+            a C3D output writes them as points ``*N``. Empty when not gathered.
     """
 
     names: list[str]
@@ -119,6 +135,7 @@ class LabeledTrajectories:
     best_view: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=int))
     view_names: list[str] = field(default_factory=list)
     confidence: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    unlabeled: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
 
     @property
     def n_frames(self) -> int:

@@ -44,6 +44,7 @@ from service.labeling.cloud import CloudChain
 from service.labeling.exchanged import exchanged_back, handed_back
 from service.labeling.extension import extended
 from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
+from service.labeling.leftover_points import with_leftover_points
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
@@ -137,14 +138,15 @@ class CaptureLabeling:
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
         three (``rigid_fill``; with a model also ``joint_tracks`` and ``pose_fill``); in camera
         mode with each marker's best view per frame (``service.best_view.markers``); with every
-        label's confidence."""
+        label's confidence; 3D points no marker took kept as unlabeled trajectories
+        (``leftover_points``)."""
         labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)
             if isinstance(self._association, Joint3dChain):
                 labels.filled = self._association.fills_on_lone_views(labels, outcomes)
         if self._view_choice is None:
-            return labels
+            return with_leftover_points(labels, self._points)
         return self._view_choice.attach(labels, self._association.views(outcomes))
 
     def _labeled(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:

@@ -31,7 +31,7 @@ def trajectories_to_bytes(traj: LabeledTrajectories) -> bytes:
     header = json.dumps({"names": list(traj.names), "rate": float(traj.rate), "view_names": list(traj.view_names)})
     np.savez_compressed(buffer, header=np.array(header), positions=traj.positions, occluded=traj.occluded,
                         point_index=traj.point_index, filled=traj.filled, best_view=traj.best_view,
-                        confidence=traj.confidence)
+                        confidence=traj.confidence, unlabeled=traj.unlabeled)
     return buffer.getvalue()
 
 
@@ -45,6 +45,7 @@ def trajectories_from_bytes(data: bytes) -> LabeledTrajectories:
             best_view=stored["best_view"] if "best_view" in stored else np.zeros((0, 0), dtype=int),
             view_names=header.get("view_names", []),
             confidence=stored["confidence"] if "confidence" in stored else np.zeros((0, 0)),  # none stored before
+            unlabeled=stored["unlabeled"] if "unlabeled" in stored else np.zeros((0, 0, 3)),  # none stored before
         )
 
 

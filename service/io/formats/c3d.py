@@ -24,7 +24,7 @@ from service.io.formats.conventions import (
     to_millimetres,
     zero_gaps_to_nan,
 )
-from service.io.recording import LabeledTrajectories, Recording, SourceFile
+from service.io.recording import UNLABELED_PREFIX, LabeledTrajectories, Recording, SourceFile, is_unlabeled
 
 
 def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | None = None) -> Recording:
@@ -74,10 +74,15 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     if traj.n_frames == 0 or not traj.names:
         raise InputError(f"{path}: nothing to write (zero frames or zero markers)")
     source = source or SourceFile()
-    if source.c3d is None:
-        c3d = _with_labels(_new_c3d(traj, source, start), traj, source.unit, 0, path)
-    else:  # a copy: ezc3d's write extends the LABELS list it is given
-        c3d = _with_labels(copy.deepcopy(source.c3d), traj, source.unit, start, path)
+    at = 0 if source.c3d is None else start
+    # a copy: ezc3d's write extends the LABELS list it is given
+    c3d = _new_c3d(traj, source, start) if source.c3d is None else copy.deepcopy(source.c3d)
+    outside = _with_labels(c3d, traj, source.unit, at, path)
+    if source.c3d is not None and traj.unlabeled.shape[0]:  # their points were labeled, or are in the new *N
+        _clear_unlabeled(c3d, slice(at, at + traj.n_frames), path)
+    unlabeled = np.concatenate([outside, _placed(traj.unlabeled, source.unit, at, c3d["data"]["points"].shape[2])], axis=1)
+    if unlabeled.shape[1]:
+        _with_unlabeled(c3d, unlabeled, path)
     if traj.confidence.size:
         _with_confidence(c3d, traj, 0 if source.c3d is None else start)
     _check_writable(path)
@@ -97,16 +102,22 @@ def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d
     return c3d
 
 
-def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: int, path: Path) -> ezc3d.c3d:
-    """``c3d`` with the points ``traj`` names replaced (in place): the labels in frames
-    ``start ..``, missing in every other frame. Camera masks of those points are cleared:
-    the cameras that saw an input point say nothing of the label it now carries."""
+def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: int, path: Path) -> np.ndarray:
+    """Replace the points ``traj`` names (in place): the labels in frames ``start ..``, missing
+    in every other frame. Camera masks of those points are cleared: the cameras that saw an
+    input point say nothing of the label it now carries. Returns ``(3, U, frames)`` the input
+    samples of those points outside the labeled frames, one channel per point that has any
+    (NaN elsewhere): they are kept, unlabeled."""
     points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
     columns = _columns(_labels(c3d, points.shape[1], path), traj.names, path)
     frames = slice(start, start + traj.n_frames)
     if start < 0 or frames.stop > points.shape[2]:
         raise InputError(f"{path}: labels of frames {start}..{frames.stop - 1} do not fit the input's "
                          f"{points.shape[2]} frames")
+    own = points[:3, columns]
+    outside = (meta["residuals"][0, columns] >= 0) & np.isfinite(own).all(axis=0) & (own != 0).any(axis=0)
+    outside[:, frames] = False
+    kept = np.where(outside, own, np.nan)[:, outside.any(axis=1)]
     hidden = hidden_samples(traj)
     points[:3, columns], meta["residuals"][0, columns] = 0.0, -1.0
     # (0, 0, 0) under residual -1: readers that ignore residuals see the usual zero gap.
@@ -114,7 +125,43 @@ def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: in
     meta["residuals"][0, columns, frames] = np.where(hidden, -1.0, 0.0).T
     if "camera_masks" in meta and meta["camera_masks"].size:
         meta["camera_masks"][:, columns] = False
-    return c3d
+    return kept
+
+
+def _clear_unlabeled(c3d: ezc3d.c3d, frames: slice, path: Path) -> None:
+    """The input's own unlabeled trajectories (``*N``) missing in ``frames`` (in place)."""
+    points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
+    columns = [i for i, label in enumerate(_labels(c3d, points.shape[1], path)) if is_unlabeled(label)]
+    points[:3, columns, frames], meta["residuals"][0, columns, frames] = 0.0, -1.0
+
+
+def _placed(unlabeled: np.ndarray, unit: str, start: int, frames: int) -> np.ndarray:
+    """``(3, U, frames)``: the ``(F, U, 3)`` mm channels in ``unit`` from frame ``start``, NaN elsewhere."""
+    placed = np.full((3, unlabeled.shape[1], frames), np.nan)
+    placed[:, :, start : start + len(unlabeled)] = from_millimetres(unlabeled, unit).T
+    return placed
+
+
+def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
+    """Append one point per channel of ``unlabeled`` ``(3, U, frames)`` (the file's unit, NaN
+    where empty), in place, named ``*N`` from one past the highest such name the file has."""
+    points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
+    labels = _labels(c3d, points.shape[1], path)
+    first = 1 + max((int(label[1:]) for label in labels if is_unlabeled(label)), default=-1)
+    present = np.isfinite(unlabeled).all(axis=0).T  # (frames, channels)
+    added = np.ones((4, present.shape[1], points.shape[2]))
+    added[:3] = np.where(present.T, unlabeled, 0.0)
+    residual = np.where(present.T, 0.0, -1.0)[None]
+    c3d["data"]["points"] = np.concatenate([points, added], axis=1)
+    meta["residuals"] = np.concatenate([meta["residuals"], residual], axis=1)
+    if "camera_masks" in meta and meta["camera_masks"].size:
+        masks = np.zeros((meta["camera_masks"].shape[0], present.shape[1], points.shape[2]), bool)
+        meta["camera_masks"] = np.concatenate([meta["camera_masks"], masks], axis=1)
+    point = c3d["parameters"]["POINT"]
+    names = [f"{UNLABELED_PREFIX}{first + k}" for k in range(present.shape[1])]
+    last = max((k for k in point if re.fullmatch(r"LABELS\d*", k)), key=lambda k: int(k[len("LABELS"):] or 1))
+    # past 255 points the labels go on in LABELS2, LABELS3 ...: the new ones after the last
+    point[last]["value"] = list(point[last]["value"]) + names
 
 
 CONFIDENCE_SUFFIX = "_confidence"  # analog channel <marker>_confidence holds that marker's label confidence
