@@ -84,6 +84,7 @@ def test_demo_prints_scores_and_writes_c3d_and_plot(tmp_path: Path) -> None:
     labels, points = read_c3d(tmp_path / "demo_labeled.c3d")
     markers = [label for label in labels if not label.startswith("*")]  # then the ghosts, unlabeled: *0, *1, ...
     assert len(markers) == 39 and len(set(labels)) == len(labels) > 39
+    assert f"as {len(labels) - 39} unlabeled trajectories *N" in " ".join(result.stdout.split())
     assert points.shape == (3, len(labels), 150)
     assert (tmp_path / "demo_trajectories.png").read_bytes().startswith(PNG_MAGIC)
     relabeled = run_cli("track", tmp_path / "demo_capture.json", "--out", tmp_path / "relabeled.c3d", "--json")

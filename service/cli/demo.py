@@ -14,6 +14,7 @@ from service.evaluation.scenario import Scenario
 from service.evaluation.scene import generate_scene
 from service.evaluation.simulated import SimulatedCapture
 from service.io.formats import write_labeled
+from service.labeling.leftover_points import leftover_summary
 
 DEMO_SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)
 
@@ -35,7 +36,9 @@ def run_demo(folder: Path, frames: int, seed: int) -> None:
     write_labeled(c3d, result.result)
     plot_trajectories(result.result, png, truth=result.capture.truth)
     _write_capture(capture, result.capture)
-    out.print(f"Wrote {c3d}, {png} and the unlabeled input as {capture} "
+    kept = leftover_summary(result.result)
+    out.print(f"Wrote {c3d} (the points no marker took, {kept['unlabeled_points']} of them, as "
+              f"{kept['unlabeled_trajectories']} unlabeled trajectories *N), {png} and the unlabeled input as {capture} "
               f"(try: markerflow track {capture} --out {folder / 'relabeled.csv'})")
 
 
