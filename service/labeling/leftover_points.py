@@ -7,8 +7,10 @@ its labeling left over (ghosts, and markers it lost and did not re-acquire): the
 frame to frame into fragments, each point joined to the nearest leftover point of the frame
 before within ``reach`` (a gated assignment, so two fragments never share a point), and the
 fragments packed into as few channels as possible, a channel holding fragments one after
-another with at least one empty frame between them, so that no reader's gap filler joins
-two of them.
+another with at least one empty frame between them, so each fragment's ends show. (One
+channel per fragment, as Vicon writes them, would make thousands of channels of a take with
+ghosts; a gap filler run over a packed channel would join its fragments, so fill markers,
+not ``*N``.)
 """
 
 from __future__ import annotations
