@@ -24,7 +24,7 @@ from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.exchanged import exchange_summary, handover_summary
-from service.labeling.leftover_points import leftover_summary
+from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
@@ -106,7 +106,8 @@ def run_track(
             f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
             f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
-            f"{_second_pass_note(labeling.choice)}{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}",
+            f"{_second_pass_note(labeling.choice)}{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
+            f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'])}",
             highlight=False,
         )
     warn_doubtful(summary["doubtful_fraction"])

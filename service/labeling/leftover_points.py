@@ -44,6 +44,12 @@ def leftover_summary(result: LabeledTrajectories) -> dict[str, int]:
     return {"unlabeled_points": int(present.sum()), "unlabeled_trajectories": int(present.shape[1])}
 
 
+def leftover_note(points: int, trajectories: int) -> str:
+    """The summary line's mention of them, empty when there are none."""
+    plural = "trajectory" if trajectories == 1 else "trajectories"
+    return f"; {points} points no marker took kept as {trajectories} unlabeled {plural} *N" if points else ""
+
+
 def leftover_points(points: list[np.ndarray], point_index: np.ndarray) -> list[np.ndarray]:
     """Per frame, the ``(L, 3)`` points of ``points[f]`` that no marker took (``point_index[f]``, -1 none)."""
     leftover = []
