@@ -57,7 +57,7 @@ from service.capture.model_input import model_names  # noqa: E402
 from service.evaluation.label_jumps import label_jumps  # noqa: E402
 from service.evaluation.matrix import DATA, RECORDINGS  # noqa: E402
 from service.io.formats import read_labeled  # noqa: E402
-from service.io.recording import Recording, is_unlabeled  # noqa: E402
+from service.io.recording import Recording  # noqa: E402
 
 MARKERFLOW = [sys.executable, "-m", "service.cli"]  # the interpreter running this bench, as `markerflow`
 SAME_POINT_MM = 1e-3  # the output holds the input's own coordinates, through a unit round trip
@@ -102,8 +102,6 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: l
     missing_out = output.missing() if output.n_frames == truth.n_frames else np.isnan(theirs).any(axis=2)
     jumped = label_jumps(truth)[rows]
     for i, name in enumerate(truth.names):
-        if is_unlabeled(name):  # a file's unlabeled trajectory *N names no marker: its points are to label
-            continue
         if name not in output.names or (labeled is not None and name not in labeled):
             row.missing += int((~truth.missing()[rows, i]).sum())
             continue
@@ -116,11 +114,6 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: l
         row.extra += int((~own & took).sum())
         row.on_jumps += int((own & jumped[:, i]).sum())
         row.correct_on_jumps += int((own & took & same & jumped[:, i]).sum())
-
-
-def _markers(truth: Recording) -> int:
-    """The take's markers: its unlabeled trajectories ``*N`` are not."""
-    return sum(not is_unlabeled(name) for name in truth.names)
 
 
 def run(command: list[str], row: Row) -> dict | None:
@@ -168,11 +161,11 @@ def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, rou
     command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end),
                "--formulation", formulation]
     if not (partial and route.model and start > 0):  # no frame before the start: nothing to fit a model on
-        row = Row(name, Route().label(start), end - start, _markers(truth))
+        row = Row(name, Route().label(start), end - start, truth.n_markers)
         if run(command, row) is not None:
             score(truth, read_labeled(out), slice(start, end), row)
         return row
-    row = Row(name, route.label(start), end - start, _markers(truth))
+    row = Row(name, route.label(start), end - start, truth.n_markers)
     present = np.where(missing[:, :, None], np.nan, truth.positions)
     try:
         model = fit_subject(list(truth.names), present[:start]).model
@@ -211,7 +204,9 @@ def main() -> None:
             if args.only and recording.name not in args.only:
                 continue
             path = DATA / recording.path
-            truth = read_labeled(path)  # a take with every marker in frame 0 starts there on every route
+            # its markers (an unlabeled trajectory *N names none); a take with every marker in
+            # frame 0 starts there on every route
+            truth = read_labeled(path).without_unlabeled()
             rows = [relabel(recording.name, path, truth, cap, Path(folder), Route(at, args.model, args.keep_labels),
                             args.formulation)
                     for at in (fractions if bool(truth.missing()[0].any()) else [None])]

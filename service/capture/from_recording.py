@@ -13,7 +13,7 @@ import numpy as np
 from service.capture.capture import Capture
 from service.capture.span import frame_span
 from service.errors import InputError
-from service.io.recording import Recording, is_unlabeled
+from service.io.recording import Recording
 
 
 def capture_from_recording(recording: Recording, shuffle: bool = True, seed: int = 0) -> Capture:
@@ -29,13 +29,8 @@ def capture_from_recording(recording: Recording, shuffle: bool = True, seed: int
     for f in range(recording.n_frames):
         points = recording.positions[f][present[f]]
         frames.append(points[rng.permutation(len(points))] if shuffle else points)
-    named = marker_columns(recording.names)
-    return Capture([recording.names[i] for i in named], recording.positions[0][named], recording.rate, points=frames)
-
-
-def marker_columns(names: list[str]) -> list[int]:
-    """The columns that name markers: all but the unlabeled trajectories ``*N``."""
-    return [i for i, name in enumerate(names) if not is_unlabeled(name)]
+    markers = recording.without_unlabeled()
+    return Capture(list(markers.names), markers.positions[0], recording.rate, points=frames)
 
 
 def capture_from_span(
@@ -48,16 +43,17 @@ def capture_from_span(
     with no position in the labeled frame has nothing to start its track from.
 
     Raises:
-        InputError: A span outside the take (``frame_span``), or no marker present at ``start``.
+        InputError: A span outside the take (``frame_span``), no marker named (only unlabeled
+            trajectories), or no marker present at ``start``.
     """
     stop = frame_span(start, end, recording.n_frames)
-    named = marker_columns(recording.names)
-    if not named:
+    markers = recording.without_unlabeled()
+    if not markers.names:
         raise InputError(f"no marker is named: its {recording.n_markers} points are all unlabeled trajectories (*N); "
                          "--model names them from a subject model")
-    present = ~recording.missing()[start][named]
+    present = ~markers.missing()[start]
     if not present.any():
-        raise InputError(f"--start {start}: no marker is labeled in that frame{_hint(recording)}")
+        raise InputError(f"--start {start}: no marker is labeled in that frame{_hint(markers)}")
     span = capture_from_recording(Recording(recording.names, recording.positions[start:stop], recording.rate),
                                   shuffle, seed)
     names = [n for n, p in zip(span.names, present) if p]
@@ -71,18 +67,17 @@ def require_complete_first_frame(recording: Recording, source: str) -> None:
     Raises:
         InputError: A marker is missing in frame 0; the line names it and the fullest frame.
     """
-    named = marker_columns(recording.names)
-    absent = [named[i] for i in np.flatnonzero(recording.missing()[0][named])]
+    markers = recording.without_unlabeled()
+    absent = np.flatnonzero(markers.missing()[0])
     if len(absent):
         raise InputError(
-            f"{source}: marker '{recording.names[absent[0]]}' has no position in the first frame "
-            f"({len(absent)} of {len(named)} absent); --start S labels from frame S{_hint(recording)}"
+            f"{source}: marker '{markers.names[absent[0]]}' has no position in the first frame "
+            f"({len(absent)} of {markers.n_markers} absent); --start S labels from frame S{_hint(markers)}"
         )
 
 
 def _hint(recording: Recording) -> str:
     """Where the take's labels are fullest: the frame a user would start from."""
-    named = marker_columns(recording.names)
-    present = (~recording.missing()[:, named]).sum(axis=1)
+    present = (~recording.missing()).sum(axis=1)
     best = int(np.argmax(present))
-    return f" (frame {best} has the most markers labeled: {present[best]} of {len(named)})"
+    return f" (frame {best} has the most markers labeled: {present[best]} of {recording.n_markers})"

@@ -78,7 +78,9 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     # a copy: ezc3d's write extends the LABELS list it is given
     c3d = _new_c3d(traj, source, start) if source.c3d is None else copy.deepcopy(source.c3d)
     outside = _with_labels(c3d, traj, source.unit, at, path)
-    if source.c3d is not None and traj.unlabeled.shape[0]:  # their points were labeled, or are in the new *N
+    # gathered (``unlabeled`` has the frames, with or without channels): the input's own *N
+    # points were in the capture, so they were labeled or are in the new *N
+    if source.c3d is not None and traj.unlabeled.shape[0]:
         _clear_unlabeled(c3d, slice(at, at + traj.n_frames), path)
     unlabeled = np.concatenate([outside, _placed(traj.unlabeled, source.unit, at, c3d["data"]["points"].shape[2])], axis=1)
     if unlabeled.shape[1]:
