@@ -18,7 +18,7 @@ from test_subject_model import chain
 from formulations.subject.fit import fit_subject
 from service.capture.capture import LabelingOptions
 from service.io.formats import read_labeled, write_labeled
-from service.io.recording import LabeledTrajectories
+from service.io.recording import LabeledTrajectories, is_unlabeled
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.spans import window_spans
 from service.server.settings import Settings
@@ -111,8 +111,11 @@ def test_the_downloaded_c3d_is_the_librarys(done_job, capture, tmp_path):
     expected, _ = CaptureLabeling(capture, OPTIONS).label()
     write_labeled(tmp_path / "library.c3d", expected)
     served, library = read_labeled(tmp_path / "served.c3d"), read_labeled(tmp_path / "library.c3d")
-    assert served.names == library.names == expected.names
+    assert served.names == library.names
     assert np.array_equal(served.positions, library.positions, equal_nan=True)
+    # the markers, then the points no marker took as unlabeled trajectories *N
+    assert [name for name in served.names if not is_unlabeled(name)] == expected.names
+    assert len(served.names) == len(expected.names) + expected.unlabeled.shape[1]
 
 
 def test_another_token_sees_none_of_the_job(browser, base_url, done_job):
