@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from formulations.confidence.calibration import LABEL_CALIBRATION
 from service.cli.report import warn_doubtful
 from service.evaluation.doubt_scores import doubt_counts, doubt_scores
 from service.evaluation.scenario import Scenario
@@ -20,7 +21,14 @@ from service.io.formats.c3d import write_c3d
 from service.io.formats.csv import read_csv_labeled
 from service.io.recording import LabeledTrajectories, Recording, UnlabeledCloud
 from service.labeling.confidence import carried, last_labeled
-from service.labeling.stats import DOUBTFUL_BELOW, DOUBTFUL_WARNING, doubtful_fraction, doubtful_labels, reacquisitions
+from service.labeling.stats import (
+    DOUBTFUL_BELOW,
+    DOUBTFUL_WARNING,
+    doubtful_fraction,
+    doubtful_labels,
+    reacquisitions,
+    reported_doubtful,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 CMU = REPO.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
@@ -30,8 +38,11 @@ def test_doubtful_labels_are_seen_samples_below_the_threshold() -> None:
     confidence = np.array([[1.0, 0.2], [DOUBTFUL_BELOW - 1e-6, DOUBTFUL_BELOW], [0.1, 0.95]])
     occluded = np.array([[False, True], [False, False], [True, False]])
     assert doubtful_labels(confidence, occluded).tolist() == [[False, False], [True, False], [False, False]]
-    assert doubtful_fraction(confidence, occluded) == 1 / 4
-    assert doubtful_fraction(confidence, np.ones((3, 2), bool)) == 0.0
+    # a result's confidences are calibrated: its doubtful labels are those under the same map
+    reported = LABEL_CALIBRATION(confidence)
+    assert reported_doubtful(reported, occluded).tolist() == doubtful_labels(confidence, occluded).tolist()
+    assert doubtful_fraction(reported, occluded) == 1 / 4
+    assert doubtful_fraction(reported, np.ones((3, 2), bool)) == 0.0
     assert reacquisitions(["a", "b"], np.array([[True, False], [False, False], [True, False], [False, False]])) == {
         "a": [1, 3]}
 
@@ -65,7 +76,7 @@ def test_doubt_scores_count_wrong_labels_flagged_doubtful() -> None:
     # frame 0 given; frame 1: a right, b on a ghost (wrong); frame 2: a and b swapped (both wrong); frame 3: b occluded
     capture = _capture([np.array([0, 1]), np.array([1, 0, -1]), np.array([0, 1]), np.array([0])])
     taken = np.array([[0, 1], [1, 2], [1, 0], [0, -1]])
-    confidence = np.array([[1.0, 1.0], [0.99, 0.3], [0.2, 0.97], [0.5, 0.1]])
+    confidence = np.array([[1.0, 1.0], [0.995, 0.3], [0.2, 0.997], [0.5, 0.1]])  # calibrated, as a result holds
     result = LabeledTrajectories(["a", "b"], np.zeros((4, 2, 3)), taken < 0, 100.0, point_index=taken,
                                  confidence=confidence)
     scores = doubt_scores(capture, result)
@@ -80,7 +91,7 @@ def test_labels_on_jumped_marker_frames_are_left_out_of_the_doubt_counts() -> No
     capture = _capture([np.array([0, 1]), np.array([1, 0]), np.array([0, 1])])
     taken = np.array([[0, 1], [0, 1], [0, 1]])  # frame 1: both on the other's point
     result = LabeledTrajectories(["a", "b"], np.zeros((3, 2, 3)), taken < 0, 100.0, point_index=taken,
-                                 confidence=np.array([[1.0, 1.0], [0.3, 0.95], [0.99, 0.2]]))
+                                 confidence=np.array([[1.0, 1.0], [0.3, 0.995], [0.995, 0.2]]))
     assert doubt_counts(capture, result).scores() == {"doubtful_share": 2 / 4, "doubtful_recall": 1 / 2}
     unknown = np.zeros((3, 2), bool)
     unknown[1, 1] = True  # the file's b is not known to be b there

@@ -11,7 +11,7 @@ import numpy as np
 from formulations.cameras.camera import Camera
 from service.capture.capture import Capture
 from service.io.recording import LabeledTrajectories
-from service.labeling.stats import DOUBTFUL_BELOW, WindowStats
+from service.labeling.stats import REPORTED_DOUBTFUL_BELOW, WindowStats
 from service.web.job_data import Labels, labels_of
 from service.web.plots.cameras import USED_PX, best_views, cameras_svg, detections_used
 from service.web.plots.certificate import certificate_svg
@@ -98,7 +98,7 @@ def test_labels_take_doubt_from_confidence_and_name_the_best_views():
     traj = LabeledTrajectories(["a", "b", "c", "d"], positions, occluded, 100.0, confidence=confidence,
                                best_view=views, view_names=["cam1", "cam2"])
     labels = labels_of(traj)
-    assert np.array_equal(labels.doubtful, ~occluded & (np.nan_to_num(confidence, nan=1.0) < DOUBTFUL_BELOW))
+    assert np.array_equal(labels.doubtful, ~occluded & (np.nan_to_num(confidence, nan=1.0) < REPORTED_DOUBTFUL_BELOW))
     assert labels.best_view == [[{-1: None, 0: "cam1", 1: "cam2"}[int(v)] for v in row] for row in views]
     bare = labels_of(LabeledTrajectories(["a", "b", "c", "d"], positions, occluded, 100.0))
     assert not bare.doubtful.any() and bare.best_view is None and "no per-label confidence" in bare.doubt_source

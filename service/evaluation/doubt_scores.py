@@ -8,7 +8,7 @@ import numpy as np
 
 from service.evaluation.simulated import SimulatedCapture
 from service.io.recording import LabeledTrajectories
-from service.labeling.stats import doubtful_labels
+from service.labeling.stats import reported_doubtful
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,7 @@ def doubt_counts(
     capture: SimulatedCapture, result: LabeledTrajectories, unknown: np.ndarray | None = None,
 ) -> DoubtCounts:
     """Count a labeling's labels against the truth; doubtful = confidence below
-    ``DOUBTFUL_BELOW`` (``service.labeling.stats.doubtful_labels``).
+    ``REPORTED_DOUBTFUL_BELOW`` (``service.labeling.stats.reported_doubtful``).
 
     ``unknown``: ``(frames, markers)`` marker-frames whose truth is not known (a recording's
     own label jumps there, ``label_jumps``): their labels are left out of every count.
@@ -55,7 +55,7 @@ def doubt_counts(
             raise ValueError(f"frame {f}: the labeling names point {taken.max()} of {len(capture.point_marker[f])}")
         owner[f, labeled[f]] = capture.point_marker[f][taken]
     wrong = labeled & (owner != np.arange(result.point_index.shape[1]))
-    doubtful = doubtful_labels(result.confidence, ~labeled)
+    doubtful = reported_doubtful(result.confidence, ~labeled)
     return DoubtCounts(int(labeled.sum()), int(doubtful.sum()), int(wrong.sum()), int((doubtful & wrong).sum()))
 
 

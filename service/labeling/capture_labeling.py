@@ -25,6 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from formulations.cameras.rig import Rig
+from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
@@ -132,22 +133,24 @@ class CaptureLabeling:
         outcomes, self.choice = kept
         return outcomes
 
-    def result(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
+    def result(self, outcomes: list[WindowOutcome], calibrated: bool = True) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes, their tracks extended over the
         points no marker took (``extension``); each closed gap's fill tied to
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
         three (``rigid_fill``; with a model also ``joint_tracks`` and ``pose_fill``); in camera
         mode with each marker's best view per frame (``service.best_view.markers``); with every
-        label's confidence; 3D points no marker took kept as unlabeled trajectories
-        (``leftover_points``)."""
+        label's confidence, ``calibrated`` as reported (else the windows' raw ones); 3D points
+        no marker took kept as unlabeled trajectories (``leftover_points``)."""
         labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)
             if isinstance(self._association, Joint3dChain):
                 labels.filled = self._association.fills_on_lone_views(labels, outcomes)
         if self._view_choice is None:
-            return with_leftover_points(labels, self._points)
-        return self._view_choice.attach(labels, self._association.views(outcomes))
+            labels = with_leftover_points(labels, self._points)
+        else:
+            labels = self._view_choice.attach(labels, self._association.views(outcomes))
+        return _reported(labels) if calibrated else labels
 
     def _labeled(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The windows' labels with their confidence, tracks extended over free points and
@@ -202,14 +205,23 @@ def _after(progress: Progress | None, done: int) -> Progress | None:
 
 
 def _confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.ndarray:
-    """``(frames, markers)``: 1 in the given first frame, each window's confidences in its
-    new frames, NaN where no stored window says (not labeled yet, or stored without)."""
+    """``(frames, markers)``: 1 in the given first frame, each window's raw confidences in
+    its new frames, NaN where no stored window says (not labeled yet, or stored without)."""
     confidence = np.full((frames, markers), np.nan)
     confidence[0] = 1.0
     for outcome in outcomes:
         if outcome.confidence is not None:
             confidence[outcome.stats.template + 1 : outcome.stats.last + 1] = outcome.confidence
     return confidence
+
+
+def _reported(labels: LabeledTrajectories) -> LabeledTrajectories:
+    """``labels`` with their confidences calibrated (``formulations.confidence.calibration``);
+    the given first frame stays 1: the user labeled it."""
+    if labels.confidence.size:
+        labels.confidence = LABEL_CALIBRATION(labels.confidence)
+        labels.confidence[0] = 1.0
+    return labels
 
 
 def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -> Association:

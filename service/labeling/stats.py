@@ -6,7 +6,9 @@ LP): it proves no label right. Every label also carries a confidence
 (``formulations.confidence``: the margin by which the chosen reading beats the best
 reading that changes the label, read as a probability); a label is *doubtful* when its
 confidence is below ``DOUBTFUL_BELOW``, and a take's share of them is reported next to
-the certificate.
+the certificate. The windows' confidences are what labeling acts on; a result reports them
+calibrated (``formulations.confidence.calibration``), where the same labels are doubtful
+below ``REPORTED_DOUBTFUL_BELOW`` (the map is monotone).
 """
 
 from __future__ import annotations
@@ -15,9 +17,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.window.solution import WindowSolution
 
-DOUBTFUL_BELOW = 0.9  # a label whose confidence is below this is doubtful
+DOUBTFUL_BELOW = 0.9  # a label whose (window's, raw) confidence is below this is doubtful
+REPORTED_DOUBTFUL_BELOW = float(LABEL_CALIBRATION(DOUBTFUL_BELOW))  # the same labels, calibrated as reported
 DOUBTFUL_WARNING = 0.02  # warn when more than this share of a take's labels is doubtful
 REACQUIRED_LISTED = 20  # re-acquisition frames listed per marker in a summary
 
@@ -104,16 +108,22 @@ def reacquired(occluded: np.ndarray) -> np.ndarray:
     return onsets
 
 
-def doubtful_labels(confidence: np.ndarray, occluded: np.ndarray) -> np.ndarray:
-    """``(F, M)`` bool: labels (seen samples) whose confidence is below ``DOUBTFUL_BELOW``."""
-    return (np.asarray(confidence) < DOUBTFUL_BELOW) & ~np.asarray(occluded, dtype=bool)
+def doubtful_labels(confidence: np.ndarray, occluded: np.ndarray, below: float = DOUBTFUL_BELOW) -> np.ndarray:
+    """``(F, M)`` bool: labels (seen samples) whose confidence is below ``below`` (windows' raw
+    confidences: ``DOUBTFUL_BELOW``)."""
+    return (np.asarray(confidence) < below) & ~np.asarray(occluded, dtype=bool)
+
+
+def reported_doubtful(confidence: np.ndarray, occluded: np.ndarray) -> np.ndarray:
+    """``doubtful_labels`` of a result's (calibrated) confidences: below ``REPORTED_DOUBTFUL_BELOW``."""
+    return doubtful_labels(confidence, occluded, REPORTED_DOUBTFUL_BELOW)
 
 
 def doubtful_fraction(confidence: np.ndarray, occluded: np.ndarray) -> float:
-    """Doubtful labels / labels (``doubtful_labels``; 0 with no label)."""
+    """A result's doubtful labels / labels (``reported_doubtful``; 0 with no label)."""
     occluded = np.asarray(occluded, dtype=bool)
     labels = int((~occluded).sum())
-    return int(doubtful_labels(confidence, occluded).sum()) / labels if labels else 0.0
+    return int(reported_doubtful(confidence, occluded).sum()) / labels if labels else 0.0
 
 
 def reacquisitions(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:

@@ -67,7 +67,8 @@ def trajectories_json(traj: LabeledTrajectories) -> dict:
     predicted position where occluded, null elsewhere; ``best_view`` ``[frame][marker]`` the
     name of the camera that shows the marker best (camera mode), null for 3D points;
     ``confidence`` ``[frame][marker]`` the probability that the label is right
-    (``service.labeling.confidence``), null where no window said."""
+    (``service.labeling.confidence``, calibrated: ``formulations.confidence.calibration``),
+    null where no window said."""
     return {
         "markers": list(traj.names), "rate": traj.rate, "positions": nullable(traj.positions),
         "occluded": traj.occluded.tolist(), "filled": nullable(traj.filled) if traj.filled.size else None,

@@ -44,7 +44,7 @@ class WindowSummary(Certificate):
     template: int = Field(description="First frame of the window (labeled by the window before).")
     last: int
     labels: int = Field(0, description="Labels (markers holding a point) in the window's new frames.")
-    doubtful: int = Field(0, description="Of those, the ones whose confidence is below the doubtful threshold.")
+    doubtful: int = Field(0, description="Of those, the ones the result reports doubtful (confidence below its threshold).")
 
     @classmethod
     def of_stored(cls, window: StoredWindow) -> WindowSummary:
@@ -96,7 +96,8 @@ class LabeledResult(BaseModel):
         default=None, description="[frame][marker] = the camera that shows the marker best (camera mode); null for 3D points.",
     )
     confidence: list[list[float | None]] | None = Field(
-        default=None, description="[frame][marker] = probability that the label is right; null where no window said.",
+        default=None, description=("[frame][marker] = probability that the label is right (calibrated against how often "
+                                   "labels are); null where no window said."),
     )
 
 

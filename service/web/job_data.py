@@ -15,7 +15,7 @@ import numpy as np
 
 from service.capture.document import CaptureDocument
 from service.io.recording import LabeledTrajectories
-from service.labeling.stats import DOUBTFUL_BELOW, WindowStats, certificate_figures, doubtful_labels
+from service.labeling.stats import REPORTED_DOUBTFUL_BELOW, WindowStats, certificate_figures, reported_doubtful
 from service.server.results import stored_windows_trajectories, trajectories_from_bytes
 from service.server.store import Job, JobStore, StoredWindow, store_for
 from service.server.submission import labeling_warnings
@@ -83,13 +83,13 @@ def window_stats(windows: list[StoredWindow]) -> list[WindowStats]:
 
 
 def labels_of(traj: LabeledTrajectories) -> Labels:
-    """The labels of ``traj``, doubtful where their confidence is below ``DOUBTFUL_BELOW``
+    """The labels of ``traj``, doubtful where their confidence is below ``REPORTED_DOUBTFUL_BELOW``
     (none are marked when the result carries no confidence), with each marker's best view
     per frame where the result names one (camera mode)."""
     occluded = np.asarray(traj.occluded, dtype=bool)
     filled = ~np.isnan(traj.filled).any(axis=2) & occluded if traj.filled.size else np.zeros_like(occluded)
     if traj.confidence.size:
-        doubtful, source = doubtful_labels(traj.confidence, occluded), f"confidence below {DOUBTFUL_BELOW:g}"
+        doubtful, source = reported_doubtful(traj.confidence, occluded), f"confidence below {REPORTED_DOUBTFUL_BELOW:.3g}"
     else:
         doubtful, source = np.zeros_like(occluded), "this result carries no per-label confidence"
     best_view = None
