@@ -6,8 +6,10 @@ confidence (``CaptureLabeling.result(..., calibrated=False)``) is paired with wh
 point it names is the marker's own. The tuning half's pairs are fitted (``fit_calibration``); both halves are
 then scored raw and calibrated: doubtful share and recall (raw p below ``DOUBTFUL_BELOW``,
 the same labels as calibrated p below its image, and for comparison calibrated p below
-``DOUBTFUL_BELOW``), Brier score, and the expected calibration error over ten bins of p. The fitted knots are printed
-in the form of ``LABEL_CALIBRATION`` (``formulations/confidence/calibration.py``).
+``DOUBTFUL_BELOW``), Brier score, and the expected calibration error over ten bins of p; and
+so is the map in use, ``LABEL_CALIBRATION``, so that it can be checked on other seeds than it
+was fitted on (``--seeds 1 2``). The fitted knots are printed in the form of
+``LABEL_CALIBRATION`` (``formulations/confidence/calibration.py``).
 
     .venv/bin/python bench/confidence_calibration.py [--seeds 0] [--frames 600] [--jobs 2] [--conditions ...]
 """
@@ -25,11 +27,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from formulations.confidence.calibration import ConfidenceCalibration, fit_calibration  # noqa: E402
+from formulations.confidence.calibration import LABEL_CALIBRATION, ConfidenceCalibration, fit_calibration  # noqa: E402
 from service.evaluation.matrix import CONDITIONS, DATA, RECORDINGS, prepare, recording_named  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
-from service.labeling.stats import DOUBTFUL_BELOW  # noqa: E402
+from service.labeling.stats import DOUBTFUL_BELOW, REPORTED_DOUBTFUL_BELOW  # noqa: E402
 
 FIVE = ["default", "noise-2", "noise-4", "drop-30", "ghosts-10"]  # the conditions the README's matrices run
 
@@ -88,6 +90,7 @@ def main() -> None:
         print(f"{half:10s} raw        {scores(raw, right, DOUBTFUL_BELOW)}")
         print(f"{half:10s} calibrated {scores(calibration(raw), right, reported_below)}")
         print(f"{half:10s} calibrated {scores(calibration(raw), right, DOUBTFUL_BELOW)} (another threshold)")
+        print(f"{half:10s} shipped    {scores(LABEL_CALIBRATION(raw), right, REPORTED_DOUBTFUL_BELOW)} (the map in use)")
     print(knots(calibration))
 
 
