@@ -8,13 +8,16 @@ other parameter group, the frame numbering, the point rate and the length unit a
 from __future__ import annotations
 
 import copy
+import os
 import re
+import secrets
 from pathlib import Path
 
 import ezc3d
 import numpy as np
 
 from service.errors import InputError
+from service.io.formats.c3d_analog import ChannelParameters, fix_channels, with_confidence
 from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout
 from service.io.formats.conventions import (
     from_millimetres,
@@ -85,10 +88,8 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     unlabeled = np.concatenate([outside, _placed(traj.unlabeled, source.unit, at, c3d["data"]["points"].shape[2])], axis=1)
     if unlabeled.shape[1]:
         _with_unlabeled(c3d, unlabeled, path)
-    if traj.confidence.size:
-        _with_confidence(c3d, traj, 0 if source.c3d is None else start)
-    _check_writable(path)
-    c3d.write(str(path))
+    channels = with_confidence(c3d, traj, at) if traj.confidence.size else {}
+    _write(c3d, path, channels)
 
 
 def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d.c3d:
@@ -166,43 +167,6 @@ def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
     point[last]["value"] = list(point[last]["value"]) + names
 
 
-CONFIDENCE_SUFFIX = "_confidence"  # analog channel <marker>_confidence holds that marker's label confidence
-
-
-def _with_confidence(c3d: ezc3d.c3d, traj: LabeledTrajectories, start: int) -> None:
-    """Append one analog channel ``<marker>_confidence`` per labeled marker (in place).
-
-    Why analog channels: a C3D parameter holds at most 255 values per dimension and about
-    32 kB in all (ezc3d refuses to read back a MARKERFLOW:CONFIDENCE of 2 x 900 values),
-    far less than markers x frames; and the POINT residual is stored as an 8-bit multiple
-    of POINT:SCALE (0.5 reads back as 0 with the default scale) and means a reconstruction
-    error where negative marks a gap. Analog channels are C3D's place for any per-frame
-    signal: each frame's value is repeated over the analog samples of that frame (the
-    file's own analog rate, or the point rate when it had none), 0 in frames outside the
-    labels. Channels of these names already in the file (a relabeled markerflow output)
-    are replaced.
-    """
-    analog, frames = c3d["parameters"]["ANALOG"], c3d["data"]["points"].shape[2]
-    data = c3d["data"]["analogs"]
-    ratio = data.shape[2] // frames if data.size else 1
-    labels = [str(label).strip() for label in analog["LABELS"]["value"]] if data.size else []
-    names = [f"{name}{CONFIDENCE_SUFFIX}" for name in traj.names]
-    kept = [i for i, label in enumerate(labels) if label not in names]
-    values = np.zeros((len(names), frames))
-    values[:, start : start + traj.n_frames] = np.nan_to_num(traj.confidence.T, nan=0.0)
-    added = np.repeat(values, ratio, axis=1)[None]
-    c3d["data"]["analogs"] = np.concatenate([data[:, kept], added], axis=1) if data.size else added
-    for key, text in (("LABELS", names), ("DESCRIPTIONS", ["markerflow label confidence"] * len(names)),
-                      ("UNITS", ["1"] * len(names))):
-        texts = list(analog[key]["value"]) if key in analog and data.size else [""] * len(labels)
-        analog[key]["value"] = [texts[i] for i in kept] + text
-    for key, number in (("SCALE", 1.0), ("OFFSET", 0.0)):
-        numbers = np.asarray(analog[key]["value"]) if key in analog and data.size else np.zeros(len(labels))
-        analog[key]["value"] = np.concatenate([numbers[kept], np.full(len(names), number)])
-    if not data.size:
-        analog["RATE"]["value"] = np.array([float(c3d["parameters"]["POINT"]["RATE"]["value"][0])])
-
-
 def _columns(labels: list[str], names: list[str], path: Path) -> list[int]:
     """The input point of each labeled marker: the one of the same name."""
     column = {label: i for i, label in enumerate(labels)}
@@ -261,12 +225,23 @@ def _is_utf8(label: str) -> bool:
     return True
 
 
-def _check_writable(path: Path) -> None:
-    """ezc3d writes nothing, silently, to a path it cannot open; fail loudly instead."""
+def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
+    """Write to a new file beside ``path`` and rename it there: ezc3d appends ``.c3d`` to any
+    other ending (``OUT.C3D`` would be left empty and ``OUT.C3D.c3d`` written), writes nothing,
+    silently, where it cannot open the file, and a failure must not leave a half file in place
+    of one the user had."""
+    name = str(path.with_name(f".{path.stem}-{secrets.token_hex(6)}.c3d"))  # ezc3d creates it, umask applies
     try:
-        path.open("wb").close()
+        c3d.write(name)
+        fix_channels(name, channels)
+        if not os.path.isfile(name) or os.path.getsize(name) == 0:
+            raise InputError(f"{path}: cannot write there")
+        os.replace(name, path)
     except OSError as exc:
         raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
+    finally:
+        if os.path.exists(name):
+            os.remove(name)
 
 
 def _first_line(exc: Exception) -> str:
