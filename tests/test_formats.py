@@ -139,7 +139,7 @@ def test_csv_round_trip(tmp_path: Path) -> None:
     write_csv(out, traj)
     lines = out.read_text().splitlines()
     assert lines[0].startswith("frame,time,Male:LFWT_x,Male:LFWT_y,Male:LFWT_z,Male:RFWT_x")
-    assert lines[1].startswith("0,0.0,,,,")  # marker 0 occluded in frame 0
+    assert lines[1].startswith("1,0.0,,,,")  # frame 1 (counted from 1), marker 0 occluded
     back = read_csv_labeled(out)
     assert back.names == traj.names
     assert back.rate == pytest.approx(traj.rate, rel=1e-12)
@@ -271,7 +271,7 @@ def _csv_edit(dst: Path, old: str, new: str) -> Path:
 
 @pytest.mark.parametrize(
     ("old", "new"),
-    [("0,0.0,", "0,zero,"), ("\n2,", "\n2,1,"), ("\n2,0.016666666666666666,", "\n2,0.0,")],
+    [("1,0.0,", "1,zero,"), ("\n3,", "\n3,1,"), ("\n3,0.016666666666666666,", "\n3,0.0,")],
     ids=["non-numeric", "ragged", "no rate"],
 )
 def test_bad_csv_cells_raise_input_error(old: str, new: str, tmp_path: Path) -> None:
@@ -321,3 +321,14 @@ def test_c3d_of_more_than_255_markers_reads_back(tmp_path: Path) -> None:
     rec = read_c3d(out)
     assert rec.names == names
     _assert_matches(rec.positions, traj, atol=1e-3)
+
+
+def test_a_name_with_a_tab_is_refused_for_trc_and_kept_by_csv(tmp_path: Path) -> None:
+    """A tab in a name made a TRC no reader parses back ("line 4 names 5 markers")."""
+    traj = _occluded_cmu(frames=3)
+    traj.names[0] = "Male:\tLFWT"
+    with pytest.raises(InputError, match="tab or line break"):
+        write_labeled(tmp_path / "x.trc", traj)
+    assert not (tmp_path / "x.trc").exists()
+    write_labeled(tmp_path / "x.csv", traj)
+    assert read_csv_labeled(tmp_path / "x.csv").names == traj.names

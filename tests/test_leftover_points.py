@@ -91,6 +91,8 @@ def test_a_files_own_unlabeled_trajectory_is_labeled_or_kept_not_refused(tmp_pat
     assert np.allclose(kept[:, 40:90], fragment[:, 0, 40:90], atol=1e-3) and (residuals[len(labels) + 1, :40] < 0).all()
     said = run_cli("track", source, "--out", tmp_path / "again.c3d")  # the summary line says so
     assert "50 points no marker took kept as 1 unlabeled trajectory *N" in " ".join(said.stdout.split())
+    table = run_cli("track", source, "--out", tmp_path / "again.trc")  # a TRC holds labels only, and says so
+    assert "50 points no marker took are not in this table" in " ".join(table.stdout.split())
 
 
 def test_cmu_relabeled_whole_keeps_no_unlabeled_trajectory(tmp_path: Path) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import ezc3d
@@ -20,6 +21,7 @@ from service.io.recording import LabeledTrajectories, Recording, SourceFile
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 EZC3D = DATA / "c3d_ezc3d_testfiles"
+OPENSIM = DATA / "mocap_opensim"
 TENNIS = DATA / "c3d_kineticstoolkit" / "kinematics_tennis_serve.c3d"  # metres
 KEPT_GROUPS = ("ANALOG", "FORCE_PLATFORM", "EVENT", "TRIAL", "SUBJECTS", "MANUFACTURER", "SEG")
 
@@ -142,8 +144,28 @@ def test_tables_are_numbered_from_the_inputs_first_frame(tmp_path: Path) -> None
     assert rows[0].split("\t")[:2] == ["705", "0.0"] and rows[-1].split("\t")[0] == str(705 + rec.n_frames - 1)
     write_labeled(tmp_path / "x.csv", _labels(source), rec.source, start=0)
     csv_rows = (tmp_path / "x.csv").read_text().splitlines()[1:]
-    assert csv_rows[0].split(",")[:2] == ["704", "0.0"]  # CSV frames from 0, as the C3D header counts
-    assert read_labeled(tmp_path / "x.csv").rate == pytest.approx(rec.rate, rel=1e-12)
+    assert csv_rows[0].split(",")[:2] == ["705", "0.0"]  # the same numbers as the TRC's
+    back = read_labeled(tmp_path / "x.csv")
+    assert back.rate == rec.rate and back.source is not None and back.source.first_frame == 704
+    write_labeled(tmp_path / "y.trc", _labels(source), back.source)  # a CSV relabeled keeps its numbering
+    assert (tmp_path / "y.trc").read_text().splitlines()[6].split("\t")[:2] == ["705", "0.0"]
+
+
+def test_a_trc_starting_past_frame_1_keeps_its_frame_numbers_and_times(tmp_path: Path) -> None:
+    """rajagopal's run starts at Frame# 23, Time 0.23: relabeled from frame 10, its rows
+    must say 33 and 0.33, not 11 and 0.1."""
+    source = OPENSIM / "rajagopal_motion_capture_run.trc"
+    rec = read_labeled(source)
+    first = source.read_text().splitlines()[6].split("\t")[:2]
+    assert [float(cell) for cell in first] == [23, 0.23] and rec.source is not None
+    labels = _labels(source)
+    for name in ("x.trc", "x.csv"):
+        write_labeled(tmp_path / name, replace(labels, positions=labels.positions[10:], occluded=labels.occluded[10:]),
+                      rec.source, start=10)
+    row = (tmp_path / "x.trc").read_text().splitlines()[6].split("\t")
+    assert int(row[0]) == 33 and float(row[1]) == pytest.approx(0.33)
+    row = (tmp_path / "x.csv").read_text().splitlines()[1].split(",")
+    assert int(row[0]) == 33 and float(row[1]) == pytest.approx(0.33)
 
 
 def test_tennis_in_metres_stays_in_metres(tmp_path: Path) -> None:

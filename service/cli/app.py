@@ -71,8 +71,8 @@ def track(
     start: Annotated[int | None, typer.Option(
         help="First frame to label (default 0). A recording starts from its own labels there (markers absent there "
         "stay unlabeled); with --model, from the model's identification (or its labels there, --keep-labels). "
-        "A .c3d output keeps the frames outside "
-        "--start/--end, unlabeled; a .trc or .csv output holds the labeled frames only.",
+        "A .c3d output of a .c3d input keeps the frames outside "
+        "--start/--end, unlabeled; any other output holds the labeled frames only, numbered as in the input.",
     )] = None,
     end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
     second_pass: Annotated[bool | None, typer.Option(

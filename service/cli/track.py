@@ -20,6 +20,7 @@ from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, out, warn, warn_doubtful, window_progress
 from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
+from service.io.formats.trc import check_trc_names
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.coincident import coincident_pairs, coincident_warning
@@ -69,6 +70,8 @@ def run_track(
     if keep_labels and input.suffix.lower() != ".json":  # a capture JSON's labels are kept anyway
         labels_at = (start or 0, end)
     capture, options, source, absent = _read_input(input, shuffle, labels_at)
+    if output.suffix.lower() == ".trc":  # found before labeling, not after
+        check_trc_names(capture.names + absent, output)
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
     unknown: list[str] = []  # markers labeled at start that the model lacks (--keep-labels)
     if model is not None:
@@ -107,7 +110,7 @@ def run_track(
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
             f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
             f"{_second_pass_note(labeling.choice)}{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
-            f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'])}",
+            f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
     warn_doubtful(summary["doubtful_fraction"])

@@ -25,7 +25,7 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.c3d import read_c3d
-from service.io.formats.csv import read_csv_labeled
+from service.io.formats.csv import read_csv
 from service.io.formats.trc import read_trc
 from service.io.recording import Recording
 
@@ -35,11 +35,11 @@ _CONTEXT.set_forkserver_preload([__name__])
 
 def _read_csv(path: Path, max_markers: int | None = None, max_frames: int | None = None) -> Recording:
     """markerflow's own table: text parsed whole (no native code), then held to the same counts."""
-    table = read_csv_labeled(path)
+    table = read_csv(path)
     for count, what, limit in ((len(table.names), "markers", max_markers), (table.n_frames, "frames", max_frames)):
         if limit is not None and count > limit:
             raise InputError(f"{path}: {count} {what} exceeds the limit of {limit} (limits.max_{what})")
-    return Recording(table.names, table.positions, table.rate)
+    return table
 
 
 _READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": _read_csv}

@@ -24,7 +24,10 @@ class SourceFile:
 
     Attributes:
         unit: The input's length unit (mm, cm or m): the output is written in it.
-        first_frame: The input's number of its first frame (the C3D header's, from 0).
+        first_frame: The input's number of its first frame, counted from 0 (the C3D
+            header's; a TRC's or markerflow CSV's first ``Frame#`` less 1, as they count from 1).
+        first_time: The input's time of its first frame, s (a TRC's or CSV's first ``Time``;
+            0 for a C3D, which has no time column).
         c3d: A C3D input as ezc3d read it: a C3D output is this file with only its points,
             their labels and residuals replaced. None for other inputs. (``Any``: ezc3d
             ships no type information.)
@@ -33,6 +36,7 @@ class SourceFile:
     unit: str = "mm"
     first_frame: int = 0
     c3d: Any = None
+    first_time: float = 0.0
 
 
 @dataclass

@@ -44,10 +44,15 @@ def leftover_summary(result: LabeledTrajectories) -> dict[str, int]:
     return {"unlabeled_points": int(present.sum()), "unlabeled_trajectories": int(present.shape[1])}
 
 
-def leftover_note(points: int, trajectories: int) -> str:
-    """The summary line's mention of them, empty when there are none."""
+def leftover_note(points: int, trajectories: int, kept: bool = True) -> str:
+    """The summary line's mention of them, empty when there are none; ``kept`` False for an
+    output that holds labels only (TRC, CSV), which says so instead."""
+    if not points:
+        return ""
+    if not kept:
+        return f"; {points} points no marker took are not in this table (a .c3d output keeps them as *N)"
     plural = "trajectory" if trajectories == 1 else "trajectories"
-    return f"; {points} points no marker took kept as {trajectories} unlabeled {plural} *N" if points else ""
+    return f"; {points} points no marker took kept as {trajectories} unlabeled {plural} *N"
 
 
 def leftover_points(points: list[np.ndarray], point_index: np.ndarray) -> list[np.ndarray]:

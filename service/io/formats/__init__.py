@@ -8,18 +8,11 @@ from typing import Any
 
 from service.errors import InputError
 from service.io.formats.c3d import read_c3d, write_c3d
-from service.io.formats.csv import read_csv_labeled, write_csv
+from service.io.formats.csv import read_csv, write_csv
 from service.io.formats.trc import read_trc, write_trc
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
-
-def _read_csv(path: str | Path) -> Recording:
-    """A table markerflow wrote, read back as labeled trajectories (to check or relabel it)."""
-    labels = read_csv_labeled(path)
-    return Recording(labels.names, labels.positions, labels.rate)
-
-
-_READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": _read_csv}
+_READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": read_csv}
 _WRITERS = {".c3d": write_c3d, ".trc": write_trc, ".csv": write_csv}
 
 
@@ -27,7 +20,7 @@ def read_labeled(path: str | Path) -> Recording:
     """Read labeled trajectories from a .c3d, .trc or markerflow .csv file (millimetres, NaN gaps).
 
     The recording's ``source`` keeps what output written from it needs (unit, frame
-    numbering, and a C3D's other content); a .csv has none: markerflow wrote it, in mm.
+    numbering and times, and a C3D's other content); a .csv is mm, as markerflow wrote it.
 
     Raises:
         InputError: unsupported suffix, or a missing or malformed file.

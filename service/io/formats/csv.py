@@ -9,7 +9,7 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.conventions import hidden_samples, require_file, require_samples, sample_cells
-from service.io.recording import LabeledTrajectories, SourceFile
+from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _AXES = ("x", "y", "z")
 _CONFIDENCE = "_confidence"
@@ -24,15 +24,17 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     marker's label is right, in every frame (occluded ones too: that it is occluded
     there), empty where no window said.
 
-    ``frame`` numbers the input's frames as its file does (the labels of input frame
-    ``start`` are frame ``source.first_frame + start``); ``time`` is seconds since the
-    input's first frame. Always mm: the table has no unit of its own.
+    ``frame`` numbers the input's frames from 1 at its first, as a C3D's header and a
+    TRC's ``Frame#`` do (the labels of input frame ``start`` are frame
+    ``source.first_frame + start + 1``); ``time`` goes on from the input's
+    (``source.first_time``). Always mm: the table has no unit of its own.
 
     Raises:
         InputError: the path cannot be written.
     """
     path = Path(path)
-    first = (source or SourceFile()).first_frame + start
+    source = source or SourceFile()
+    first = source.first_frame + start + 1
     hidden = hidden_samples(traj)
     header = ["frame", "time"] + [f"{name}_{axis}" for name in traj.names for axis in _AXES]
     views = np.array(traj.view_names, dtype=object)[traj.best_view] if traj.view_names else None
@@ -44,13 +46,24 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
             writer = csv.writer(f)
             writer.writerow(header)
             writer.writerows(
-                [str(first + f), repr((start + f) / traj.rate)] + sample_cells(traj.positions[f], hidden[f])
+                [str(first + f), repr(source.first_time + (start + f) / traj.rate)] + sample_cells(traj.positions[f], hidden[f])
                 + (list(views[f]) if views is not None else [])
                 + (_confidence_cells(traj.confidence[f]) if confidence else [])
                 for f in range(traj.n_frames)
             )
     except OSError as exc:
         raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
+
+
+def read_csv(path: str | Path) -> Recording:
+    """A table ``write_csv`` wrote, as a recording to relabel: its frame numbers and times
+    kept (``SourceFile``), in mm.
+
+    Raises:
+        InputError: as ``read_csv_labeled``.
+    """
+    labels, source = _read_table(path)
+    return Recording(labels.names, labels.positions, labels.rate, source)
 
 
 def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
@@ -61,6 +74,11 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
             than two frames (no rate to infer), or a name twice or an infinite or absurd
             coordinate (``require_samples``).
     """
+    return _read_table(path)[0]
+
+
+def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
+    """The labels of a ``write_csv`` table, and its numbering (first frame less 1, first time)."""
     path = require_file(path)
     try:
         # utf-8-sig: spreadsheets often save with a byte-order mark.
@@ -80,14 +98,17 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
     labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))
+    first = table[0, 0]
+    source = SourceFile("mm", int(first) - 1 if first.is_integer() and first >= 1 else 0, c3d=None,
+                        first_time=float(table[0, 1]))
     if confidence is not None:
         labels.confidence = _named_confidence(confidence, names, path)
     if not with_views:
-        return labels
+        return labels, source
     view_names = list(dict.fromkeys(name for row in views for name in row))
     best_view = np.array([[view_names.index(name) for name in row] for row in views], dtype=int)
     return LabeledTrajectories(names, positions, occluded, labels.rate, best_view=best_view, view_names=view_names,
-                               confidence=labels.confidence)
+                               confidence=labels.confidence), source
 
 
 def _split_confidence(rows: list[list[str]], path: Path) -> tuple[list[list[str]], tuple[list[str], np.ndarray] | None]:
@@ -146,4 +167,4 @@ def _rate(frames: np.ndarray, times: np.ndarray, path: Path) -> float:
     rate = (frames[-1] - frames[0]) / span if span > 0 else np.nan
     if not (np.isfinite(rate) and rate > 0):
         raise InputError(f"{path}: frame and time columns give no positive frame rate")
-    return float(rate)
+    return float(f"{rate:.9g}")  # the times' rounding off: 100 Hz, not 99.99999999999999

@@ -6,6 +6,7 @@ not vetted and would rather not depend on, and the format is a plain tab-separat
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -64,7 +65,8 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
     require_samples(names, positions, path)
-    source = SourceFile(unit=header["Units"].strip().lower())
+    first_frame, first_time = _numbering(numbered[0][1])
+    source = SourceFile(header["Units"].strip().lower(), first_frame, first_time=first_time)
     return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
 
 
@@ -72,13 +74,15 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     """Write ``traj`` as a TRC table in ``source.unit`` (mm without a source); occluded cells empty.
 
     ``Frame#`` counts from 1 at the input's first frame, so the labels of input frame
-    ``start`` are numbered ``source.first_frame + start + 1``; ``Time`` is seconds since
-    the input's first frame.
+    ``start`` are numbered ``source.first_frame + start + 1``; ``Time`` goes on from the
+    input's (``source.first_time``).
 
     Raises:
-        InputError: the path cannot be written.
+        InputError: a marker name with a tab or line break (no TRC can hold it), or the path
+            cannot be written.
     """
     path = Path(path)
+    check_trc_names(traj.names, path)
     source = source or SourceFile()
     first = source.first_frame + start + 1
     names = "\t".join(f"{name}\t\t" for name in traj.names)
@@ -95,7 +99,7 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     values = from_millimetres(traj.positions, source.unit)
     hidden = hidden_samples(traj)
     rows = [
-        "\t".join([str(first + f), repr((start + f) / traj.rate)] + sample_cells(values[f], hidden[f]))
+        "\t".join([str(first + f), repr(source.first_time + (start + f) / traj.rate)] + sample_cells(values[f], hidden[f]))
         for f in range(traj.n_frames)
     ]
     try:
@@ -103,6 +107,27 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     except OSError as exc:
         raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
 
+
+
+def check_trc_names(names: list[str], path: str | Path) -> None:
+    """A TRC separates its cells by tabs and its rows by line breaks: a name holding either
+    would write a table no reader parses back.
+
+    Raises:
+        InputError: the first such name.
+    """
+    for name in names:
+        if re.search(r"[\t\r\n]", name):
+            raise InputError(f"{path}: marker name {name!r} holds a tab or line break, which a TRC cannot; "
+                             "write .c3d or .csv")
+
+
+def _numbering(line: str) -> tuple[int, float]:
+    """The first row's Frame# less 1 (TRC counts from 1; 0 when it is not a whole number
+    from 1) and its Time."""
+    cells = line.split("\t")
+    frame, time = float(cells[0]), float(cells[1])
+    return (int(frame) - 1 if frame.is_integer() and frame >= 1 else 0), time
 
 
 def _at_most(count: int, what: str, limit: int | None, name: str, path: Path) -> None:
