@@ -124,6 +124,17 @@ def assert_figures_agree(summary: dict, scenario_frames: int) -> None:
     assert summary["seconds_per_frame"] > 0.0
 
 
+def test_eval_leaves_out_a_marker_never_placed_and_says_so(tmp_path: Path) -> None:
+    """Hamner's running take names L.Bicep and never places it: eval refused the take."""
+    labels, points = cmu_points(60)
+    points[:, 5] = np.nan
+    source = write_c3d(tmp_path / "spare.c3d", labels, points)
+    result = run_cli("eval", source, "--scenario", write_scenario(tmp_path / "s.toml", 60), "--json")
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout)["markers"] == len(labels) - 1
+    assert f"no position in any frame left out: {labels[5]}" in result.stderr
+
+
 def test_eval_takes_the_formulation_option(tmp_path: Path) -> None:
     scenario = write_scenario(tmp_path / "s.toml", 40)
     result = run_cli("eval", CMU, "--scenario", scenario, "--json", "--formulation", "lp-l1-cvxpy")

@@ -99,7 +99,10 @@ def test_without_start_a_take_lacking_a_marker_in_frame_0_is_refused_with_a_hint
     names, _ = _take(source)
     code, stdout, stderr = _track(source, "--out", tmp_path / "out.c3d")
     assert code == 2 and not (tmp_path / "out.c3d").exists()
-    assert names[0] in stderr and "--start S" in stderr and len(stderr.strip().splitlines()) == 1
+    assert names[0] in stderr and "--start " in stderr and len(stderr.strip().splitlines()) == 1
+    suggested = int(stderr.split("--start ")[1].split()[0])
+    code, _, stderr = _track(source, "--start", str(suggested), "--out", tmp_path / "out.c3d")
+    assert code == 0 and "absent at frame" not in stderr  # the frame suggested has every marker
 
 
 @pytest.mark.parametrize("span", [

@@ -72,8 +72,23 @@ def require_complete_first_frame(recording: Recording, source: str) -> None:
     if len(absent):
         raise InputError(
             f"{source}: marker '{markers.names[absent[0]]}' has no position in the first frame "
-            f"({len(absent)} of {markers.n_markers} absent); --start S labels from frame S{_hint(markers)}"
+            f"({len(absent)} of {markers.n_markers} absent); {_start_hint(markers)}"
         )
+
+
+def _start_hint(recording: Recording) -> str:
+    """What ``--start`` to give: the fullest frame, or, when frame 0 is as full as any,
+    that ``--start 0`` labels from it; and a marker no frame has, if any."""
+    missing = recording.missing()
+    present = (~missing).sum(axis=1)
+    best = int(np.argmax(present))
+    if best == 0:
+        hint = (f"no frame has all {recording.n_markers}: --start 0 labels from frame 0, the absent markers "
+                "written missing")
+    else:
+        hint = f"--start {best} labels from the frame with the most ({present[best]} of {recording.n_markers})"
+    never = [name for name, gone in zip(recording.names, np.asarray(missing.all(axis=0), dtype=bool).tolist()) if gone]
+    return hint + (f"; {never[0]} has no position in any frame" if never else "")
 
 
 def _hint(recording: Recording) -> str:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from service.capture.formulation_spec import formulation_from_spec, resolve_formulation
 from service.capture.model_input import read_model
-from service.cli.report import print_summary, warn_doubtful, window_progress
+from service.cli.report import print_summary, warn, warn_doubtful, window_progress
 from service.errors import InputError
 from service.evaluation.cameras import CameraEvaluation, evaluate_cameras
 from service.evaluation.cloud import Evaluation, evaluate
@@ -37,7 +37,11 @@ def run_eval(
         chosen = formulation_from_spec(formulation)
     else:
         chosen = resolve_formulation(scenario.formulation_table, str(scenario_path))
-    truth = read_labeled(trajectories).without_unlabeled()  # unlabeled trajectories *N name no marker
+    # unlabeled trajectories *N name no marker; a marker never placed has nothing to score
+    truth, never = read_labeled(trajectories).without_unlabeled().without_never_seen()
+    if never:
+        warn(f"{len(never)} marker{'s' if len(never) > 1 else ''} with no position in any frame left out: "
+             f"{', '.join(never[:6])}{' ...' if len(never) > 6 else ''}")
     result: Evaluation | CameraEvaluation
     with window_progress(f"labeling {trajectories.name}") as progress:
         if model is not None:

@@ -79,6 +79,13 @@ class Recording:
         keep = [i for i, name in enumerate(self.names) if not is_unlabeled(name)]
         return replace(self, names=[self.names[i] for i in keep], positions=self.positions[:, keep])
 
+    def without_never_seen(self) -> tuple[Recording, list[str]]:
+        """The markers with a position in some frame, and the names of those with none
+        (a marker set's spare that was never placed: nothing to label or score)."""
+        seen = np.asarray(~self.missing().all(axis=0), dtype=bool)
+        kept = replace(self, names=[n for n, s in zip(self.names, seen.tolist()) if s], positions=self.positions[:, seen])
+        return kept, [n for n, s in zip(self.names, seen.tolist()) if not s]
+
     def missing(self) -> np.ndarray:
         """``(frames, markers)`` bool: NaN samples, or (0, 0, 0) as some exporters write gaps."""
         p = self.positions
