@@ -74,6 +74,16 @@ def test_bad_frame_numbers_are_one_line(tmp_path, frame):
     assert "\n" not in str(error.value)
 
 
+@pytest.mark.parametrize("cells", ["1e300,10,5,5,0.9", "10,10,5,nan,0.9", "10,10,5,5,inf", "10,abc,5,5,0.9"])
+def test_bad_box_cells_name_their_line(tmp_path, cells):
+    """A box at 1e300 px was taken (and overflowed the filter); nan, inf and text said no line."""
+    path = tmp_path / "det.txt"
+    path.write_text(f"1,-1,10,10,5,5,0.9\n2,-1,{cells}\n")
+    with pytest.raises(InputError, match="line 2: ") as error:
+        read_detections(path)
+    assert "\n" not in str(error.value)
+
+
 def test_frame_bound_is_documented_and_accepted(tmp_path):
     from service.boxes.mot_files import MAX_FRAMES
     path = tmp_path / "det.txt"
@@ -157,3 +167,16 @@ def test_mot_eval_scores_do_not_depend_on_frames_after_the_last_box(tmp_path):
     short = mot_scores(res, gt, tmp_path / "short.ini").as_dict()
     long = mot_scores(res, gt, tmp_path / "long.ini").as_dict()
     assert {**short, "frames": 100000} == long  # frames after the last box change no score
+
+
+def test_cli_warns_when_a_long_window_leaves_people_untracked(tmp_path):
+    """MOT17-02's first 60 frames (MPNTrack's boxes, ids dropped): window 30 tracks 380 of
+    687 boxes, silently; the default window tracks them all and says nothing."""
+    source = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17_train_gt_and_tracker_outputs"
+    rows = [line.split(",") for line in (source / "MOT17-02-FRCNN" / "trackers" / "MPNTrack.txt").read_text().split()]
+    det = tmp_path / "det.txt"
+    det.write_text("".join(",".join([r[0], "-1", *r[2:7]]) + "\n" for r in rows if int(float(r[0])) <= 60))
+    for window, warned in (("5", False), ("30", True)):
+        run = runner.invoke(app, ["boxes", str(det), "--out", str(tmp_path / "r.txt"), "-w", window, "--json"])
+        assert run.exit_code == 0, run.output
+        assert ("of the detections are in no track at --window 30" in run.output) == warned

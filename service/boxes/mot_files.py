@@ -24,6 +24,9 @@ MIN_COLUMNS, MAX_COLUMNS = 7, 10
 # Frames per sequence: 55 minutes at 30 fps, a hundred times MOT17's longest. TrackEval keeps
 # arrays per frame (10^5 frames: seconds), so a stray huge frame number costs for nothing.
 MAX_FRAMES = 100_000
+# Box coordinates and sizes, pixels: a hundred times an 8K frame. Past it a box is a broken
+# line (1e300 overflowed the Kalman filter's squares), not an image.
+MAX_PIXELS = 1e6
 
 
 @dataclass(frozen=True)
@@ -55,17 +58,23 @@ def read_rows(path: Path) -> np.ndarray:
                    or len(line.split(",")) != len(lines[0].split(",")))
         raise InputError(f"{path}: line {bad} has {len(lines[bad - 1].split(','))} columns; a MOTChallenge file has "
                          f"{MIN_COLUMNS} to {MAX_COLUMNS} (frame, id, left, top, width, height, conf, ...) on every line")
-    try:
-        rows = np.array([[float(v) for v in line.split(",")] for line in lines])
-    except ValueError as error:
-        raise InputError(f"{path}: not a number ({error})") from None
+    rows = np.array([_numbers(path, number, line) for number, line in enumerate(lines, 1)])
     _check(path, rows)
     return rows
 
 
+def _numbers(path: Path, number: int, line: str) -> list[float]:
+    try:
+        return [float(v) for v in line.split(",")]
+    except ValueError as error:
+        raise InputError(f"{path}: line {number}: not a number ({error})") from None
+
+
 def _check(path: Path, rows: np.ndarray) -> None:
-    if not np.isfinite(rows[:, :7]).all():
-        raise InputError(f"{path}: frame, id, box and confidence must be finite numbers")
+    bad = ~np.isfinite(rows[:, :7]).all(axis=1) | (np.abs(rows[:, 2:6]) > MAX_PIXELS).any(axis=1)
+    if bad.any():
+        raise InputError(f"{path}: line {int(np.argmax(bad)) + 1}: frame, id, box and confidence must be finite "
+                         f"numbers, the box within {MAX_PIXELS:g} pixels")
     frames = rows[:, 0]
     bad = (frames < 1) | (frames > MAX_FRAMES) | (frames != np.round(frames))
     if bad.any():

@@ -11,8 +11,23 @@ from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks
 from service.boxes.track import track_boxes
 from service.capture.formulation_spec import formulation_from_spec
 from service.cli.output import check_writable_folder
-from service.cli.report import out
+from service.cli.report import out, warn
 from service.errors import InputError
+
+TUNED_WINDOW = 5  # the default --window, the one the box costs were chosen at (README, Boxes)
+UNTRACKED_WARNING = 0.25  # detections in no track, past a longer window: objects were dropped
+
+
+def long_window_warning(window: int, detections: int, tracked: int) -> str | None:
+    """A line when a window longer than the tuned one left many detections in no track: the
+    window prices each of its frames against the template's forecast, so far frames of a long
+    window lose people who change pace (MOT17-02's first 60 frames: 687 of 687 boxes tracked
+    at window 5, 609 at 20, 380 at 30)."""
+    untracked = 1 - tracked / detections if detections else 0.0
+    if window <= TUNED_WINDOW or untracked <= UNTRACKED_WARNING:
+        return None
+    return (f"warning: {untracked:.0%} of the detections are in no track at --window {window}: a window prices its frames "
+            f"against its first frame's forecast, so long ones lose people; try --window {TUNED_WINDOW}")
 
 
 def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | None, images: Path | None,
@@ -43,5 +58,6 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
     }
     if as_json:
         print(json.dumps(summary))
-        return
-    out.print(" ".join(f"{key}={value}" for key, value in summary.items()), highlight=False)
+    else:
+        out.print(" ".join(f"{key}={value}" for key, value in summary.items()), highlight=False)
+    warn(long_window_warning(window, len(boxes.frame), len(run.tracks.frame)))

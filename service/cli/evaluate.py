@@ -40,7 +40,7 @@ def run_eval(
     # unlabeled trajectories *N name no marker; a marker never placed has nothing to score
     truth, never = read_labeled(trajectories).without_unlabeled().without_never_seen()
     if never:
-        warn(f"{len(never)} marker{'s' if len(never) > 1 else ''} with no position in any frame left out: "
+        warn(f"warning: {len(never)} marker{'s' if len(never) > 1 else ''} with no position in any frame left out: "
              f"{', '.join(never[:6])}{' ...' if len(never) > 6 else ''}")
     result: Evaluation | CameraEvaluation
     with window_progress(f"labeling {trajectories.name}") as progress:
