@@ -165,6 +165,16 @@ def test_cli_fits_cmu_85_02(tmp_path: Path) -> None:
     assert np.isfinite(joints.positions).all()
 
 
+def test_cli_refuses_a_model_named_other_than_json(tmp_path: Path) -> None:
+    """``--out model.c3d`` wrote JSON under a C3D's name."""
+    names, positions, _ = chain(3)
+    trc = tmp_path / "take.trc"
+    write_labeled(trc, LabeledTrajectories(names, positions, np.zeros(positions.shape[:2], bool), 100.0))
+    result = CliRunner().invoke(app, ["model", str(trc), "--out", str(tmp_path / "model.c3d")])
+    assert result.exit_code == 2 and "name it .json" in result.output
+    assert not (tmp_path / "model.c3d").exists()
+
+
 def test_cli_static_take_is_one_line_error(tmp_path: Path) -> None:
     names, positions, _ = chain(3, motion=0.0)
     trc = tmp_path / "static.trc"

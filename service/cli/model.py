@@ -25,6 +25,8 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     With ``markerset`` (a template name or file) the segments and joint centres come from the
     template and the takes (a static trial is enough) give the marker coordinates.
     """
+    if output.suffix.lower() != ".json":  # a model is JSON: another suffix would mislead every reader
+        raise InputError(f"{output}: a subject model is written as JSON; name it .json")
     check_writable_folder(output.parent)
     if centres is not None:
         check_writable_output(centres)
