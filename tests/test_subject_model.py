@@ -175,6 +175,19 @@ def test_cli_refuses_a_model_named_other_than_json(tmp_path: Path) -> None:
     assert not (tmp_path / "model.c3d").exists()
 
 
+def test_cli_refuses_to_pool_takes_of_two_marker_sets(tmp_path: Path) -> None:
+    """Two subjects' takes, no name in common, made one model of two bodies side by side."""
+    names, positions, _ = chain(3)
+    first, second = tmp_path / "a.trc", tmp_path / "b.trc"
+    occluded = np.zeros(positions.shape[:2], bool)
+    write_labeled(first, LabeledTrajectories(names, positions, occluded, 100.0))
+    write_labeled(second, LabeledTrajectories([f"Other:{n}" for n in names], positions, occluded, 100.0))
+    result = CliRunner().invoke(app, ["model", str(first), str(second), "--out", str(tmp_path / "m.json")])
+    assert result.exit_code == 2 and "b.trc: shares 0 of its" in result.output
+    same = CliRunner().invoke(app, ["model", str(first), str(first), "--out", str(tmp_path / "m.json")])
+    assert same.exit_code == 0, same.output
+
+
 def test_cli_static_take_is_one_line_error(tmp_path: Path) -> None:
     names, positions, _ = chain(3, motion=0.0)
     trc = tmp_path / "static.trc"

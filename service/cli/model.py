@@ -12,6 +12,7 @@ from formulations.subject.fit import SubjectFit, fit_subject
 from formulations.subject.grouping import Grouping
 from formulations.subject.template import fit_template
 from service.capture.markerset import load_template
+from service.capture.model_input import MIN_SHARED
 from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out
 from service.errors import InputError
@@ -32,7 +33,9 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         check_writable_output(centres)
     if markerset is not None and centres is not None:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
-    names, positions, rate = _pool([read_labeled(path).without_unlabeled() for path in inputs])  # *N: no marker
+    takes = [read_labeled(path).without_unlabeled() for path in inputs]  # *N: no marker
+    _check_one_marker_set(takes, inputs)
+    names, positions, rate = _pool(takes)
     try:
         if markerset is not None:
             fit = SubjectFit(fit_template(load_template(markerset), names, positions), Grouping([], [], []), {})
@@ -50,6 +53,22 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
 
         write_labeled(centres, _centre_trajectories(fit, rate))
     out.print(f"-> {output}" + (f", joint centres -> {centres}" if centres else ""), highlight=False)
+
+
+def _check_one_marker_set(takes: list[Recording], paths: list[Path]) -> None:
+    """Takes of one subject share their marker set: a take sharing less than half its names
+    with the first is another set (or subject), and pooled with it would make one model of
+    two bodies side by side.
+
+    Raises:
+        InputError: the first such take, with how many names it shares.
+    """
+    first = set(takes[0].names)
+    for take, path in zip(takes[1:], paths[1:], strict=True):
+        shared = len(first.intersection(take.names))
+        if shared < MIN_SHARED * min(len(first), take.n_markers):
+            raise InputError(f"{path.name}: shares {shared} of its {take.n_markers} marker names with "
+                             f"{paths[0].name}; a model is fitted to takes of one marker set")
 
 
 def _pool(takes: list[Recording]) -> tuple[list[str], np.ndarray, float]:
