@@ -61,7 +61,7 @@ def test_start_relabels_from_the_takes_own_labels_and_keeps_the_whole_file(tmp_p
     names, truth = _take(source)
     code, _, stderr = _track(source, "--start", START, "--end", END, "--out", out)
     assert code == 0, stderr
-    assert f"1 markers absent at frame {START} are not labeled" in stderr and names[5] in stderr
+    assert f"1 marker absent at frame {START}, not labeled" in stderr and names[5] in stderr
     given = ezc3d.c3d(str(source))
     written, points, labeled = _labels(out)
     n = len(names)  # the input's points, then its samples outside the span kept unlabeled (*N)

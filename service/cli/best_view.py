@@ -14,7 +14,7 @@ from formulations.best_view import select_views
 from formulations.errors import FormulationError
 from service.best_view.tables import read_view_costs, write_choices
 from service.cli.output import check_writable_folder
-from service.cli.report import out
+from service.cli.report import counted, out
 from service.errors import InputError
 
 
@@ -41,6 +41,6 @@ def run_best_view(costs_path: Path, output: Path, switch_cost: float, window: in
     frames = sum(len(obj.frames) for obj in objects)
     out.print(
         f"{costs_path.name}: {len(objects)} objects, {len(cameras)} cameras, {frames} object-frames -> {output} "
-        f"({switches} switches; the per-frame best would switch {greedy} times)",
+        f"({counted(switches, 'switch', 'switches')}; the per-frame best would switch {counted(greedy, 'time')})",
         highlight=False,
     )

@@ -67,6 +67,11 @@ def warn_doubtful(fraction: float | None) -> None:
               f"another reading of their window is nearly as likely); check them", file=sys.stderr, flush=True)
 
 
+def counted(count: int, noun: str, plural: str | None = None) -> str:
+    """``1 marker``, ``2 markers`` (``plural`` for nouns that do not take an s)."""
+    return f"{count} {noun if count == 1 else plural or noun + 's'}"
+
+
 def warn(line: str | None) -> None:
     """A warning line on stderr (none for None), after the figures it qualifies."""
     if line is not None:

@@ -17,7 +17,7 @@ from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
 from service.capture.model_input import check_shared_names, read_model, with_model
 from service.cli.output import check_writable_output
-from service.cli.report import CERTIFICATE, out, warn, warn_doubtful, window_progress
+from service.cli.report import CERTIFICATE, counted, out, warn, warn_doubtful, window_progress
 from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
@@ -177,7 +177,7 @@ def _second_pass_note(choice: PassChoice | None) -> str:
     kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
     off = "" if choice.first_off_mm is None or choice.second_off_mm is None else (
         f"rigid pairs {choice.first_off_mm:.1f} -> {choice.second_off_mm:.1f} mm off the first frame; ")
-    other = "" if not choice.taken_from_other else f", {choice.taken_from_other} markers' labels from the other pass"
+    other = "" if not choice.taken_from_other else f", {counted(choice.taken_from_other, 'marker')}' labels from the other pass"
     return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
 
 
@@ -205,7 +205,7 @@ def _unknown_warning(unknown: list[str], start: int) -> str | None:
     (``labeled_singles``): labeling from the model drops them."""
     if not unknown:
         return None
-    return (f"warning: {len(unknown)} markers labeled at frame {start} are not in the model and are not labeled: "
+    return (f"warning: {counted(len(unknown), 'marker')} labeled at frame {start} not in the model, not labeled: "
             f"{', '.join(unknown[:12])}{' ...' if len(unknown) > 12 else ''} (fit the model on frames where they "
             "are seen, or label without --model)")
 
@@ -213,7 +213,7 @@ def _unknown_warning(unknown: list[str], start: int) -> str | None:
 def _absent_warning(absent: list[str], start: int) -> str | None:
     if not absent:
         return None
-    return (f"warning: {len(absent)} markers absent at frame {start} are not labeled (written missing): "
+    return (f"warning: {counted(len(absent), 'marker')} absent at frame {start}, not labeled (written missing): "
             f"{', '.join(absent[:12])}{' ...' if len(absent) > 12 else ''}")
 
 
