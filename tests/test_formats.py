@@ -288,41 +288,6 @@ def test_unwritable_output_raises_input_error(name: str, tmp_path: Path) -> None
         write_labeled(tmp_path / name, _occluded_cmu(frames=3))
 
 
-@pytest.mark.parametrize("name", ["OUT.C3D", "out.C3d"])
-def test_c3d_named_in_capitals_is_written_at_that_name(name: str, tmp_path: Path) -> None:
-    """ezc3d appends ``.c3d`` to any other ending: the file asked for was left empty."""
-    traj = _occluded_cmu(frames=20)
-    (tmp_path / name).write_bytes(b"an older file")
-    write_labeled(tmp_path / name, traj)
-    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
-    _assert_matches(read_c3d(tmp_path / name).positions, traj, atol=1e-3)
-
-
-def test_c3d_of_more_than_255_markers_reads_back(tmp_path: Path) -> None:
-    """Each marker's confidence channel past the 255th goes on in ANALOG:LABELS2, SCALE2, ...:
-    a parameter of more than 255 values is no C3D any reader takes."""
-    base = _occluded_cmu(frames=5)
-    copies = 7  # 287 markers
-    names = [f"S{k}:{name}" for k in range(copies) for name in base.names]
-    positions = np.concatenate([base.positions + [3000.0 * k, 0, 0] for k in range(copies)], axis=1)
-    occluded = np.concatenate([base.occluded] * copies, axis=1)
-    confidence = np.linspace(0.1, 1.0, positions.shape[0] * len(names)).reshape(positions.shape[0], len(names))
-    traj = LabeledTrajectories(names, positions, occluded, base.rate, confidence=confidence)
-    out = tmp_path / "many.c3d"
-    write_c3d(out, traj)
-    raw = ezc3d.c3d(str(out))
-    analog = raw["parameters"]["ANALOG"]
-    labels = list(analog["LABELS"]["value"]) + list(analog["LABELS2"]["value"])
-    assert labels == [f"{name}_confidence" for name in names]
-    for key in ("SCALE", "UNITS", "DESCRIPTIONS"):
-        assert len(analog[key]["value"]) == 255 and len(analog[f"{key}2"]["value"]) == len(names) - 255
-    assert list(analog["UNITS2"]["value"]) == ["1"] * (len(names) - 255)
-    np.testing.assert_allclose(raw["data"]["analogs"][0, :, :], confidence.T, atol=1e-6)
-    rec = read_c3d(out)
-    assert rec.names == names
-    _assert_matches(rec.positions, traj, atol=1e-3)
-
-
 def test_a_name_with_a_tab_is_refused_for_trc_and_kept_by_csv(tmp_path: Path) -> None:
     """A tab in a name made a TRC no reader parses back ("line 4 names 5 markers")."""
     traj = _occluded_cmu(frames=3)
