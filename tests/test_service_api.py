@@ -95,14 +95,15 @@ def _submit(client, body: str) -> dict:
     return answer.json()
 
 
-def _library_files(traj, folder):
-    write_labeled(folder / "library.csv", traj)
-    write_labeled(folder / "library.c3d", traj)
+def _library_files(traj, folder, source=None):
+    write_labeled(folder / "library.csv", traj, source)
+    write_labeled(folder / "library.c3d", traj, source)
     return (folder / "library.csv").read_bytes(), read_labeled(folder / "library.c3d")
 
 
-def _assert_same_result(client, job_id: str, expected, folder) -> None:
-    """JSON bitwise, CSV byte for byte, C3D as read back: all equal to the library's output."""
+def _assert_same_result(client, job_id: str, expected, folder, source=None) -> None:
+    """JSON bitwise, CSV byte for byte, C3D as read back: all equal to the library's output
+    (written from ``source``, the uploaded file's, as ``markerflow track`` writes it)."""
     answer = client.get(f"/v1/jobs/{job_id}/result", params={"format": "json"})
     assert answer.status_code == 200 and answer.headers["content-type"] == "application/json"
     result = answer.json()
@@ -110,7 +111,7 @@ def _assert_same_result(client, job_id: str, expected, folder) -> None:
     assert np.array_equal(nan_array(result["positions"]), expected.positions, equal_nan=True)
     assert np.array_equal(np.array(result["occluded"]), expected.occluded)
     assert np.array_equal(nan_array(result["filled"]), expected.filled, equal_nan=True)
-    csv_bytes, c3d_recording = _library_files(expected, folder)
+    csv_bytes, c3d_recording = _library_files(expected, folder, source)
     answer = client.get(f"/v1/jobs/{job_id}/result", params={"format": "csv"})
     assert answer.headers["content-type"].startswith("text/csv")
     assert answer.headers["content-disposition"] == f'attachment; filename="markerflow-{job_id}.csv"'
@@ -157,7 +158,7 @@ def test_uploaded_c3d_is_relabeled_like_the_library(client, tmp_path):
     options = LabelingOptions(formulation="ilp", window=8)
     expected, _ = CaptureLabeling(capture_from_recording(read_labeled(tmp_path / "take.c3d")), options).label()
     assert expected.occluded[10:14, 3].all()
-    _assert_same_result(client, job["id"], expected, tmp_path)
+    _assert_same_result(client, job["id"], expected, tmp_path, read_labeled(tmp_path / "take.c3d").source)
 
 
 def _as_labeled(truth: Recording, occluded: np.ndarray):

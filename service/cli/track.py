@@ -280,11 +280,8 @@ def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[So
     """What output from a model keeps of its input: all of it when the input has every model
     marker, else its unit and frame numbering (a C3D lacking a model marker cannot hold its labels);
     and, for a .c3d output that then loses the input's other content, the warning that says so."""
-    if source is None or source.c3d is None:
-        return source, None
-    labels = {str(label).strip() for label in source.c3d["parameters"]["POINT"]["LABELS"]["value"]}
-    lacking = [name for name in names if name not in labels]
-    if not lacking:
+    lacking = [] if source is None else source.lacking(names)
+    if source is None or not lacking:
         return source, None
     warning = (f"warning: the input has no point for model markers {', '.join(lacking[:6])}"
                f"{' ...' if len(lacking) > 6 else ''}, so {output.name} is a new C3D of the labels alone (the input's "

@@ -38,6 +38,16 @@ class SourceFile:
     c3d: Any = None
     first_time: float = 0.0
 
+    def lacking(self, names: list[str]) -> list[str]:
+        """The ``names`` a C3D source has no point of (none for other sources): labels of
+        those (a subject model's markers) cannot go into a copy of the input."""
+        if self.c3d is None:
+            return []
+        point = self.c3d["parameters"]["POINT"]
+        keys = [key for key in point if re.fullmatch(r"LABELS\d*", key)]  # past 255: LABELS2, ...
+        labels = {str(label).strip() for key in keys for label in point[key]["value"]}
+        return [name for name in names if name not in labels]
+
 
 @dataclass
 class Recording:

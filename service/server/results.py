@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import json
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -17,10 +18,11 @@ import numpy as np
 
 from service.capture.document import read_capture_document
 from service.errors import InputError
-from service.io.formats import write_labeled
-from service.io.recording import LabeledTrajectories
+from service.io.formats import read_labeled, write_labeled
+from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
+from service.server.tables import Upload
 
 MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3d": "application/octet-stream"}
 
@@ -77,14 +79,26 @@ def trajectories_json(traj: LabeledTrajectories) -> dict:
     }
 
 
-def render(traj: LabeledTrajectories, format: str) -> bytes:
-    """The result file's bytes; CSV and C3D through ``write_labeled``, as the CLI writes them."""
+def render(traj: LabeledTrajectories, format: str, upload: Upload | None = None) -> bytes:
+    """The result file's bytes; CSV and C3D through ``write_labeled``, as the CLI writes them:
+    from an ``upload``, in its unit and frame numbering, and a C3D of a C3D is that file with
+    only its points replaced (its analog channels, force plates, events and parameters kept)."""
     if format == "json":
         return json.dumps(trajectories_json(traj)).encode()
     with tempfile.TemporaryDirectory(prefix="markerflow-result-") as folder:
         path = Path(folder) / f"result.{format}"
         try:
-            write_labeled(path, traj)
+            write_labeled(path, traj, None if upload is None else _source(upload, traj.names, Path(folder)))
         except InputError as error:  # the writers name their path: the caller sees only the file's name
             raise InputError(str(error).replace(str(path), path.name)) from None
         return path.read_bytes()
+
+
+def _source(upload: Upload, names: list[str], folder: Path) -> SourceFile | None:
+    """What output keeps of the uploaded file (``SourceFile``); a C3D lacking a point for one
+    of ``names`` (a subject model's markers) keeps its unit and numbering only. The file was
+    read whole, in a bounded child, when the job was accepted: reading it again is safe."""
+    path = folder / f"upload{upload[0]}"
+    path.write_bytes(upload[1])
+    source = read_labeled(path).source
+    return replace(source, c3d=None) if source is not None and source.lacking(names) else source

@@ -65,7 +65,7 @@ async def submit_job(
                             headers={"Retry-After": str(settings.retry_after_seconds)})
     submission = await read_submission(request, settings.limits, upload=True)
     job, new = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows,
-                                       idempotency_key)
+                                       idempotency_key, submission.upload)
     if new:
         await run_in_threadpool(request.app.state.executor.submit, job.id)
     return _accepted(response, job, list(submission.warnings))
@@ -144,10 +144,11 @@ async def job_result(
     store = _store(request)
     if job.state == "done":
         stored = await run_in_threadpool(store.result, job.id)
-        content = await run_in_threadpool(lambda: render(trajectories_from_bytes(stored), format))
+        content = await run_in_threadpool(lambda: render(trajectories_from_bytes(stored), format, store.upload(job.id)))
     else:
         content = await run_in_threadpool(
-            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format))
+            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format,
+                           store.upload(job.id)))
     disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
     return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
 

@@ -21,7 +21,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
 
 from service.labeling.outcome import WindowOutcome
-from service.server.tables import JobRow, JobState, WindowRow, engine_for
+from service.server.tables import JobRow, JobState, Upload, UploadRow, WindowRow, engine_for
 
 ACTIVE: tuple[JobState, ...] = ("queued", "running")
 STATES: tuple[JobState, ...] = get_args(JobState)
@@ -85,8 +85,9 @@ class JobStore:
         self.session = sessionmaker(self.engine, expire_on_commit=False)
 
     def add(self, owner: str, source: str, document: bytes, windows_total: int,
-            key: str | None = None) -> tuple[Job, bool]:
-        """A new queued job and True; with an idempotency ``key`` the owner already used, that job and False."""
+            key: str | None = None, upload: Upload | None = None) -> tuple[Job, bool]:
+        """A new queued job and True; with an idempotency ``key`` the owner already used, that
+        job and False. ``upload``: the file the document was read from, kept for its output."""
         now = _now()
         row = JobRow(id=uuid.uuid4().hex, owner=owner, state="queued", source=source[:300], created_at=now,
                      updated_at=now, windows_total=windows_total, windows_done=0, input=document,
@@ -94,6 +95,9 @@ class JobStore:
         try:
             with self.session.begin() as session:
                 session.add(row)
+                if upload is not None:
+                    session.flush()  # the job row first: the upload's key refers to it
+                    session.add(UploadRow(job_id=row.id, suffix=upload[0], data=upload[1]))
         except IntegrityError:
             earlier = self.by_key(owner, key) if key is not None else None
             if earlier is None:  # not the key's unique index: a real conflict
@@ -148,6 +152,12 @@ class JobStore:
     def input(self, job_id: str) -> bytes:
         with self.session() as session:
             return session.execute(select(JobRow.input).where(JobRow.id == job_id)).scalar_one()
+
+    def upload(self, job_id: str) -> Upload | None:
+        """The file the job was uploaded as (suffix, bytes); None for a capture document."""
+        with self.session() as session:
+            row = session.execute(select(UploadRow.suffix, UploadRow.data).where(UploadRow.job_id == job_id)).first()
+        return None if row is None else (row[0], row[1])
 
     def result(self, job_id: str) -> bytes:
         """The result of a done job (``finish`` stores it with the state)."""

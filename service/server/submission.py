@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +33,7 @@ from service.server.limits import check_limits
 from service.server.model_submission import document_with_model, model_field
 from service.server.prescan import check_depth
 from service.server.settings import Limits
+from service.server.tables import Upload
 
 UPLOAD_FIELDS = ("file", "formulation", "window", "model")
 UPLOAD_SUFFIXES = (".c3d", ".trc")
@@ -47,6 +48,7 @@ class Submission:
     source: str
     n_windows: int
     warnings: tuple[str, ...] = ()
+    upload: Upload | None = None  # the file it was read from: its result is written as the CLI writes it
 
     def stored(self) -> bytes:
         return self.document.model_dump_json().encode()
@@ -84,8 +86,11 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
     options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
     model = model_field(form.get("model"))
     recording = read_upload(upload, filename, limits)
+    upload.file.seek(0)
+    kept = (filename.suffix.lower(), upload.file.read())
     if model is not None:
-        return _checked(document_with_model(recording, model, options, filename.name), filename.name, limits)
+        return replace(_checked(document_with_model(recording, model, options, filename.name), filename.name, limits),
+                       upload=kept)
     absent = np.flatnonzero(recording.missing()[0])
     if len(absent):
         raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame "
@@ -94,7 +99,7 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
         document = CaptureDocument.of(capture_from_recording(recording), options)
     except ValidationError as error:
         raise InputError(describe_validation_error(error)) from None
-    return _checked(document, filename.name, limits)
+    return replace(_checked(document, filename.name, limits), upload=kept)
 
 
 def _checked(document: CaptureDocument, source: str, limits: Limits) -> Submission:

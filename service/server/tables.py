@@ -11,6 +11,7 @@ from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import DeclarativeBase, Mapped, deferred, mapped_column
 
 JobState = Literal["queued", "running", "done", "failed", "cancelled"]
+Upload = tuple[str, bytes]  # an uploaded file: its suffix (".c3d") and bytes
 
 
 class Base(DeclarativeBase):
@@ -36,6 +37,18 @@ class JobRow(Base):
 
 # One job per owner and key (rows without a key are not constrained: unique indexes allow many nulls).
 IDEMPOTENCY_INDEX = Index("ix_jobs_owner_idempotency_key", JobRow.owner, JobRow.idempotency_key, unique=True)
+
+
+class UploadRow(Base):
+    """The file a job was uploaded as, kept so that its result is written as the CLI writes it:
+    a C3D with the input's analog channels, events and parameters, any format numbered as
+    the input (``service.io.recording.SourceFile``). Its own table: stores made before it
+    get it from ``create_all``, and a capture-document job has none."""
+
+    __tablename__ = "uploads"
+    job_id: Mapped[str] = mapped_column(ForeignKey("jobs.id"), primary_key=True)
+    suffix: Mapped[str] = mapped_column(String(8))
+    data: Mapped[bytes] = deferred(mapped_column(LargeBinary))
 
 
 class WindowRow(Base):

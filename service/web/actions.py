@@ -55,7 +55,8 @@ async def submit(request: Request, owner: str = Depends(page_owner)) -> Response
             submission = await run_in_threadpool(form_submission, form, settings.limits)
         except InputError as error:
             return await jobs_list(request, owner, error=str(error), status=422)
-    job, _ = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows)
+    job, _ = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows,
+                                     None, submission.upload)
     await run_in_threadpool(request.app.state.executor.submit, job.id)
     return RedirectResponse(f"/jobs/{job.id}", status_code=303)
 

@@ -38,10 +38,12 @@ async def result(request: Request, job_id: str, format: Literal["json", "csv", "
     job = await owned_job(request, job_id, owner)
     store = request.app.state.store
     if job.state == "done":
-        content = await run_in_threadpool(lambda: render(trajectories_from_bytes(store.result(job.id)), format))
+        content = await run_in_threadpool(
+            lambda: render(trajectories_from_bytes(store.result(job.id)), format, store.upload(job.id)))
     elif job.state in ("failed", "cancelled"):
         content = await run_in_threadpool(
-            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format))
+            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format,
+                           store.upload(job.id)))
     else:
         raise HTTPException(409, f"job {job_id} is {job.state}; its result comes when it ends")
     disposition = f'attachment; filename="markerflow-{job.id}.{format}"'

@@ -1,0 +1,67 @@
+"""An uploaded take's result is written as ``markerflow track`` writes it, over real HTTP:
+a C3D keeps the input's analog channels, events and parameters, and every format the
+input's frame numbering. The service used to write the labels alone, from frame 1 at 0 s."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import ezc3d
+import numpy as np
+import pytest
+from service_fixtures import serving, wait_for
+
+from service.capture.capture import LabelingOptions
+from service.capture.from_recording import capture_from_recording
+from service.io.formats import read_labeled, write_labeled
+from service.labeling.capture_labeling import CaptureLabeling
+from service.server.settings import Settings
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+VICON = DATA / "c3d_ezc3d_testfiles" / "Vicon.c3d"  # 38 analog channels, events, subjects
+RUN = DATA / "mocap_opensim" / "rajagopal_motion_capture_run.trc"  # starts at Frame# 23, 0.23 s
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    db = tmp_path_factory.mktemp("uploads") / "jobs.db"
+    with serving(Settings(db=f"sqlite:///{db}")) as client:
+        yield client
+
+
+def _uploaded(client, path: Path) -> str:
+    with path.open("rb") as upload:
+        answer = client.post("/v1/jobs", files={"file": (path.name, upload)})
+    assert answer.status_code == 202, answer.text
+    job = wait_for(client, answer.json()["id"], timeout=120)
+    assert job["state"] == "done", job
+    return job["id"]
+
+
+def _library(path: Path, out: Path) -> None:
+    """What ``markerflow track PATH --out OUT`` writes (default options, from frame 0)."""
+    recording = read_labeled(path)
+    labels, _ = CaptureLabeling(capture_from_recording(recording), LabelingOptions()).label()
+    write_labeled(out, labels, recording.source)
+
+
+def test_a_c3d_result_keeps_the_uploads_analog_channels_and_groups(client, tmp_path):
+    job = _uploaded(client, VICON)
+    served = client.get(f"/v1/jobs/{job}/result", params={"format": "c3d"}).content
+    _library(VICON, tmp_path / "library.c3d")
+    assert served == (tmp_path / "library.c3d").read_bytes()
+    (tmp_path / "served.c3d").write_bytes(served)
+    before, after = ezc3d.c3d(str(VICON)), ezc3d.c3d(str(tmp_path / "served.c3d"))
+    assert {"EVENT", "SUBJECTS", "TRIAL"} <= set(after["parameters"])
+    channels = before["data"]["analogs"].shape[1]
+    assert channels == 38
+    np.testing.assert_allclose(after["data"]["analogs"][0, :channels], before["data"]["analogs"][0], atol=1e-4)
+
+
+def test_a_table_result_keeps_the_uploads_frame_numbers_and_times(client, tmp_path):
+    job = _uploaded(client, RUN)
+    rows = client.get(f"/v1/jobs/{job}/result", params={"format": "csv"}).text.splitlines()
+    frame, time = rows[1].split(",")[:2]
+    assert int(frame) == 23 and float(time) == pytest.approx(0.23)
+    _library(RUN, tmp_path / "library.csv")
+    assert rows == (tmp_path / "library.csv").read_text().splitlines()
