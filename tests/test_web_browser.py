@@ -131,16 +131,35 @@ def test_another_token_sees_none_of_the_job(browser, base_url, done_job):
         context.close()
 
 
-def test_a_refused_upload_shows_the_apis_message(browser, base_url, tmp_path, capture):
+def test_a_refused_upload_shows_the_apis_message_and_keeps_the_options(browser, base_url, tmp_path, capture):
     context, page = _signed_in(browser, base_url, BOB)
     try:
         (tmp_path / "take.json").write_text(document_json(capture))
         page.get_by_label("Capture file").set_input_files(tmp_path / "take.json")
+        page.get_by_label("Formulation", exact=True).select_option("ilp")
+        page.get_by_label("Formulation parameters (JSON, optional)").fill('{"time_limit": 10}')
         page.get_by_label("Window (frames)").fill("1")
         page.get_by_label("Window (frames)").evaluate("input => input.removeAttribute('min')")
         page.get_by_role("button", name="Submit").click()
         assert page.get_by_role("alert").inner_text().startswith("⚠ window:") or \
             page.locator("#upload-error").inner_text().startswith("window:")
+        # the form was emptied: the user had to choose everything again
+        assert page.get_by_label("Formulation", exact=True).input_value() == "ilp"
+        assert page.get_by_label("Formulation parameters (JSON, optional)").input_value() == '{"time_limit": 10}'
+        assert page.get_by_label("Window (frames)").input_value() == "1"
+    finally:
+        context.close()
+
+
+def test_blank_options_keep_the_documents_own(browser, base_url, tmp_path, capture):
+    """The form sent lp-l1 and window 20 over a document that asked for ilp and 30."""
+    context, page = _signed_in(browser, base_url, BOB)
+    try:
+        (tmp_path / "own.json").write_text(document_json(capture, LabelingOptions(formulation="ilp", window=30)))
+        page.get_by_label("Capture file").set_input_files(tmp_path / "own.json")
+        page.get_by_role("button", name="Submit").click()
+        page.wait_for_url(re.compile(r"/jobs/[0-9a-f]{32}$"))
+        assert page.locator("dl.facts").inner_text().count("ilp · window 30") == 1
     finally:
         context.close()
 

@@ -14,7 +14,7 @@ from service.errors import InputError
 from service.server.auth import bearer_token
 from service.server.store import ACTIVE
 from service.web.access import owned_job
-from service.web.listing import jobs_list
+from service.web.listing import CHOSEN, jobs_list
 from service.web.session import forget_token, keep_token, page_owner, same_origin
 from service.web.upload import FIELDS, form_submission
 
@@ -54,7 +54,8 @@ async def submit(request: Request, owner: str = Depends(page_owner)) -> Response
         try:
             submission = await run_in_threadpool(form_submission, form, settings.limits)
         except InputError as error:
-            return await jobs_list(request, owner, error=str(error), status=422)
+            chosen = {key: value for key in CHOSEN if isinstance(value := form.get(key), str)}
+            return await jobs_list(request, owner, error=str(error), status=422, chosen=chosen)
     job, _ = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows,
                                      None, submission.upload)
     await run_in_threadpool(request.app.state.executor.submit, job.id)

@@ -16,13 +16,20 @@ from service.web.upload import MODEL_OPTION
 LISTED_JOBS = 100
 
 
-async def jobs_list(request: Request, owner: str, error: str | None = None, status: int = 200) -> Response:
-    """The page; ``error`` is an upload's refusal, shown above the form."""
+async def jobs_list(
+    request: Request, owner: str, error: str | None = None, status: int = 200, chosen: dict[str, str] | None = None,
+) -> Response:
+    """The page; ``error`` is an upload's refusal, shown above the form, whose fields keep
+    what the user ``chosen`` (formulation, parameters, window, association)."""
     store, db = request.app.state.store, request.app.state.settings.db
     jobs, total = await run_in_threadpool(store.page, owner, LISTED_JOBS, 0)
     rows = [await run_in_threadpool(_row, store, db, job) for job in jobs]
     return page(request, "jobs.html", status, rows=rows, total=total, formulations=[d.name for d in describe()],
-                associations=ASSOCIATIONS, model_option=MODEL_OPTION, error=error)
+                associations=ASSOCIATIONS, model_option=MODEL_OPTION, error=error,
+                chosen={key: "" for key in CHOSEN} | (chosen or {}))
+
+
+CHOSEN = ("formulation", "parameters", "window", "association")  # the form's option fields
 
 
 def _row(store: JobStore, db: str, job: Job) -> dict:

@@ -1,8 +1,9 @@
 """The page's upload form as a checked ``Submission``: the same checks as ``POST /v1/jobs``.
 
 A ``.c3d``/``.trc`` file goes through the API's upload path (read in a bounded child
-process); a capture document (``.json``) through the API's JSON path, with the form's
-options put in place of the document's own.
+process), with lp-l1 and a window of 20 where the form leaves them blank; a capture
+document (``.json``) through the API's JSON path, the form's options put in place of the
+document's own only where the user gave them (a blank field keeps the document's).
 """
 
 from __future__ import annotations
@@ -43,13 +44,14 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     if not isinstance(upload, UploadFile) or not upload.filename:
         raise InputError("file: choose a capture file (.json, .c3d or .trc)")
     name = Path(upload.filename).name
-    formulation = _formulation(_text(form, "formulation") or "lp-l1", _text(form, "parameters"))
-    window = _text(form, "window") or "20"
+    chosen, parameters = _text(form, "formulation"), _text(form, "parameters")
+    formulation = _formulation(chosen or "lp-l1", parameters)
+    window = _text(form, "window")
     model = form.get("model")
     model = model if MODEL_OPTION and isinstance(model, UploadFile) and model.filename else None
     if Path(name).suffix.lower() in UPLOAD_SUFFIXES:
         extra = [("model", model)] if model is not None else []
-        fields = FormData([("file", upload), ("formulation", formulation), ("window", window), *extra])
+        fields = FormData([("file", upload), ("formulation", formulation), ("window", window or "20"), *extra])
         return upload_submission(fields, limits)
     if Path(name).suffix.lower() != ".json":
         raise InputError(f"file: {name} is not a capture document (.json) or a labeled .c3d/.trc file")
@@ -59,8 +61,10 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     document = _json(body, f"file: {name}")
     if not isinstance(document, dict):
         raise InputError(f"file: {name} is not a capture document (a JSON object)")
-    document["formulation"] = json.loads(formulation) if formulation.startswith("{") else formulation
-    document["window"] = _whole(window)
+    if chosen or parameters:
+        document["formulation"] = json.loads(formulation) if formulation.startswith("{") else formulation
+    if window:
+        document["window"] = _whole(window)
     association = _text(form, "association")
     if association:
         document["association"] = association
