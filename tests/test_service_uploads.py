@@ -65,3 +65,16 @@ def test_a_table_result_keeps_the_uploads_frame_numbers_and_times(client, tmp_pa
     assert int(frame) == 23 and float(time) == pytest.approx(0.23)
     _library(RUN, tmp_path / "library.csv")
     assert rows == (tmp_path / "library.csv").read_text().splitlines()
+
+
+def test_a_done_job_says_what_the_cli_warns_of(client, tmp_path):
+    """A TRC in mm whose header says m: the job was "done", 100 % windows integral and 0 %
+    doubtful, with 99 % of the labels missing; the CLI warned, the job said nothing."""
+    lines = (DATA / "mocap_opensim" / "gait2354_subject01_walk1.trc").read_text().splitlines()
+    header = lines[2].split("\t")
+    header[4] = "m"
+    (tmp_path / "metres.trc").write_text("\n".join([*lines[:2], "\t".join(header), *lines[3:]]) + "\n")
+    job = _uploaded(client, tmp_path / "metres.trc")
+    warnings = client.get(f"/v1/jobs/{job}").json()["warnings"]
+    assert any("not look human-sized" in line for line in warnings), warnings
+    assert any("no marker is labeled" in line for line in warnings), warnings

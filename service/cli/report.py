@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW
+from service.labeling.result_warnings import doubtful_warning
 
 # Piped output (files, CI logs) has no width to detect: give tables room rather than 80
 # columns, and never break a line of text (a script reads the summary as one line).
@@ -61,10 +61,7 @@ def print_summary(summary: dict, title: str) -> None:
 
 def warn_doubtful(fraction: float | None) -> None:
     """One stderr line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
-    if fraction is not None and fraction > DOUBTFUL_WARNING:
-        sys.stdout.flush()  # after the figures it qualifies, also when both go to one terminal
-        print(f"warning: {fraction:.1%} of the labels are doubtful (confidence below {REPORTED_DOUBTFUL_BELOW:.1%}: "
-              f"another reading of their window is nearly as likely); check them", file=sys.stderr, flush=True)
+    warn(doubtful_warning(fraction))
 
 
 def counted(count: int, noun: str, plural: str | None = None) -> str:

@@ -17,24 +17,22 @@ from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
 from service.capture.model_input import check_shared_names, read_model, with_model
 from service.cli.output import check_writable_output
-from service.cli.report import CERTIFICATE, counted, out, warn, warn_doubtful, window_progress
+from service.cli.report import CERTIFICATE, counted, out, warn, window_progress
 from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.coincident import coincident_pairs, coincident_warning
+from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.leftover_points import leftover_note, leftover_summary
-from service.labeling.lost_subject import UnnamedSpan, unnamed_span, unnamed_warning
+from service.labeling.lost_subject import unnamed_span
+from service.labeling.result_warnings import result_warnings
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import (
-    FastMarker,
     fast_markers,
-    fast_motion_warning,
     model_misfit_warning,
-    scale_warning,
 )
 
 
@@ -113,12 +111,8 @@ def run_track(
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
-    warn_doubtful(summary["doubtful_fraction"])
-    warn(fast_motion_warning([FastMarker(**fast) for fast in summary["fast_markers"]]))
-    warn(scale_warning(capture.first_frame, result.positions, capture.rate, source.unit if source else "mm"))
-    warn(coincident_warning([(a, b) for a, b in summary["coincident_markers"]]))
-    span = summary["unnamed_span"]
-    warn(unnamed_warning(None if span is None else UnnamedSpan(**span), capture.rate, start or 0))
+    for line in result_warnings(capture, result, source.unit if source else "mm", start or 0):
+        warn(line)
     warn(not_kept)
     warn(_absent_warning(absent, start or 0))
     warn(_unknown_warning(unknown, start or 0))

@@ -39,7 +39,9 @@ async def _job(request: Request, job_id: str, owner: str) -> Job:
 
 async def _status(request: Request, job: Job) -> JobStatus:
     windows = await run_in_threadpool(_store(request).windows, job.id)
-    return JobStatus(**JobSummary.of(job).model_dump(), windows=[WindowSummary.of_stored(w) for w in windows])
+    warnings = await run_in_threadpool(_store(request).warnings, job.id) if job.state == "done" else []
+    return JobStatus(**JobSummary.of(job).model_dump(), windows=[WindowSummary.of_stored(w) for w in windows],
+                     warnings=warnings)
 
 
 @router.post(

@@ -26,6 +26,7 @@ from service.capture.document import read_capture_document
 from service.errors import InputError
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import StaleOutcome, WindowOutcome
+from service.labeling.result_warnings import result_warnings
 from service.server.results import trajectories_to_bytes
 from service.server.store import JobStore, WindowTaken, store_for
 
@@ -47,7 +48,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     where = ""  # "window k: " once the windows are being computed
     try:
         document = read_capture_document(store.input(job_id), "input")  # stored before a check was added: InputError
-        labeling = CaptureLabeling(document.capture(), document.options())
+        capture = document.capture()
+        labeling = CaptureLabeling(capture, document.options())
         outcomes = _resumable_outcomes(store, job_id)
         where = f"window {len(outcomes)}: "
         for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
@@ -62,7 +64,9 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
             return store.known(job_id).state
         # The kept windows replace the stored ones with the result, in one transaction: a
         # restart then finds either the first pass (and refines it again) or a finished job.
-        store.finish(job_id, trajectories_to_bytes(labeling.result(kept)), None if kept is outcomes else (kept, worker))
+        result = labeling.result(kept)
+        store.finish(job_id, trajectories_to_bytes(result), None if kept is outcomes else (kept, worker),
+                     result_warnings(capture, result, "mm" if store.upload(job_id) is None else "the file's unit"))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except InputError as error:  # e.g. a formulation that cannot take one of the windows

@@ -71,6 +71,11 @@ class JobSummary(BaseModel):
 
 class JobStatus(JobSummary):
     windows: list[WindowSummary] = Field(description="Every finished window, in order.")
+    warnings: list[str] = Field(default_factory=list, description=(
+        "Once done, what the labeling warns of, as markerflow track prints it: most labels doubtful, markers "
+        "moving further per frame than they are apart, a take not human-sized in its unit, copied columns, "
+        "a stretch where no marker is labeled though points are there. An integral window is optimal under "
+        "the model, not proven right: these are what the certificate does not see."))
 
 
 class JobAccepted(JobSummary):

@@ -21,7 +21,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
 
 from service.labeling.outcome import WindowOutcome
-from service.server.tables import JobRow, JobState, Upload, UploadRow, WindowRow, engine_for
+from service.server.tables import JobRow, JobState, Upload, UploadRow, WarningsRow, WindowRow, engine_for
 
 ACTIVE: tuple[JobState, ...] = ("queued", "running")
 STATES: tuple[JobState, ...] = get_args(JobState)
@@ -204,9 +204,11 @@ class JobStore:
             session.execute(delete(WindowRow).where(WindowRow.job_id == job_id))
             session.execute(update(JobRow).where(JobRow.id == job_id).values(windows_done=0, updated_at=_now()))
 
-    def finish(self, job_id: str, result: bytes, windows: tuple[list[WindowOutcome], str] | None = None) -> bool:
-        """Store the result of a running job; ``windows`` (outcomes, worker) replace its stored
-        windows in the same transaction (a second pass kept), so a restart never sees a mix."""
+    def finish(self, job_id: str, result: bytes, windows: tuple[list[WindowOutcome], str] | None = None,
+               warnings: list[str] | None = None) -> bool:
+        """Store the result of a running job and what it warns of; ``windows`` (outcomes,
+        worker) replace its stored windows in the same transaction (a second pass kept), so a
+        restart never sees a mix."""
         with self.session.begin() as session:
             moved = session.execute(update(JobRow).where(JobRow.id == job_id, JobRow.state == "running")
                                     .values(updated_at=_now(), state="done", result=result))
@@ -215,7 +217,15 @@ class JobStore:
             if windows is not None:
                 session.execute(delete(WindowRow).where(WindowRow.job_id == job_id))
                 session.add_all([_window_row(job_id, outcome, windows[1]) for outcome in windows[0]])
+            if warnings:
+                session.add(WarningsRow(job_id=job_id, lines=json.dumps(warnings)))
             return True
+
+    def warnings(self, job_id: str) -> list[str]:
+        """What the finished labeling warns of (none before it is done)."""
+        with self.session() as session:
+            lines = session.execute(select(WarningsRow.lines).where(WarningsRow.job_id == job_id)).scalar()
+        return [] if lines is None else [str(line) for line in json.loads(lines)]
 
     def fail(self, job_id: str, error: str) -> bool:
         """A queued job fails too: its executor may give up before it starts (a lost Dask worker)."""

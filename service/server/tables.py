@@ -51,6 +51,16 @@ class UploadRow(Base):
     data: Mapped[bytes] = deferred(mapped_column(LargeBinary))
 
 
+class WarningsRow(Base):
+    """The lines a finished labeling warns of (``service.labeling.result_warnings``), as a
+    JSON list: what ``markerflow track`` prints after its summary. Its own table, so stores
+    made before it get it from ``create_all``; a job done before it has none."""
+
+    __tablename__ = "job_warnings"
+    job_id: Mapped[str] = mapped_column(ForeignKey("jobs.id"), primary_key=True)
+    lines: Mapped[str] = mapped_column(Text)
+
+
 class WindowRow(Base):
     __tablename__ = "windows"
     job_id: Mapped[str] = mapped_column(ForeignKey("jobs.id"), primary_key=True)

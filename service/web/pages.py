@@ -56,7 +56,8 @@ async def job_page(request: Request, job_id: str, markers: Annotated[list[str] |
     labels = await run_in_threadpool(job_labels, db, job)
     context = {"job": job, "active": job.state in ACTIVE, "options": job_options(db, job.id), "windows": windows,
                "summary": certificate_summary(windows) if windows else None, "labels": labels,
-               "doubtful": doubtful_share(windows)}
+               "doubtful": doubtful_share(windows),
+               "warnings": await run_in_threadpool(store.warnings, job.id) if job.state == "done" else []}
     if labels is not None:
         chosen = chosen_markers(labels, markers or [])
         counts = [(name, *(int(mask[:, m].sum()) for _, mask in state_masks(labels)))

@@ -1,0 +1,44 @@
+"""What a finished labeling warns of, one line each: the lines ``markerflow track`` prints
+after its summary, and a job's status and page show once it is done.
+
+An integral window is optimal under the model, not proven right: a take whose labels are
+mostly doubtful, whose markers move further per frame than they are apart, that is not
+human-sized in its unit, has copied columns, or where no marker is labeled though points are
+there, is labeled wrongly in ways the certificate does not see. These lines say so.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from service.capture.capture import Capture
+from service.io.recording import LabeledTrajectories
+from service.labeling.coincident import coincident_pairs, coincident_warning
+from service.labeling.lost_subject import unnamed_span, unnamed_warning
+from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
+from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning
+
+
+def doubtful_warning(fraction: float | None) -> str | None:
+    """A line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
+    if fraction is None or fraction <= DOUBTFUL_WARNING:
+        return None
+    return (f"warning: {fraction:.1%} of the labels are doubtful (confidence below {REPORTED_DOUBTFUL_BELOW:.1%}: "
+            "another reading of their window is nearly as likely); check them")
+
+
+def result_warnings(capture: Capture, result: LabeledTrajectories, unit: str = "mm", start: int = 0) -> list[str]:
+    """Every line that applies to ``result``, the labeling of ``capture`` (whose input was in
+    ``unit``, its labels starting at input frame ``start``)."""
+    fraction = doubtful_fraction(result.confidence, result.occluded) if result.confidence.size else None
+    lines = [
+        doubtful_warning(fraction),
+        fast_motion_warning(fast_markers(result.names, result.positions)),
+        scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit)
+        if capture.points is not None else None,
+        coincident_warning(coincident_pairs(result.names, result.positions)),
+    ]
+    if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against
+        span = unnamed_span(result.occluded, np.array([len(p) for p in capture.points]), capture.rate)
+        lines.append(unnamed_warning(span, capture.rate, start))
+    return [line for line in lines if line is not None]
