@@ -169,3 +169,18 @@ def test_stalled_requests_time_out_and_event_streams_are_limited_per_token(tmp_p
             time.sleep(0.05)
         assert again.status_code == 200
         client.delete(f"/v1/jobs/{job_id}")
+
+
+def test_a_window_finished_after_a_cancel_is_not_stored(tmp_path):
+    """DELETE answered "cancelled, 116 windows" and a window finishing in the worker before
+    it was stopped made it 117: the count a cancel answers must stay what it said."""
+    capture = generated_capture(frames=40, seed=5)
+    store = store_for(f"sqlite:///{tmp_path / 'jobs.db'}")
+    options = LabelingOptions(window=10)
+    labeling = CaptureLabeling(capture, options)
+    job, _ = store.add("local", "json", document_json(capture, options).encode(), labeling.n_windows)
+    first, second = list(labeling.windows())[:2]
+    assert store.start(job.id) and store.save_window(job.id, first, "worker")
+    assert store.cancel(job.id)
+    assert not store.save_window(job.id, second, "worker")
+    assert store.known(job.id).windows_done == 1 and [w.index for w in store.windows(job.id)] == [0]

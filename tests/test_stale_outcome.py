@@ -44,8 +44,9 @@ def test_a_job_with_windows_of_an_older_version_relabels_and_finishes(tmp_path):
     store = store_for(db)
     job, _ = store.add("local", "json", document_json(capture, OPTIONS).encode(), labeling.n_windows)
     older = list(labeling.windows())[:2]
+    assert store.start(job.id)  # the older version had started it: windows are stored while running
     for outcome in older:
-        store.save_window(job.id, outcome, "older")
+        assert store.save_window(job.id, outcome, "older")
     with sqlite3.connect(tmp_path / "jobs.db") as connection:
         for outcome in older:
             connection.execute("UPDATE windows SET outcome = ? WHERE job_id = ? AND \"index\" = ?",

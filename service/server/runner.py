@@ -53,7 +53,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         outcomes = _resumable_outcomes(store, job_id)
         where = f"window {len(outcomes)}: "
         for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
-            store.save_window(job_id, outcome, worker)
+            if not store.save_window(job_id, outcome, worker):  # cancelled while the window ran
+                return store.known(job_id).state
             outcomes.append(outcome)
             where = f"window {len(outcomes)}: " if len(outcomes) < labeling.n_windows else ""
             # Between windows: a cancel (from any process) or a shutdown stops the job here.

@@ -183,20 +183,26 @@ class JobStore:
         """Mark the job running; False if it is no longer queued or running (cancelled, finished)."""
         return self._move(job_id, ACTIVE, state="running")
 
-    def save_window(self, job_id: str, outcome: WindowOutcome, worker: str) -> None:
-        """Store one finished window and count it, in one transaction.
+    def save_window(self, job_id: str, outcome: WindowOutcome, worker: str) -> bool:
+        """Store one finished window and count it, in one transaction; False (nothing stored)
+        when the job is no longer running: a cancel answered with its count of windows, and a
+        window finished after it must not change what it said.
 
         Raises:
             WindowTaken: The window is already stored.
         """
         try:
             with self.session.begin() as session:
+                counted = session.execute(update(JobRow).where(JobRow.id == job_id, JobRow.state == "running")
+                                          .values(windows_done=outcome.index + 1, updated_at=_now()))
+                if cast(CursorResult[Any], counted).rowcount != 1:
+                    raise _NotRunning  # leaving the block rolls the transaction back
                 session.add(_window_row(job_id, outcome, worker))
-                session.flush()
-                session.execute(update(JobRow).where(JobRow.id == job_id)
-                                .values(windows_done=outcome.index + 1, updated_at=_now()))
+        except _NotRunning:
+            return False
         except IntegrityError:
             raise WindowTaken(f"job {job_id} window {outcome.index} is already stored") from None
+        return True
 
     def forget_windows(self, job_id: str) -> None:
         """Drop the job's stored windows (they cannot be resumed from: ``StaleOutcome``)."""
@@ -256,6 +262,10 @@ class JobStore:
                 select(*columns, func.count(), func.coalesce(func.sum(WindowRow.solve_seconds), 0.0))
             ).one()
         return [int(n) for n in below], int(count), float(total)
+
+
+class _NotRunning(Exception):
+    """Inside ``save_window``: the job stopped running, store nothing."""
 
 
 def _window_row(job_id: str, outcome: WindowOutcome, worker: str) -> WindowRow:
