@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from pathlib import Path
 
 import pytest
 from service_fixtures import serving
@@ -14,6 +15,7 @@ from service.server.settings import Settings
 from service.server.store import store_for
 
 DOCUMENT = json.dumps(small_document())
+DATA_C3D = Path(__file__).resolve().parents[2] / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 
 
 @pytest.fixture()
@@ -51,6 +53,24 @@ def test_the_same_idempotency_key_returns_the_same_job(guarded):
     assert _post(client, ALICE, key="take-43").json()["id"] != first.json()["id"]
     listed = client.get("/v1/jobs", headers=as_(ALICE)).json()
     assert listed["total"] == 2
+
+
+def test_a_key_reused_for_another_capture_is_422(guarded):
+    """The second capture was answered 202 with the first's job, and never labeled."""
+    client, _ = guarded
+    first = _post(client, ALICE, key="take-44")
+    other = json.dumps({**small_document(), "window": 3})
+    reused = _post(client, ALICE, key="take-44", body=other)
+    assert reused.status_code == 422, reused.text
+    assert reused.json()["message"].startswith(f"Idempotency-Key: already used for another capture (job {first.json()['id']})")
+
+
+def test_a_field_sent_twice_is_422(guarded):
+    client, _ = guarded
+    upload = DATA_C3D.read_bytes()
+    answer = client.post("/v1/jobs", headers=as_(ALICE), files={"file": ("take.c3d", upload)},
+                         data={"window": ["10", "50"]})
+    assert answer.status_code == 422 and answer.json()["message"] == "window: given 2 times; send each field once"
 
 
 def test_a_retry_is_answered_even_with_the_queue_full(guarded):

@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request, Response
 from starlette.concurrency import run_in_threadpool
 
+from service.errors import InputError
 from service.server.auth import caller
 from service.server.bodies import read_submission, request_body
 from service.server.results import MEDIA_TYPES, render, stored_windows_trajectories, trajectories_from_bytes
@@ -55,17 +56,21 @@ async def submit_job(
     idempotency_key: str | None = Header(
         None, alias="Idempotency-Key", pattern=r"^[!-~]{1,200}$",
         description="Any printable ASCII up to 200 characters, new for each capture: a retried POST with the "
-                    "same key (and token) gets the job the first one made, not a second job."),
+                    "same key (and token) and the same capture gets the job the first one made, not a second job; "
+                    "the key with another capture is a 422."),
 ) -> JobAccepted:
     """Queue a capture for labeling; answered once the job and its input are committed."""
     store, settings = _store(request), request.app.state.settings
     earlier, queued = await run_in_threadpool(store.intake, owner, idempotency_key)  # one thread hop
-    if earlier is not None:
-        return _accepted(response, earlier)
-    if queued >= settings.max_queued_jobs:
+    if earlier is None and queued >= settings.max_queued_jobs:
         raise HTTPException(429, f"{queued} jobs are queued, the limit (max_queued_jobs); retry later",
                             headers={"Retry-After": str(settings.retry_after_seconds)})
+    # read and checked even for a retry: a key reused for another capture must not answer with the first's job
     submission = await read_submission(request, settings.limits, upload=True)
+    if earlier is not None:
+        if await run_in_threadpool(store.input, earlier.id) != submission.stored():
+            raise InputError(f"Idempotency-Key: already used for another capture (job {earlier.id}); use a new key")
+        return _accepted(response, earlier)
     job, new = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows,
                                        idempotency_key, submission.upload)
     if new:

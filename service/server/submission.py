@@ -69,6 +69,8 @@ def labeled_upload(form: FormData, fields: tuple[str, ...], suffixes: tuple[str,
     for name in form:
         if name not in fields:
             raise InputError(f"{name}: unknown form field; the fields are {', '.join(fields)}")
+        if len(form.getlist(name)) > 1:  # which one was meant? the last silently won
+            raise InputError(f"{name}: given {len(form.getlist(name))} times; send each field once")
     listed = ", ".join(suffixes[:-1]) + f" or {suffixes[-1]}"
     upload = form.get("file")
     if not isinstance(upload, UploadFile):
