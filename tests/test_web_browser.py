@@ -118,6 +118,23 @@ def test_the_downloaded_c3d_is_the_librarys(done_job, capture, tmp_path):
     assert len(served.names) == len(expected.names) + expected.unlabeled.shape[1]
 
 
+def test_the_pages_fit_a_400_px_window(done_job):
+    """At 400 px the form was cut off and the jobs table (891 px) scrolled the whole page."""
+    page, job_id = done_job
+    base = page.url.split("/jobs/")[0]
+    page.set_viewport_size({"width": 400, "height": 800})
+    try:
+        for path in ("/", f"/jobs/{job_id}"):
+            page.goto(base + path)
+            page.locator("details").evaluate_all("all => all.forEach(d => d.open = true)")
+            assert page.evaluate("document.documentElement.scrollWidth") <= 400, path
+            for field in page.locator("form#upload input, form#upload select").all():
+                box = field.bounding_box()
+                assert box is None or box["x"] + box["width"] <= 400, path
+    finally:
+        page.set_viewport_size({"width": 1280, "height": 800})
+
+
 def test_another_token_sees_none_of_the_job(browser, base_url, done_job):
     _, job_id = done_job
     context, page = _signed_in(browser, base_url, BOB)
