@@ -137,6 +137,9 @@ def test_json_round_trip_and_wrong_version_refused() -> None:
     data["version"] = 1
     with pytest.raises(FormulationError, match="malformed"):
         SubjectModel.from_json(json.dumps(data))
+    del data["joints"]  # said "malformed: KeyError 'joints'", a Python exception's name
+    with pytest.raises(FormulationError, match="malformed: it has no 'joints' \\(a model holds segments"):
+        SubjectModel.from_json(json.dumps(data))
 
 
 def _segment_of(fit: dict, marker: str) -> str | None:

@@ -56,6 +56,9 @@ class SingleMarker:
     sd: list[float]
 
 
+MODEL_KEYS = ("segments", "joints", "limbs", "singles")  # what a version-1 model holds
+
+
 @dataclass(frozen=True)
 class SubjectModel:
     """Which markers ride on which segment, the joints, the limb lengths and the marker radius."""
@@ -79,10 +82,16 @@ class SubjectModel:
         if not isinstance(data, dict) or data.get("version") != VERSION:
             found = data.get("version") if isinstance(data, dict) else None
             raise FormulationError(f"subject model version {found!r} is not supported (expected {VERSION})")
+        missing = [key for key in MODEL_KEYS if key not in data]
+        if missing:
+            raise FormulationError(f"subject model is malformed: it has no {', '.join(repr(k) for k in missing)} "
+                                   f"(a model holds {', '.join(MODEL_KEYS)})")
         try:
             return _decode(data)
-        except (KeyError, TypeError, ValueError) as error:
-            raise FormulationError(f"subject model is malformed: {type(error).__name__} {error}") from None
+        except KeyError as error:  # a field of one entry: name it, not the exception
+            raise FormulationError(f"subject model is malformed: an entry lacks its {error} field") from None
+        except (TypeError, ValueError) as error:
+            raise FormulationError(f"subject model is malformed: {error}") from None
 
 
 def _decode(data: dict[str, Any]) -> SubjectModel:
