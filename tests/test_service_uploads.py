@@ -12,8 +12,9 @@ import pytest
 from service_fixtures import serving, wait_for
 
 from service.capture.capture import LabelingOptions
-from service.capture.from_recording import capture_from_recording
+from service.capture.from_recording import capture_from_recording, capture_from_span
 from service.io.formats import read_labeled, write_labeled
+from service.labeling.absent_markers import with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.server.settings import Settings
 
@@ -78,3 +79,22 @@ def test_a_done_job_says_what_the_cli_warns_of(client, tmp_path):
     warnings = client.get(f"/v1/jobs/{job}").json()["warnings"]
     assert any("not look human-sized" in line for line in warnings), warnings
     assert any("no marker is labeled" in line for line in warnings), warnings
+
+
+def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path):
+    """A real take lacking markers in frame 0 was refused unless a subject model came with it;
+    ``start`` relabels it from its own labels there, as ``track --start`` does."""
+    racing = DATA / "c3d_kineticstoolkit" / "kinematics_racing_full.c3d"
+    refused = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())})
+    assert refused.status_code == 422 and "send 'start'" in refused.json()["message"]
+    answer = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())},
+                         data={"start": "17", "end": "120"})
+    assert answer.status_code == 202, answer.text
+    job = wait_for(client, answer.json()["id"], timeout=120)
+    assert job["state"] == "done", job
+    served = client.get(f"/v1/jobs/{job['id']}/result", params={"format": "c3d"}).content
+    recording = read_labeled(racing)
+    capture, absent = capture_from_span(recording, 17, 120)
+    labels, _ = CaptureLabeling(capture, LabelingOptions()).label()
+    write_labeled(tmp_path / "library.c3d", with_absent(labels, absent), recording.source, 17)
+    assert absent and served == (tmp_path / "library.c3d").read_bytes()

@@ -22,6 +22,7 @@ from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
 from service.io.recording import LabeledTrajectories, SourceFile
+from service.labeling.absent_markers import with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
@@ -93,7 +94,7 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    write_labeled(output, with_unlabeled(result, absent), source, start or 0)
+    write_labeled(output, with_absent(result, absent), source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
@@ -248,26 +249,6 @@ def _read_input(
         raise InputError(f"{input}: cannot read ({error.strerror})") from None
     document = read_capture_document(text, str(input))
     return document.capture(), document.options(), None, []
-
-
-def with_unlabeled(result: LabeledTrajectories, names: list[str]) -> LabeledTrajectories:
-    """``result`` with markers ``names`` appended, occluded in every frame: written as missing,
-    so a relabeled file holds no label that markerflow did not give."""
-    if not names:
-        return result
-    frames, extra = result.n_frames, len(names)
-
-    def widened(values: np.ndarray, fill: float | int) -> np.ndarray:
-        if values.size == 0:
-            return values
-        return np.concatenate([values, np.full((frames, extra, *values.shape[2:]), fill, dtype=values.dtype)], axis=1)
-
-    return replace(
-        result, names=[*result.names, *names], positions=widened(result.positions, np.nan),
-        occluded=widened(result.occluded, True), point_index=widened(result.point_index, -1),
-        filled=widened(result.filled, np.nan), best_view=widened(result.best_view, -1),
-        confidence=widened(result.confidence, np.nan),
-    )
 
 
 def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[SourceFile | None, str | None]:

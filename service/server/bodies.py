@@ -31,12 +31,17 @@ UPLOAD_SCHEMA = {
     "type": "object",
     "required": ["file"],
     "properties": {
-        "file": {"type": "string", "format": "binary", "description": "Labeled .c3d or .trc; frame 0 names the markers."},
+        "file": {"type": "string", "format": "binary",
+                 "description": "Labeled .c3d or .trc; frame 0 (or 'start') names the markers."},
         "formulation": {"type": "string", "description": "A name, or a JSON object {\"name\": ..., parameters}.",
                         "default": "lp-l1"},
         "window": {"type": "integer", "minimum": 2, "default": 20},
         "model": {"type": "string", "format": "binary", "description": "Subject model JSON (markerflow model): "
                   "frame 0's labels are kept and the model names the markers they leave out."},
+        "start": {"type": "integer", "minimum": 0, "description": "Relabel from the file's labels at this frame "
+                  "(default 0, which must then have every marker); markers absent there are written missing. "
+                  "Not with a model."},
+        "end": {"type": "integer", "minimum": 2, "description": "Label frames before this one (default: to the last)."},
     },
 }
 

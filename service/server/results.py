@@ -20,6 +20,7 @@ from service.capture.document import read_capture_document
 from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
+from service.labeling.absent_markers import with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
 from service.server.tables import Upload
@@ -81,14 +82,19 @@ def trajectories_json(traj: LabeledTrajectories) -> dict:
 
 def render(traj: LabeledTrajectories, format: str, upload: Upload | None = None) -> bytes:
     """The result file's bytes; CSV and C3D through ``write_labeled``, as the CLI writes them:
-    from an ``upload``, in its unit and frame numbering, and a C3D of a C3D is that file with
-    only its points replaced (its analog channels, force plates, events and parameters kept)."""
+    from an ``upload``, in its unit and frame numbering (labels from its ``start``, the markers
+    absent there written missing), and a C3D of a C3D is that file with only its points
+    replaced (its analog channels, force plates, events and parameters kept)."""
     if format == "json":
         return json.dumps(trajectories_json(traj)).encode()
     with tempfile.TemporaryDirectory(prefix="markerflow-result-") as folder:
         path = Path(folder) / f"result.{format}"
         try:
-            write_labeled(path, traj, None if upload is None else _source(upload, traj.names, Path(folder)))
+            if upload is None:
+                write_labeled(path, traj)
+            else:
+                whole = with_absent(traj, list(upload.absent))
+                write_labeled(path, whole, _source(upload, whole.names, Path(folder)), upload.start)
         except InputError as error:  # the writers name their path: the caller sees only the file's name
             raise InputError(str(error).replace(str(path), path.name)) from None
         return path.read_bytes()
@@ -98,7 +104,7 @@ def _source(upload: Upload, names: list[str], folder: Path) -> SourceFile | None
     """What output keeps of the uploaded file (``SourceFile``); a C3D lacking a point for one
     of ``names`` (a subject model's markers) keeps its unit and numbering only. The file was
     read whole, in a bounded child, when the job was accepted: reading it again is safe."""
-    path = folder / f"upload{upload[0]}"
-    path.write_bytes(upload[1])
+    path = folder / f"upload{upload.suffix}"
+    path.write_bytes(upload.data)
     source = read_labeled(path).source
     return replace(source, c3d=None) if source is not None and source.lacking(names) else source

@@ -97,7 +97,8 @@ class JobStore:
                 session.add(row)
                 if upload is not None:
                     session.flush()  # the job row first: the upload's key refers to it
-                    session.add(UploadRow(job_id=row.id, suffix=upload[0], data=upload[1]))
+                    session.add(UploadRow(job_id=row.id, suffix=upload.suffix, data=upload.data, start=upload.start,
+                                          absent=json.dumps(list(upload.absent))))
         except IntegrityError:
             earlier = self.by_key(owner, key) if key is not None else None
             if earlier is None:  # not the key's unique index: a real conflict
@@ -154,10 +155,11 @@ class JobStore:
             return session.execute(select(JobRow.input).where(JobRow.id == job_id)).scalar_one()
 
     def upload(self, job_id: str) -> Upload | None:
-        """The file the job was uploaded as (suffix, bytes); None for a capture document."""
+        """The file the job was uploaded as; None for a capture document."""
         with self.session() as session:
-            row = session.execute(select(UploadRow.suffix, UploadRow.data).where(UploadRow.job_id == job_id)).first()
-        return None if row is None else (row[0], row[1])
+            row = session.execute(select(UploadRow.suffix, UploadRow.data, UploadRow.start, UploadRow.absent)
+                                  .where(UploadRow.job_id == job_id)).first()
+        return None if row is None else Upload(row[0], row[1], row[2], tuple(json.loads(row[3])))
 
     def result(self, job_id: str) -> bytes:
         """The result of a done job (``finish`` stores it with the state)."""

@@ -22,7 +22,7 @@ from formulations.methods.registry import describe
 from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument, describe_validation_error
 from service.capture.formulation_spec import formulation_from_table
-from service.capture.from_recording import capture_from_recording
+from service.capture.from_recording import capture_from_span
 from service.errors import InputError
 from service.io.isolated import ReaderBounds, read_isolated
 from service.io.recording import Recording
@@ -35,7 +35,7 @@ from service.server.prescan import check_depth
 from service.server.settings import Limits
 from service.server.tables import Upload
 
-UPLOAD_FIELDS = ("file", "formulation", "window", "model")
+UPLOAD_FIELDS = ("file", "formulation", "window", "model", "start", "end")
 UPLOAD_SUFFIXES = (".c3d", ".trc")
 
 
@@ -82,26 +82,51 @@ def labeled_upload(form: FormData, fields: tuple[str, ...], suffixes: tuple[str,
 
 
 def upload_submission(form: FormData, limits: Limits) -> Submission:
-    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object), ``window``
-    and ``model`` (a subject model JSON: frame 0 may then be partly labeled, ``model_submission``)."""
+    """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object), ``window``,
+    ``start`` and ``end`` (relabel frames start .. end - 1 from the file's labels at ``start``,
+    the markers absent there left out, as ``markerflow track --start`` does) or ``model`` (a
+    subject model JSON: frame 0 may then be partly labeled, ``model_submission``)."""
     upload, filename = labeled_upload(form, UPLOAD_FIELDS, UPLOAD_SUFFIXES, "file")
     options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
     model = model_field(form.get("model"))
+    start, end = _frame_field(form.get("start"), "start"), _frame_field(form.get("end"), "end")
     recording = read_upload(upload, filename, limits)
     upload.file.seek(0)
-    kept = (filename.suffix.lower(), upload.file.read())
+    data = upload.file.read()
     if model is not None:
-        return replace(_checked(document_with_model(recording, model, options, filename.name), filename.name, limits),
-                       upload=kept)
-    absent = np.flatnonzero(recording.missing()[0])
-    if len(absent):
-        raise InputError(f"file: marker {recording.names[absent[0]]} has no position in the first frame "
-                         "(send a subject model as 'model' to label from a partly labeled frame)")
+        if start is not None or end is not None:
+            raise InputError("start: a subject model labels the whole file; send start and end without a model")
+        document = document_with_model(recording, model, options, filename.name)
+        return replace(_checked(document, filename.name, limits), upload=Upload(filename.suffix.lower(), data))
+    if start is None:
+        _require_complete_first_frame(recording)
     try:
-        document = CaptureDocument.of(capture_from_recording(recording), options)
+        capture, absent = capture_from_span(recording, start or 0, end)
+        document = CaptureDocument.of(capture, options)
     except ValidationError as error:
         raise InputError(describe_validation_error(error)) from None
+    kept = Upload(filename.suffix.lower(), data, start or 0, tuple(absent))
     return replace(_checked(document, filename.name, limits), upload=kept)
+
+
+def _require_complete_first_frame(recording: Recording) -> None:
+    """Frame 0 is the labeled frame unless ``start`` names another: every marker must be there."""
+    markers = recording.without_unlabeled()
+    absent = np.flatnonzero(markers.missing()[0])
+    if len(absent):
+        present = (~markers.missing()).sum(axis=1)
+        best = int(np.argmax(present))
+        raise InputError(f"file: marker {markers.names[absent[0]]} has no position in the first frame; send 'start' "
+                         f"to label from another (frame {best} has {present[best]} of {markers.n_markers} markers; "
+                         "those absent there are written missing), or a subject model as 'model'")
+
+
+def _frame_field(value: str | UploadFile | None, field: str) -> int | None:
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    if not isinstance(value, str) or not re.fullmatch(r"\s*[0-9]{1,9}\s*", value):
+        raise InputError(f"{field}: expected a frame number from 0, got {value!r}")
+    return int(value)
 
 
 def _checked(document: CaptureDocument, source: str, limits: Limits) -> Submission:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from datetime import datetime
 from typing import Literal
 
@@ -11,7 +12,17 @@ from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import DeclarativeBase, Mapped, deferred, mapped_column
 
 JobState = Literal["queued", "running", "done", "failed", "cancelled"]
-Upload = tuple[str, bytes]  # an uploaded file: its suffix (".c3d") and bytes
+
+
+@dataclass(frozen=True)
+class Upload:
+    """An uploaded file: its suffix (".c3d") and bytes, the input frame its labels start at
+    (``start``: a relabel from a later frame), and the markers left out there (absent)."""
+
+    suffix: str
+    data: bytes
+    start: int = 0
+    absent: tuple[str, ...] = ()
 
 
 class Base(DeclarativeBase):
@@ -49,6 +60,8 @@ class UploadRow(Base):
     job_id: Mapped[str] = mapped_column(ForeignKey("jobs.id"), primary_key=True)
     suffix: Mapped[str] = mapped_column(String(8))
     data: Mapped[bytes] = deferred(mapped_column(LargeBinary))
+    start: Mapped[int] = mapped_column(default=0)
+    absent: Mapped[str] = mapped_column(Text, default="[]")  # JSON list of names
 
 
 class WarningsRow(Base):

@@ -27,7 +27,7 @@ from service.server.submission import (
     upload_submission,
 )
 
-FIELDS = ("file", "formulation", "parameters", "window", "association", "model")
+FIELDS = ("file", "formulation", "parameters", "window", "association", "model", "start", "end")
 MODEL_OPTION = "model" in CaptureDocument.model_fields  # a subject model in place of the labeled first frame
 
 
@@ -50,11 +50,14 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     model = form.get("model")
     model = model if MODEL_OPTION and isinstance(model, UploadFile) and model.filename else None
     if Path(name).suffix.lower() in UPLOAD_SUFFIXES:
-        extra = [("model", model)] if model is not None else []
+        extra: list[tuple[str, str | UploadFile]] = [("model", model)] if model is not None else []
+        extra += [(key, value) for key in ("start", "end") if (value := _text(form, key))]
         fields = FormData([("file", upload), ("formulation", formulation), ("window", window or "20"), *extra])
         return upload_submission(fields, limits)
     if Path(name).suffix.lower() != ".json":
         raise InputError(f"file: {name} is not a capture document (.json) or a labeled .c3d/.trc file")
+    if _text(form, "start") or _text(form, "end"):
+        raise InputError("start: a capture document is labeled from its frame 0; start and end are for .c3d/.trc")
     upload.file.seek(0)
     body = upload.file.read()
     check_body_limits(body, limits)  # nesting and sizes from the bytes, before the parse

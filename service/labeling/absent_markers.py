@@ -1,0 +1,31 @@
+"""Markers a relabel leaves out (absent in its labeled frame) put back into its output,
+missing in every frame: a relabeled file holds no label markerflow did not give, and a
+copy of a C3D input clears their points over the labeled span rather than keep the input's."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from service.io.recording import LabeledTrajectories
+
+
+def with_absent(result: LabeledTrajectories, names: list[str]) -> LabeledTrajectories:
+    """``result`` with markers ``names`` appended, occluded in every frame: written as missing,
+    so a relabeled file holds no label that markerflow did not give."""
+    if not names:
+        return result
+    frames, extra = result.n_frames, len(names)
+
+    def widened(values: np.ndarray, fill: float | int) -> np.ndarray:
+        if values.size == 0:
+            return values
+        return np.concatenate([values, np.full((frames, extra, *values.shape[2:]), fill, dtype=values.dtype)], axis=1)
+
+    return replace(
+        result, names=[*result.names, *names], positions=widened(result.positions, np.nan),
+        occluded=widened(result.occluded, True), point_index=widened(result.point_index, -1),
+        filled=widened(result.filled, np.nan), best_view=widened(result.best_view, -1),
+        confidence=widened(result.confidence, np.nan),
+    )
