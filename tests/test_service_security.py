@@ -185,7 +185,7 @@ def test_bad_uploads_are_422_naming_the_file(limited, tmp_path):
         assert answer.status_code == 422, answer.text
         return answer.json()["message"]
 
-    assert upload("take.txt", b"hello") == "file: take.txt is not a .c3d or .trc file"
+    assert upload("take.txt", b"hello") == "file: take.txt is not a .c3d, .trc or .csv file"
     assert upload("take.c3d", b"\x00" * 600).startswith("file: take.c3d: ")
     assert upload("take.trc", b"PathFileType\t4\n").startswith("file: take.trc: ")
     assert upload("take.c3d", b"", window="many") == "window: expected a whole number of frames, got 'many'"

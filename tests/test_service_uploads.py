@@ -98,3 +98,12 @@ def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path)
     labels, _ = CaptureLabeling(capture, LabelingOptions()).label()
     write_labeled(tmp_path / "library.c3d", with_absent(labels, absent), recording.source, 17)
     assert absent and served == (tmp_path / "library.c3d").read_bytes()
+
+
+def test_a_csv_markerflow_wrote_is_an_upload_too(client, tmp_path):
+    """The CLI relabels its own CSV; the service refused it."""
+    _library(RUN, tmp_path / "first.csv")
+    job = _uploaded(client, tmp_path / "first.csv")
+    rows = client.get(f"/v1/jobs/{job}/result", params={"format": "csv"}).text.splitlines()
+    _library(tmp_path / "first.csv", tmp_path / "again.csv")
+    assert rows == (tmp_path / "again.csv").read_text().splitlines() and rows[1].startswith("23,")

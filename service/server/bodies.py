@@ -32,7 +32,7 @@ UPLOAD_SCHEMA = {
     "required": ["file"],
     "properties": {
         "file": {"type": "string", "format": "binary",
-                 "description": "Labeled .c3d or .trc; frame 0 (or 'start') names the markers."},
+                 "description": "Labeled .c3d, .trc or markerflow .csv; frame 0 (or 'start') names the markers."},
         "formulation": {"type": "string", "description": "A name, or a JSON object {\"name\": ..., parameters}.",
                         "default": "lp-l1"},
         "window": {"type": "integer", "minimum": 2, "default": 20},

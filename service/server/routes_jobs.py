@@ -47,7 +47,7 @@ async def _status(request: Request, job: Job) -> JobStatus:
 
 @router.post(
     "", status_code=202, response_model=JobAccepted, openapi_extra=request_body(
-        "A capture document (JSON), or a labeled .c3d/.trc upload relabeled from its first frame.", upload=True),
+        "A capture document (JSON), or a labeled .c3d/.trc/.csv upload relabeled from its first frame.", upload=True),
     responses={413: {"model": ErrorBody}, 415: {"model": ErrorBody}, 422: {"model": ErrorBody},
                429: {"model": ErrorBody, "description": "The queue is full; retry after the Retry-After seconds."}},
 )

@@ -36,7 +36,7 @@ from service.server.settings import Limits
 from service.server.tables import Upload
 
 UPLOAD_FIELDS = ("file", "formulation", "window", "model", "start", "end")
-UPLOAD_SUFFIXES = (".c3d", ".trc")
+UPLOAD_SUFFIXES = (".c3d", ".trc", ".csv")  # .csv: a table markerflow wrote
 
 
 @dataclass(frozen=True)

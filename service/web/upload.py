@@ -42,7 +42,7 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
             raise InputError(f"{name}: unknown form field")
     upload = form.get("file")
     if not isinstance(upload, UploadFile) or not upload.filename:
-        raise InputError("file: choose a capture file (.json, .c3d or .trc)")
+        raise InputError("file: choose a capture file (.json, .c3d, .trc or .csv)")
     name = Path(upload.filename).name
     chosen, parameters = _text(form, "formulation"), _text(form, "parameters")
     formulation = _formulation(chosen or "lp-l1", parameters)
@@ -55,9 +55,9 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
         fields = FormData([("file", upload), ("formulation", formulation), ("window", window or "20"), *extra])
         return upload_submission(fields, limits)
     if Path(name).suffix.lower() != ".json":
-        raise InputError(f"file: {name} is not a capture document (.json) or a labeled .c3d/.trc file")
+        raise InputError(f"file: {name} is not a capture document (.json) or a labeled .c3d/.trc/.csv file")
     if _text(form, "start") or _text(form, "end"):
-        raise InputError("start: a capture document is labeled from its frame 0; start and end are for .c3d/.trc")
+        raise InputError("start: a capture document is labeled from its frame 0; start and end are for .c3d/.trc/.csv")
     upload.file.seek(0)
     body = upload.file.read()
     check_body_limits(body, limits)  # nesting and sizes from the bytes, before the parse
