@@ -135,6 +135,24 @@ def test_the_pages_fit_a_400_px_window(done_job):
         page.set_viewport_size({"width": 1280, "height": 800})
 
 
+def test_a_running_job_page_says_when_its_stream_is_lost(browser, base_url):
+    """With the server down the page kept saying "running" with no sign the stream was gone."""
+    slow = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=200)
+    context, page = _signed_in(browser, base_url, BOB)
+    try:
+        body = document_json(generated_capture(frames=402, seed=3, ghosts_per_frame=15.0), slow)
+        answer = page.request.post(f"{base_url}/v1/jobs", data=body,
+                                   headers={"Authorization": f"Bearer {BOB}", "Content-Type": "application/json"})
+        job_id = answer.json()["id"]
+        page.route("**/events", lambda route: route.abort())  # the server gone: the stream cannot connect
+        page.goto(f"{base_url}/jobs/{job_id}")
+        page.wait_for_function("document.getElementById('progress-text').textContent.includes('connection')")
+        assert "connection to the server lost; retrying" in page.locator("#progress-text").inner_text()
+        page.request.delete(f"{base_url}/v1/jobs/{job_id}", headers={"Authorization": f"Bearer {BOB}"})
+    finally:
+        context.close()
+
+
 def test_another_token_sees_none_of_the_job(browser, base_url, done_job):
     _, job_id = done_job
     context, page = _signed_in(browser, base_url, BOB)

@@ -1,7 +1,8 @@
 // Live progress of a queued or running job from its event stream (/jobs/<id>/events, on the
 // session cookie: EventSource cannot send an Authorization header). Each finished window moves
 // the progress bar and, at most every two seconds, redraws the certificate chart; when the job
-// ends the page reloads once to draw what the result holds.
+// ends the page reloads once to draw what the result holds. While the stream is down (the
+// server restarting) the progress line says so; the browser reconnects by itself.
 "use strict";
 (function () {
   const job = document.getElementById("job");
@@ -20,6 +21,19 @@
   }
 
   const stream = new EventSource("/jobs/" + id + "/events");
+  let lost = false;
+  stream.addEventListener("error", function () {
+    if (!lost && stream.readyState !== EventSource.CLOSED) {
+      lost = true;
+      progressText.textContent += " (connection to the server lost; retrying)";
+    }
+  });
+  stream.addEventListener("open", function () {
+    if (lost) {
+      lost = false;
+      progressText.textContent = progressText.textContent.replace(" (connection to the server lost; retrying)", "");
+    }
+  });
   stream.addEventListener("window", function (event) {
     const data = JSON.parse(event.data);
     progress.max = data.windows_total;
