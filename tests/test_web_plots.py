@@ -80,6 +80,9 @@ def test_the_plots_draw_their_data():
                            solve_seconds=0.01 * (i + 1), round_seconds=0, total_seconds=0.1, components={})
                for i in range(4)]
     empty_certificate = _drawn_paths(certificate_svg([]))
+    # a running job's chart said "3 of 4 windows integral" of 9, as if it were all
+    assert b"3 of 4 windows integral (4 of 9 done)" in certificate_svg(windows, total=9)
+    assert b"3 of 4 windows integral</dc:title>" in certificate_svg(windows, total=4)
     assert _drawn_paths(certificate_svg(windows)) > empty_certificate
     assert _drawn_paths(timeline_svg(labels)) > 5 * 4  # at least a run per marker and state
     assert chosen_markers(labels, ["M3", "nope"]) == ["M3"]

@@ -54,7 +54,7 @@ async def result(request: Request, job_id: str, format: Literal["json", "csv", "
 async def certificate_plot(request: Request, job_id: str, owner: str = Depends(page_owner)) -> Response:
     job = await owned_job(request, job_id, owner)
     windows = await run_in_threadpool(request.app.state.store.windows, job.id)
-    return _svg(await run_in_threadpool(certificate_svg, window_stats(windows)))
+    return _svg(await run_in_threadpool(certificate_svg, window_stats(windows), job.windows_total))
 
 
 @router.get("/plots/timeline.svg")

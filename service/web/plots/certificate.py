@@ -13,11 +13,12 @@ INTEGRAL = Patch(facecolor="0.35", label="integral (solid)")
 FRACTIONAL = Patch(facecolor="white", edgecolor="0.1", hatch=FRACTIONAL_HATCH, label="fractional (hatched)")
 
 
-def certificate_svg(windows: list[WindowStats]) -> bytes:
+def certificate_svg(windows: list[WindowStats], total: int | None = None) -> bytes:
     """Two panels over the window index: the relative gap (cost - bound) / cost, and the solve
     time. An integral window is a solid bar (its gap is 0: the labels are optimal under the
     model); a fractional one is hatched; a window with no proven bound (a heuristic's) is an
-    ``x`` at the top of the gap panel."""
+    ``x`` at the top of the gap panel. ``total``: the job's windows, when more are to come
+    (a running job): the title then says how many are done, not "149 of 149" of 299."""
     figure = new_figure(8.0, 4.2)
     gap_axes, time_axes = figure.subplots(2, 1, sharex=True)
     index = np.arange(len(windows))
@@ -36,12 +37,16 @@ def certificate_svg(windows: list[WindowStats]) -> bytes:
     keys = [INTEGRAL, FRACTIONAL]
     if (~proven).any():
         keys += gap_axes.plot(index[~proven], np.full((~proven).sum(), top * 1.05), "kx", label="no bound proven")
+    coming = total is not None and total > len(windows)
     if len(windows) and integral.all():
-        gap_axes.text(0.5, 0.5, "every window integral: gap 0", transform=gap_axes.transAxes, ha="center", va="center")
+        gap_axes.text(0.5, 0.5, f"every window {'so far ' if coming else ''}integral: gap 0", transform=gap_axes.transAxes,
+                      ha="center", va="center")
     gap_axes.legend(handles=keys, loc="upper right", fontsize=8)
     time_axes.set_xlabel("window")
     if len(windows):
         time_axes.set_xlim(-0.6, len(windows) - 0.4)
     title = f"{int(integral.sum())} of {len(windows)} windows integral"
+    if coming:
+        title += f" ({len(windows)} of {total} done)"
     figure.suptitle(title)
     return svg_bytes(figure, title)
