@@ -140,8 +140,8 @@ def test_an_upload_with_a_model_keeps_its_partly_labeled_frame_0(client, take, t
     held[:8, 3] = np.nan  # S0M3 absent from frame 0 and the seven after it
     upload = _write(tmp_path / "held.c3d", names, held).read_bytes()
     refused = client.post("/v1/jobs", files={"file": ("held.c3d", upload)}, data={"window": "10"})
-    _refused(refused, 422, "file: marker S0M3 has no position in the first frame; send 'start' to label from "
-             "another (frame 8 has")
+    said = _refused(refused, 422, "file: marker 'S0M3' has no position in the first frame (1 of ")
+    assert "start=8 labels from the frame with the most" in said and "subject model as 'model'" in said
     job = client.post("/v1/jobs", files={"file": ("held.c3d", upload), "model": ("subject.json", model)},
                       data={"window": "10"})
     assert job.status_code == 202, job.text

@@ -86,7 +86,7 @@ def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path)
     ``start`` relabels it from its own labels there, as ``track --start`` does."""
     racing = DATA / "c3d_kineticstoolkit" / "kinematics_racing_full.c3d"
     refused = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())})
-    assert refused.status_code == 422 and "send 'start'" in refused.json()["message"]
+    assert refused.status_code == 422 and "start=17 labels from" in refused.json()["message"]
     answer = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())},
                          data={"start": "17", "end": "120"})
     assert answer.status_code == 202, answer.text

@@ -61,8 +61,9 @@ def capture_from_span(
     return replace(span, names=names, first_frame=span.first_frame[present], unnamed_markers=len(absent)), absent
 
 
-def require_complete_first_frame(recording: Recording, source: str) -> None:
-    """Refuse a recording whose frame 0 lacks a marker, pointing at ``--start``.
+def require_complete_first_frame(recording: Recording, source: str, start: str = "--start ", more: str = "") -> None:
+    """Refuse a recording whose frame 0 lacks a marker, pointing at the ``start`` option
+    (``--start `` on the command line, ``start=`` in a service upload), then ``more``.
 
     Raises:
         InputError: A marker is missing in frame 0; the line names it and the fullest frame.
@@ -72,27 +73,24 @@ def require_complete_first_frame(recording: Recording, source: str) -> None:
     if len(absent):
         raise InputError(
             f"{source}: marker '{markers.names[absent[0]]}' has no position in the first frame "
-            f"({len(absent)} of {markers.n_markers} absent); {_start_hint(markers)}"
+            f"({len(absent)} of {markers.n_markers} absent); {_start_hint(markers, start)}{more}"
         )
 
 
-def _start_hint(recording: Recording) -> str:
-    """What ``--start`` to give: the fullest frame, or, when frame 0 is as full as any,
-    that ``--start 0`` labels from it; and a marker no frame has, if any."""
-    missing = recording.missing()
-    present = (~missing).sum(axis=1)
-    best = int(np.argmax(present))
+def _start_hint(recording: Recording, start: str) -> str:
+    """Which ``start`` to give: the fullest frame, or, when frame 0 is as full as any, that
+    ``start`` 0 labels from it; and a marker no frame has, if any."""
+    best, count = recording.fullest_frame()
     if best == 0:
-        hint = (f"no frame has all {recording.n_markers}: --start 0 labels from frame 0, the absent markers "
+        hint = (f"no frame has all {recording.n_markers}: {start}0 labels from frame 0, the absent markers "
                 "written missing")
     else:
-        hint = f"--start {best} labels from the frame with the most ({present[best]} of {recording.n_markers})"
-    never = [name for name, gone in zip(recording.names, np.asarray(missing.all(axis=0), dtype=bool).tolist()) if gone]
+        hint = f"{start}{best} labels from the frame with the most ({count} of {recording.n_markers})"
+    never = recording.without_never_seen()[1]
     return hint + (f"; {never[0]} has no position in any frame" if never else "")
 
 
 def _hint(recording: Recording) -> str:
     """Where the take's labels are fullest: the frame a user would start from."""
-    present = (~recording.missing()).sum(axis=1)
-    best = int(np.argmax(present))
-    return f" (frame {best} has the most markers labeled: {present[best]} of {recording.n_markers})"
+    best, count = recording.fullest_frame()
+    return f" (frame {best} has the most markers labeled: {count} of {recording.n_markers})"

@@ -19,7 +19,7 @@ from service.capture.model_input import check_shared_names, read_model, with_mod
 from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, counted, out, warn, window_progress
 from service.errors import InputError
-from service.io.formats import read_labeled, write_labeled
+from service.io.formats import kept_source, read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.absent_markers import with_absent
@@ -252,16 +252,15 @@ def _read_input(
 
 
 def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[SourceFile | None, str | None]:
-    """What output from a model keeps of its input: all of it when the input has every model
-    marker, else its unit and frame numbering (a C3D lacking a model marker cannot hold its labels);
-    and, for a .c3d output that then loses the input's other content, the warning that says so."""
-    lacking = [] if source is None else source.lacking(names)
-    if source is None or not lacking:
-        return source, None
+    """What output from a model keeps of its input (``kept_source``); and, for a .c3d output
+    that then loses the input's other content, the warning that says so."""
+    kept, lacking = kept_source(source, names)
+    if not lacking:
+        return kept, None
     warning = (f"warning: the input has no point for model markers {', '.join(lacking[:6])}"
                f"{' ...' if len(lacking) > 6 else ''}, so {output.name} is a new C3D of the labels alone (the input's "
                "unit and frame numbering, but not its analog channels, events or other parameters)")
-    return replace(source, c3d=None), warning if output.suffix.lower() == ".c3d" else None
+    return kept, warning if output.suffix.lower() == ".c3d" else None
 
 
 def _formulation_table(spec: str) -> str | dict:

@@ -77,11 +77,10 @@ def _slice(truth: Recording, scenario: Scenario) -> Recording:
     clean = Recording(names=list(truth.names), positions=positions, rate=truth.rate)
     absent = np.flatnonzero(clean.missing()[0])
     if absent.size:
-        present = (~truth.missing()).sum(axis=1)
-        best = int(np.argmax(present))
+        best, count = truth.fullest_frame()
         raise InputError(
             f"marker {clean.names[absent[0]]} has no position in the first frame (frame {start}); scenario key "
-            f"start_frame picks another (frame {best} has {present[best]} of {truth.n_markers} markers)"
+            f"start_frame picks another (frame {best} has {count} of {truth.n_markers} markers)"
         )
     return clean
 

@@ -38,15 +38,12 @@ class SourceFile:
     c3d: Any = None
     first_time: float = 0.0
 
-    def lacking(self, names: list[str]) -> list[str]:
-        """The ``names`` a C3D source has no point of (none for other sources): labels of
-        those (a subject model's markers) cannot go into a copy of the input."""
-        if self.c3d is None:
-            return []
-        point = self.c3d["parameters"]["POINT"]
-        keys = [key for key in point if re.fullmatch(r"LABELS\d*", key)]  # past 255: LABELS2, ...
-        labels = {str(label).strip() for key in keys for label in point[key]["value"]}
-        return [name for name in names if name not in labels]
+    @staticmethod
+    def of_table(unit: str, first_number: float, first_time: float) -> SourceFile:
+        """A TRC's or CSV's numbering, from its first row's frame number (counted from 1; a
+        number that is not a whole one from 1 counts as 1) and time."""
+        whole = float(first_number).is_integer() and first_number >= 1
+        return SourceFile(unit, int(first_number) - 1 if whole else 0, first_time=float(first_time))
 
 
 @dataclass
@@ -95,6 +92,12 @@ class Recording:
         seen = np.asarray(~self.missing().all(axis=0), dtype=bool)
         kept = replace(self, names=[n for n, s in zip(self.names, seen.tolist()) if s], positions=self.positions[:, seen])
         return kept, [n for n, s in zip(self.names, seen.tolist()) if not s]
+
+    def fullest_frame(self) -> tuple[int, int]:
+        """The first frame with the most markers placed, and how many: where a relabel would start."""
+        present = (~self.missing()).sum(axis=1)
+        best = int(np.argmax(present))
+        return best, int(present[best])
 
     def missing(self) -> np.ndarray:
         """``(frames, markers)`` bool: NaN samples, or (0, 0, 0) as some exporters write gaps."""

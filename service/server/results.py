@@ -10,7 +10,6 @@ from __future__ import annotations
 import io
 import json
 import tempfile
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -18,11 +17,12 @@ import numpy as np
 
 from service.capture.document import read_capture_document
 from service.errors import InputError
-from service.io.formats import read_labeled, write_labeled
+from service.io.formats import kept_source, read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.labeling.absent_markers import with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
+from service.server.store import JobStore
 from service.server.tables import Upload
 
 MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3d": "application/octet-stream"}
@@ -101,10 +101,16 @@ def render(traj: LabeledTrajectories, format: str, upload: Upload | None = None)
 
 
 def _source(upload: Upload, names: list[str], folder: Path) -> SourceFile | None:
-    """What output keeps of the uploaded file (``SourceFile``); a C3D lacking a point for one
-    of ``names`` (a subject model's markers) keeps its unit and numbering only. The file was
-    read whole, in a bounded child, when the job was accepted: reading it again is safe."""
+    """What output keeps of the uploaded file (``kept_source``). The file was read whole, in a
+    bounded child, when the job was accepted: reading it again is safe."""
     path = folder / f"upload{upload.suffix}"
     path.write_bytes(upload.data)
-    source = read_labeled(path).source
-    return replace(source, c3d=None) if source is not None and source.lacking(names) else source
+    return kept_source(read_labeled(path).source, names)[0]
+
+
+def job_file(store: JobStore, job_id: str, format: str, done: bool) -> bytes:
+    """A job's result file as the API and the page serve it: the stored result of a ``done``
+    job, else what its stored windows label; from an uploaded file, written as its input."""
+    traj = (trajectories_from_bytes(store.result(job_id)) if done
+            else stored_windows_trajectories(store.input(job_id), store.outcomes(job_id)))
+    return render(traj, format, store.upload(job_id))

@@ -11,7 +11,7 @@ from starlette.concurrency import run_in_threadpool
 from service.errors import InputError
 from service.server.auth import caller
 from service.server.bodies import read_submission, request_body
-from service.server.results import MEDIA_TYPES, render, stored_windows_trajectories, trajectories_from_bytes
+from service.server.results import MEDIA_TYPES, job_file
 from service.server.schemas import ErrorBody, JobAccepted, JobPage, JobStatus, JobSummary, LabeledResult, WindowSummary
 from service.server.store import ACTIVE, Job, JobStore
 from service.server.tables import JobState
@@ -148,14 +148,7 @@ async def job_result(
     job = await _job(request, job_id, owner)
     if job.state != "done" and not partial:
         raise HTTPException(409, f"job {job_id} is {job.state}, not done (partial=true gives its stored windows)")
-    store = _store(request)
-    if job.state == "done":
-        stored = await run_in_threadpool(store.result, job.id)
-        content = await run_in_threadpool(lambda: render(trajectories_from_bytes(stored), format, store.upload(job.id)))
-    else:
-        content = await run_in_threadpool(
-            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format,
-                           store.upload(job.id)))
+    content = await run_in_threadpool(job_file, _store(request), job.id, format, job.state == "done")
     disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
     return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
 

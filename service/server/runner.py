@@ -67,7 +67,7 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         # restart then finds either the first pass (and refines it again) or a finished job.
         result = labeling.result(kept)
         store.finish(job_id, trajectories_to_bytes(result), None if kept is outcomes else (kept, worker),
-                     result_warnings(capture, result, "mm" if store.upload(job_id) is None else "the file's unit"))
+                     result_warnings(capture, result, "the file's unit" if store.uploaded(job_id) else "mm"))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except InputError as error:  # e.g. a formulation that cannot take one of the windows

@@ -161,6 +161,11 @@ class JobStore:
                                   .where(UploadRow.job_id == job_id)).first()
         return None if row is None else Upload(row[0], row[1], row[2], tuple(json.loads(row[3])))
 
+    def uploaded(self, job_id: str) -> bool:
+        """Whether the job came as a file (without reading the file)."""
+        with self.session() as session:
+            return session.execute(select(UploadRow.job_id).where(UploadRow.job_id == job_id)).first() is not None
+
     def result(self, job_id: str) -> bytes:
         """The result of a done job (``finish`` stores it with the state)."""
         with self.session() as session:

@@ -14,7 +14,6 @@ import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
 from pydantic import ValidationError
 from starlette.datastructures import FormData, UploadFile
 
@@ -22,7 +21,7 @@ from formulations.methods.registry import describe
 from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument, describe_validation_error
 from service.capture.formulation_spec import formulation_from_table
-from service.capture.from_recording import capture_from_span
+from service.capture.from_recording import capture_from_span, require_complete_first_frame
 from service.errors import InputError
 from service.io.isolated import ReaderBounds, read_isolated
 from service.io.recording import Recording
@@ -98,8 +97,8 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
             raise InputError("start: a subject model labels the whole file; send start and end without a model")
         document = document_with_model(recording, model, options, filename.name)
         return replace(_checked(document, filename.name, limits), upload=Upload(filename.suffix.lower(), data))
-    if start is None:
-        _require_complete_first_frame(recording)
+    if start is None:  # frame 0 is the labeled frame: every marker must be there
+        require_complete_first_frame(recording, "file", "start=", "; or send a subject model as 'model'")
     try:
         capture, absent = capture_from_span(recording, start or 0, end)
         document = CaptureDocument.of(capture, options)
@@ -107,18 +106,6 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
         raise InputError(describe_validation_error(error)) from None
     kept = Upload(filename.suffix.lower(), data, start or 0, tuple(absent))
     return replace(_checked(document, filename.name, limits), upload=kept)
-
-
-def _require_complete_first_frame(recording: Recording) -> None:
-    """Frame 0 is the labeled frame unless ``start`` names another: every marker must be there."""
-    markers = recording.without_unlabeled()
-    absent = np.flatnonzero(markers.missing()[0])
-    if len(absent):
-        present = (~markers.missing()).sum(axis=1)
-        best = int(np.argmax(present))
-        raise InputError(f"file: marker {markers.names[absent[0]]} has no position in the first frame; send 'start' "
-                         f"to label from another (frame {best} has {present[best]} of {markers.n_markers} markers; "
-                         "those absent there are written missing), or a subject model as 'model'")
 
 
 def _frame_field(value: str | UploadFile | None, field: str) -> int | None:

@@ -9,7 +9,7 @@ from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from starlette.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from service.server.results import MEDIA_TYPES, render, stored_windows_trajectories, trajectories_from_bytes
+from service.server.results import MEDIA_TYPES, job_file
 from service.web.access import owned_job
 from service.web.job_data import Labels, capture_document, job_labels, window_stats
 from service.web.plots.cameras import cameras_svg, detections_used
@@ -36,16 +36,9 @@ async def result(request: Request, job_id: str, format: Literal["json", "csv", "
     """The result file as ``/v1/jobs/{id}/result`` serves it; a job that ended before it was
     done gives its stored windows (``partial=true``)."""
     job = await owned_job(request, job_id, owner)
-    store = request.app.state.store
-    if job.state == "done":
-        content = await run_in_threadpool(
-            lambda: render(trajectories_from_bytes(store.result(job.id)), format, store.upload(job.id)))
-    elif job.state in ("failed", "cancelled"):
-        content = await run_in_threadpool(
-            lambda: render(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)), format,
-                           store.upload(job.id)))
-    else:
+    if job.state not in ("done", "failed", "cancelled"):
         raise HTTPException(409, f"job {job_id} is {job.state}; its result comes when it ends")
+    content = await run_in_threadpool(job_file, request.app.state.store, job.id, format, job.state == "done")
     disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
     return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
 

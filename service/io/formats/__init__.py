@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from service.errors import InputError
-from service.io.formats.c3d import read_c3d, write_c3d
+from service.io.formats.c3d import point_labels, read_c3d, write_c3d
 from service.io.formats.csv import read_csv, write_csv
 from service.io.formats.trc import read_trc, write_trc
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
@@ -47,6 +48,17 @@ def write_labeled(
             cannot be written.
     """
     _by_suffix(_WRITERS, path, "write")(path, traj, source, start)
+
+
+def kept_source(source: SourceFile | None, names: list[str]) -> tuple[SourceFile | None, list[str]]:
+    """What output of the labels ``names`` keeps of ``source``: all of it, unless it is a C3D
+    without a point for some of them (a subject model's markers), whose labels cannot go into a
+    copy of it: then its unit and numbering only; and those names."""
+    if source is None or source.c3d is None:
+        return source, []
+    have = set(point_labels(source.c3d))
+    lacking = [name for name in names if name not in have]
+    return (replace(source, c3d=None) if lacking else source), lacking
 
 
 def check_output(path: str | Path) -> None:

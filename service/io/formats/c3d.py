@@ -17,7 +17,7 @@ import ezc3d
 import numpy as np
 
 from service.errors import InputError
-from service.io.formats.c3d_analog import ChannelParameters, fix_channels, with_confidence
+from service.io.formats.c3d_analog import ChannelParameters, fix_channels, joined_values, with_confidence
 from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout
 from service.io.formats.conventions import (
     from_millimetres,
@@ -193,11 +193,8 @@ def _load(path: Path) -> ezc3d.c3d:
 
 
 def _labels(c3d: ezc3d.c3d, n_markers: int, path: Path) -> list[str]:
-    """POINT:LABELS, continued in LABELS2, LABELS3, ... past 255 markers."""
-    point = c3d["parameters"]["POINT"]
-    keys = [k for k in point if re.fullmatch(r"LABELS\d*", k)]
-    keys.sort(key=lambda k: int(k[len("LABELS") :] or 1))
-    labels = [str(label).strip() for key in keys for label in point[key]["value"]]
+    """POINT:LABELS, continued in LABELS2, LABELS3, ... past 255 markers, checked."""
+    labels = point_labels(c3d)
     if n_markers == 0 or not labels:
         raise InputError(f"{path}: C3D file has no labeled points")
     if len(labels) < n_markers:
@@ -215,6 +212,11 @@ def _labels(c3d: ezc3d.c3d, n_markers: int, path: Path) -> list[str]:
         raise InputError(f"{path}: C3D point {garbled[0] + 1} of {n_markers} has a label that is not UTF-8 text "
                          f"({labels[garbled[0]].encode('utf-8', 'backslashreplace').decode()})")
     return labels
+
+
+def point_labels(c3d: ezc3d.c3d) -> list[str]:
+    """POINT:LABELS, continued in LABELS2, LABELS3, ... past 255 markers."""
+    return [str(label).strip() for label in joined_values(c3d["parameters"]["POINT"], "LABELS")]
 
 
 def _is_utf8(label: str) -> bool:

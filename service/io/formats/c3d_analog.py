@@ -45,7 +45,7 @@ def with_confidence(c3d: ezc3d.c3d, traj: LabeledTrajectories, start: int) -> Ch
     analog, frames = c3d["parameters"]["ANALOG"], c3d["data"]["points"].shape[2]
     data = c3d["data"]["analogs"]
     ratio = data.shape[2] // frames if data.size else 1
-    labels = [str(label).strip() for label in _joined(analog, "LABELS")] if data.size else []
+    labels = [str(label).strip() for label in joined_values(analog, "LABELS")] if data.size else []
     names = [f"{name}{CONFIDENCE_SUFFIX}" for name in traj.names]
     kept = [i for i, label in enumerate(labels) if label not in names]
     values = np.zeros((len(names), frames))
@@ -54,11 +54,11 @@ def with_confidence(c3d: ezc3d.c3d, traj: LabeledTrajectories, start: int) -> Ch
     c3d["data"]["analogs"] = np.concatenate([data[:, kept], added], axis=1) if data.size else added
     channels: ChannelParameters = {"LABELS": [labels[i] for i in kept] + names}
     for key, text in zip(CHANNEL_TEXTS, ("markerflow label confidence", "1"), strict=True):
-        texts = list(_joined(analog, key)) if data.size else []
+        texts = list(joined_values(analog, key)) if data.size else []
         texts += [""] * (len(labels) - len(texts))
         channels[key] = [texts[i] for i in kept] + [text] * len(names)
     for key, number in zip(CHANNEL_NUMBERS, (1.0, 0.0), strict=True):
-        numbers = [float(v) for v in np.ravel(_joined(analog, key))] if data.size else []
+        numbers = [float(v) for v in np.ravel(joined_values(analog, key))] if data.size else []
         numbers += [number] * (len(labels) - len(numbers))
         channels[key] = [numbers[i] for i in kept] + [number] * len(names)
     if not data.size:
@@ -103,10 +103,10 @@ def _set_channels(analog: dict, channels: ChannelParameters) -> ChannelParameter
     return {key: values for key, values in channels.items() if key != "LABELS"}
 
 
-def _joined(analog: dict, key: str) -> list:
-    """``KEY`` continued in ``KEY2``, ``KEY3``, ... (absent: empty)."""
-    keys = sorted((k for k in analog if re.fullmatch(rf"{key}\d*", k)), key=lambda k: int(k[len(key):] or 1))
-    return [value for k in keys for value in np.ravel(analog[k]["value"]).tolist()]
+def joined_values(group: dict, key: str) -> list:
+    """A parameter group's ``KEY`` continued in ``KEY2``, ``KEY3``, ... past 255 values (absent: empty)."""
+    keys = sorted((k for k in group if re.fullmatch(rf"{key}\d*", k)), key=lambda k: int(k[len(key):] or 1))
+    return [value for k in keys for value in np.ravel(group[k]["value"]).tolist()]
 
 
 def _chunks(key: str, values: Sequence) -> list[tuple[str, list]]:

@@ -98,9 +98,7 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
     labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))
-    first = table[0, 0]
-    source = SourceFile("mm", int(first) - 1 if first.is_integer() and first >= 1 else 0, c3d=None,
-                        first_time=float(table[0, 1]))
+    source = SourceFile.of_table("mm", table[0, 0], table[0, 1])
     if confidence is not None:
         labels.confidence = _named_confidence(confidence, names, path)
     if not with_views:

@@ -65,8 +65,8 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
     require_samples(names, positions, path)
-    first_frame, first_time = _numbering(numbered[0][1])
-    source = SourceFile(header["Units"].strip().lower(), first_frame, first_time=first_time)
+    first_row = numbered[0][1].split("\t")  # Frame# and Time checked numbers by _check_order
+    source = SourceFile.of_table(header["Units"].strip().lower(), float(first_row[0]), float(first_row[1]))
     return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
 
 
@@ -120,14 +120,6 @@ def check_trc_names(names: list[str], path: str | Path) -> None:
         if re.search(r"[\t\r\n]", name):
             raise InputError(f"{path}: marker name {name!r} holds a tab or line break, which a TRC cannot; "
                              "write .c3d or .csv")
-
-
-def _numbering(line: str) -> tuple[int, float]:
-    """The first row's Frame# less 1 (TRC counts from 1; 0 when it is not a whole number
-    from 1) and its Time."""
-    cells = line.split("\t")
-    frame, time = float(cells[0]), float(cells[1])
-    return (int(frame) - 1 if frame.is_integer() and frame >= 1 else 0), time
 
 
 def _at_most(count: int, what: str, limit: int | None, name: str, path: Path) -> None:
