@@ -104,13 +104,16 @@ def test_point_jobs_have_no_best_view(tmp_path):
     assert "best_view" not in (tmp_path / "labels.csv").read_text().splitlines()[0]
 
 
-@pytest.mark.parametrize("options,message", [
-    (LabelingOptions(best_view_switch_cost=-1.0), "best_view_switch_cost"),
-    (LabelingOptions(best_view_window=0), "best_view_window"),
+@pytest.mark.parametrize("fields,message", [
+    ({"best_view_switch_cost": -1.0}, "best_view_switch_cost"),
+    ({"best_view_window": 0}, "best_view_window"),
 ])
-def test_bad_best_view_options_are_one_line(options, message):
+def test_bad_best_view_options_are_one_line(fields, message):
     with pytest.raises(InputError, match=message):
-        CaptureLabeling(camera_capture(5, markers=4), options)
+        LabelingOptions(**fields)
+    with pytest.raises(InputError, match=message):  # the view choice checks what is built past the options
+        MarkerViewChoice(camera_capture(5, markers=4).camera_frames()[0], fields.get("best_view_switch_cost", 1.0),
+                         fields.get("best_view_window", 30))
 
 
 def test_an_occluded_marker_is_best_seen_by_the_camera_whose_ray_clears_the_body():

@@ -61,13 +61,13 @@ def test_window_outcome_bytes_round_trip_exactly():
 
 
 @pytest.mark.parametrize(
-    ("options", "message"),
+    ("fields", "message"),
     [
-        (LabelingOptions(formulation="simplex-magic"), "unknown formulation 'simplex-magic'"),
-        (LabelingOptions(formulation={"name": "ilp", "time_limit": -1}), "time_limit"),
-        (LabelingOptions(window=1), "window must be at least 2 frames"),
+        ({"formulation": "simplex-magic"}, "unknown formulation 'simplex-magic'"),
+        ({"formulation": {"name": "ilp", "time_limit": -1}}, "time_limit"),
+        ({"window": 1}, "window must be a whole number of at least 2"),
     ],
 )
-def test_bad_options_are_input_errors(options, message):
+def test_bad_options_are_input_errors(fields, message):
     with pytest.raises(InputError, match=message):
-        CaptureLabeling(points_capture(frames=5), options)
+        CaptureLabeling(points_capture(frames=5), LabelingOptions(**fields))

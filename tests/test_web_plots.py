@@ -53,10 +53,12 @@ def test_a_detection_is_used_exactly_when_a_seen_marker_projects_within_toleranc
     angle = rng.uniform(0, 2 * np.pi, (6, 4))
     distance = np.where(rng.random((6, 4)) < 0.5, 0.5 * USED_PX, 3 * USED_PX)
     offsets = distance[..., None] * np.stack([np.cos(angle), np.sin(angle)], axis=2)
-    detections = [[projected[f] + offsets[f]] for f in range(6)]
+    detections = [[projected[f] + offsets[f], np.empty((0, 2))] for f in range(6)]  # cam2 sees nothing
     labels = Labels([f"M{m}" for m in range(4)], 100.0, np.where(occluded[..., None], np.nan, positions), occluded,
                     np.zeros_like(occluded), np.zeros_like(occluded), "test", None)
-    capture = Capture(labels.names, positions[0], 100.0, cameras=[camera], detections=detections)
+    other = Camera(K=camera.K, distortion=camera.distortion, R=camera.R, t=camera.t, image_size=camera.image_size,
+                   name="cam2")
+    capture = Capture(labels.names, positions[0], 100.0, cameras=[camera, other], detections=detections)
     total, used = detections_used(capture, labels)["cam1"]
     # By hand: a detection counts if any seen marker's projection is within USED_PX of it.
     expected = [sum(any(not occluded[f, m] and np.linalg.norm(d - projected[f, m]) <= USED_PX for m in range(4))

@@ -15,6 +15,14 @@ import numpy as np
 from formulations.cameras.camera import Camera
 from formulations.methods.formulation import Formulation
 from formulations.subject.model import SubjectModel
+from service.capture.checks import (
+    checked_count,
+    checked_detections,
+    checked_first_frame,
+    checked_frames,
+    checked_names,
+    checked_rate,
+)
 from service.errors import InputError
 
 ASSOCIATIONS = ("joint-3d", "per-camera")
@@ -50,6 +58,20 @@ class LabelingOptions:
     best_view_window: int = 30
     second_pass: bool = True
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.formulation, (str, dict, Formulation)):
+            raise InputError(f"formulation must be a name, a table or a Formulation, got {self.formulation!r}")
+        checked_count(self.window, "window", least=2)
+        checked_count(self.best_view_window, "best_view_window", least=1)
+        if self.association not in ASSOCIATIONS:
+            raise InputError(f"association must be one of {', '.join(ASSOCIATIONS)}, got {self.association!r}")
+        for name in ("layout_weight", "best_view_switch_cost"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
+                raise InputError(f"{name} must be a finite number of at least 0, got {value!r}")
+        if not isinstance(self.second_pass, bool):
+            raise InputError(f"second_pass must be True or False, got {self.second_pass!r}")
+
 
 @dataclass
 class Capture:
@@ -78,12 +100,33 @@ class Capture:
     unnamed_markers: int = 0
 
     def __post_init__(self) -> None:
+        """Check and normalise what a notebook may hand in (``service.capture.checks``)."""
         if (self.points is None) == (self.detections is None):
             raise InputError("a capture has either 3D points or camera detections, not both or neither")
         if self.detections is not None and not self.cameras:
             raise InputError("camera detections need the cameras' calibration")
         if self.model is not None and self.points is None:
             raise InputError("labeling from a subject model needs 3D points (camera mode needs a labeled first frame)")
+        self.names = checked_names(self.names)
+        self.first_frame = checked_first_frame(self.first_frame, len(self.names))
+        self.rate = checked_rate(self.rate)
+        self.unnamed_markers = checked_count(self.unnamed_markers, "unnamed_markers")
+        if self.points is not None:
+            self.points = checked_frames(self.points, 3, "points")
+        else:
+            self._check_cameras()
+
+    def _check_cameras(self) -> None:
+        cameras = list(self.cameras or [])
+        if len(cameras) < 2 or not all(isinstance(camera, Camera) for camera in cameras):
+            raise InputError(f"camera mode needs at least 2 calibrated cameras (Camera), got {len(cameras)}")
+        self.detections = checked_detections(self.detections, len(cameras))
+        for f, frame in enumerate(self.detections):
+            for camera, pixels in zip(cameras, frame):
+                outside = np.flatnonzero(~camera.in_image(pixels))
+                if len(outside):
+                    raise InputError(f"detections[{f}] of camera {camera.name!r}: {pixels[outside[0]].tolist()} is "
+                                     f"outside its {camera.image_size[0]}x{camera.image_size[1]} image")
 
     @property
     def mode(self) -> str:

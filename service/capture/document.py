@@ -36,17 +36,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
+from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE
 from service.capture.model_input import model_names, parse_model, with_model
 from service.errors import InputError
 
 # 1e9 (1000 km in mm) bounds every number: sums of squares of larger finite values overflow
 # to inf inside the geometry, and no capture is that big.
-Finite = Annotated[float, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
+Finite = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
 Point3 = tuple[Finite, Finite, Finite]
 Pixel = tuple[Finite, Finite]
 MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
 _ONE_ROTATION = "give the world -> camera rotation as exactly one of R or rvec"
-MIN_RATE, MAX_RATE = 1e-3, 1e5  # Hz: see CaptureDocument.rate
 MAX_NAME_BYTES = 255  # a C3D parameter's dimensions are single bytes: longer labels make an unreadable file
 
 

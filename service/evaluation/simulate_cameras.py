@@ -97,7 +97,7 @@ def simulate_cameras(
 
     1. Project every sample into every camera (``Rig.project``, i.e. ``cv2.projectPoints``).
     2. Add ``N(0, pixel_noise^2)`` to each pixel coordinate.
-    3. Drop projections behind a camera or outside ``[0, w) x [0, h)``, and missing samples.
+    3. Drop projections behind a camera or off the sensor (``[-0.5, w - 0.5]`` per axis), and missing samples.
     4. Occlude in bursts with a visible/occluded Markov chain per (camera, marker):
        ``p_leave = 1/b``, ``p_enter = r / (b (1 - r))`` for stationary rate ``r`` and mean
        burst ``b``. Frame 0 is never occluded: the user labels it.
@@ -143,8 +143,8 @@ def simulate_cameras(
     size = rig.image_size[None, :, None, :]
     seen = (
         (rig.depth(samples).reshape(F, N, C).transpose(0, 2, 1) > 0)
-        & (pixels >= 0).all(axis=3)
-        & (pixels < size).all(axis=3)
+        & (pixels >= -0.5).all(axis=3)  # on the sensor, as ``Camera.in_image`` (pixel centres at integers)
+        & (pixels <= size - 0.5).all(axis=3)
         & ~missing[:, None, :]
         & ~_occlusions(rng, (F, C, N), r / (b * (1.0 - r)), 1.0 / b)
     )
@@ -225,4 +225,4 @@ def _clutter(
     """``Poisson(rate)`` uniform points per (frame, camera) group: group ids and pixels."""
     group = np.repeat(np.arange(n_groups), rng.poisson(rate, n_groups))
     n_cameras = len(image_size)
-    return group, rng.random((len(group), 2)) * image_size[group % n_cameras]
+    return group, rng.random((len(group), 2)) * image_size[group % n_cameras] - 0.5  # the sensor, as in_image
