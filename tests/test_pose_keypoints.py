@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from pose_scenes import background, keypoints, set_angle, silhouette_maps, walking
@@ -12,6 +14,7 @@ from formulations.pose.human import human_model
 from formulations.pose.keypoints import BODY_25B
 from formulations.pose.kinematics import forward_kinematics
 from formulations.pose.silhouette import SilhouetteMeasurement
+from service.errors import InputError
 from service.io.calibration import load_calibration
 from service.pose.openpose import read_openpose_file, write_openpose_file
 from service.pose.participant import choose_participant
@@ -57,6 +60,17 @@ def test_openpose_files_round_trip(tmp_path) -> None:
     assert np.allclose(read_openpose_file(tmp_path / "cam01.0000.json"), people)
     write_openpose_file(tmp_path / "empty.json", np.empty((0, len(BODY_25B), 3)))
     assert read_openpose_file(tmp_path / "empty.json").shape == (0, len(BODY_25B), 3)
+
+
+@pytest.mark.parametrize("value", [None, "NaN", "Infinity", 1e30])
+def test_a_keypoint_that_is_not_a_pixel_is_refused_in_one_line(tmp_path, value) -> None:
+    """A null or NaN keypoint used to reach the particle filter as a non-finite energy."""
+    values = [0.0] * (3 * len(BODY_25B))
+    values[3 * 5] = value  # LShoulder's x
+    text = json.dumps({"people": [{"pose_keypoints_2d": values}]}).replace('"NaN"', "NaN").replace('"Infinity"', "Infinity")
+    (tmp_path / "cam01.0000.json").write_text(text)
+    with pytest.raises(InputError, match=f"person 0's {BODY_25B[5]} keypoint is .*an undetected keypoint is 0, 0, 0"):
+        read_openpose_file(tmp_path / "cam01.0000.json")
 
 
 @needs_data

@@ -19,6 +19,7 @@ from formulations.pose.keypoints import BODY_25B
 from service.errors import InputError
 
 VALUES = 3 * len(BODY_25B)
+MAX_PIXEL = 1e9  # as a capture's coordinates (``service.capture.checks``): larger overflow in the geometry
 
 
 @dataclass(frozen=True)
@@ -60,10 +61,22 @@ def read_openpose_file(path: Path) -> np.ndarray:
             found = len(values) if isinstance(values, list) else "no"
             raise InputError(f"{path}: person {number} has {found} pose_keypoints_2d values, BODY_25B has {VALUES}")
         try:
-            people.append(np.array(values, dtype=float).reshape(len(BODY_25B), 3))
+            keypoints = np.array(values, dtype=float).reshape(len(BODY_25B), 3)
         except (TypeError, ValueError):
             raise InputError(f"{path}: person {number} has non-numeric keypoints") from None
+        people.append(_checked(keypoints, path, number))
     return np.array(people).reshape(-1, len(BODY_25B), 3)
+
+
+def _checked(keypoints: np.ndarray, path: Path, number: int) -> np.ndarray:
+    """A null (read as NaN), infinite or absurd value would reach the particle filter's
+    energy as NaN; OpenPose writes an undetected keypoint as 0, 0, 0, so say so."""
+    bad = np.flatnonzero(~(np.abs(keypoints[:, :2]) <= MAX_PIXEL).all(axis=1) | ~(keypoints[:, 2] >= 0))
+    if len(bad):
+        name, value = BODY_25B[bad[0]], keypoints[bad[0]].tolist()
+        raise InputError(f"{path}: person {number}'s {name} keypoint is {value}: coordinates must be finite pixels "
+                         f"and the confidence a number >= 0 (an undetected keypoint is 0, 0, 0)")
+    return keypoints
 
 
 def write_openpose_file(path: Path, people: np.ndarray) -> None:
