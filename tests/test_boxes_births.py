@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from formulations.boxes.conflicts import ConflictRule, conflict_resources, distinct_chains
 from formulations.boxes.lifecycle import Lifecycle, reentries
 from service.boxes.detections import BoxDetections
 from service.boxes.track import track_boxes
@@ -83,3 +84,12 @@ def test_a_newcomer_a_lost_object_took_in_a_windows_last_frames_is_born_there(se
         b = tracks.track_id[near & (tracks.frame >= 16)]
         assert len(a) == 1 and len(set(b.tolist())) == 1 and (a != set(b.tolist())) == apart
         assert len(b) == 25  # every box of B tracked, from its first on
+
+
+def test_of_two_parallel_chains_of_one_person_one_is_kept_and_a_crossing_chain_stays():
+    boxes = np.array([[0, 0, 10, 20], [0, 0, 10, 20], [1, 0, 11, 20], [1, 0, 11, 20], [30, 0, 40, 20],
+                      [2, 0, 12, 20]], dtype=float)
+    frame = np.array([1, 1, 2, 2, 1, 2])
+    conflicting = conflict_resources(ConflictRule(), frame, boxes)
+    person, twin, crossing = np.array([0, 2]), np.array([1, 3]), np.array([4, 5])  # crossing meets the person at 2
+    assert [c.tolist() for c in distinct_chains([twin, person, crossing], conflicting)] == [[1, 3], [4, 5]]

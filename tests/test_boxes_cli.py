@@ -83,3 +83,37 @@ def test_occluded_boxes_are_written_unless_turned_off(tmp_path):
         assert (rows[:, 6] == 0).sum() == summary["occluded_boxes"]
         counts[bool(flag)] = summary["occluded_boxes"]
     assert counts[True] == 0 < counts[False]
+
+
+@pytest.mark.skipif(not DETECTIONS.exists(), reason="needs ../shared/data (TUD-Campus detections)")
+def test_frames_numbered_in_steps_track_nothing_and_say_so_and_the_empty_result_scores_zero(tmp_path):
+    rows = np.loadtxt(DETECTIONS, delimiter=",")
+    rows[:, 0] *= 50  # one detection frame in 50: no box has a successor to start a track with
+    stepped, result = tmp_path / "det.txt", tmp_path / "result.txt"
+    np.savetxt(stepped, rows, fmt="%g", delimiter=",")
+    run = runner.invoke(app, ["boxes", str(stepped), "--out", str(result), "--json"])
+    assert run.exit_code == 0, run.output
+    assert json.loads(run.stdout)["tracked_boxes"] == 0 and result.read_text() == ""
+    assert "none of the 321 detections is in a track" in run.stderr
+    scored = runner.invoke(app, ["mot-eval", str(result), str(GT), "--json"])
+    assert scored.exit_code == 0, scored.output
+    scores = json.loads(scored.stdout)
+    assert scores["hota"] == scores["mota"] == scores["idf1"] == 0 and scores["gt_ids"] > 0
+
+
+@pytest.mark.skipif(not DETECTIONS.exists(), reason="needs ../shared/data (TUD-Campus detections)")
+def test_a_result_given_as_ground_truth_is_refused(tmp_path):
+    result = tmp_path / "result.txt"
+    assert runner.invoke(app, ["boxes", str(DETECTIONS), "--out", str(result)]).exit_code == 0
+    swapped = runner.invoke(app, ["mot-eval", str(GT), str(result)])
+    assert swapped.exit_code == 2 and "counts none of its boxes as ground truth" in swapped.output
+
+
+@pytest.mark.skipif(not DETECTIONS.exists(), reason="needs ../shared/data (TUD-Campus detections)")
+def test_a_detection_given_twice_is_tracked_once(tmp_path):
+    """Each duplicated box used to start a second object of its own (25 tracks instead of 11)."""
+    doubled = tmp_path / "det.txt"
+    doubled.write_text("".join(line + "\n" + line + "\n" for line in DETECTIONS.read_text().splitlines()))
+    for det, out in ((DETECTIONS, "once.txt"), (doubled, "twice.txt")):
+        assert runner.invoke(app, ["boxes", str(det), "--out", str(tmp_path / out)]).exit_code == 0
+    assert (tmp_path / "twice.txt").read_text() == (tmp_path / "once.txt").read_text()

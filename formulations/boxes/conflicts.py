@@ -68,3 +68,22 @@ def conflict_resources(rule: ConflictRule, frame: NDArray[np.int_], boxes: NDArr
         return sp.csr_matrix((k, k))
     r, c = np.concatenate(rows), np.concatenate(cols)
     return sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(k, k))
+
+
+def distinct_chains(chains: list[NDArray[np.int_]], conflicting: sp.csr_matrix) -> list[NDArray[np.int_]]:
+    """The chains that are not another chain seen twice: longest first, a chain each of whose
+    boxes is in the conflict set of a box of a chain already kept is dropped.
+
+    Two detections of one person (a detector's duplicate, or two boxes overlapping past the
+    conflict rule) link into two parallel chains; each would be born an object, and the two
+    objects then share the person's boxes, one of them held occluded. A chain crossing a kept
+    one shares only some frames with it and stays.
+    """
+    kept: set[int] = set()
+    covered = np.zeros(conflicting.shape[0], dtype=bool)
+    for i in sorted(range(len(chains)), key=lambda i: -len(chains[i])):
+        if len(chains[i]) and covered[chains[i]].all():
+            continue
+        kept.add(i)
+        covered[conflicting[chains[i]].indices] = True
+    return [chain for i, chain in enumerate(chains) if i in kept]

@@ -41,8 +41,11 @@ class SequenceInfo:
     image_ext: str
 
 
-def read_rows(path: Path) -> np.ndarray:
-    """``(K, columns)`` floats of a MOTChallenge file; one-line ``InputError`` when it is not one."""
+def read_rows(path: Path, empty_ok: bool = False) -> np.ndarray:
+    """``(K, columns)`` floats of a MOTChallenge file; one-line ``InputError`` when it is not one.
+
+    ``empty_ok``: an empty file is ``(0, MAX_COLUMNS)`` (a tracker that reported no one),
+    not an error."""
     try:
         text = path.read_text()
     except OSError as error:
@@ -50,6 +53,8 @@ def read_rows(path: Path) -> np.ndarray:
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a text file") from None
     lines = [line for line in text.splitlines() if line.strip()]
+    if not lines and empty_ok:
+        return np.empty((0, MAX_COLUMNS))
     if not lines:
         raise InputError(f"{path}: no boxes in the file")
     widths = {len(line.split(",")) for line in lines}

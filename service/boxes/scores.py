@@ -59,7 +59,7 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
     from trackeval.metrics import CLEAR, HOTA, Identity
     from trackeval.utils import TrackEvalException
 
-    truth, rows = read_rows(gt), read_rows(result)
+    truth, rows = read_rows(gt), read_rows(result, empty_ok=True)
     length = _length(gt, seqinfo, truth, rows)
     classes = truth.shape[1] >= 8 and bool(np.isin(truth[:, 7], np.arange(1, 14)).all())
     with tempfile.TemporaryDirectory(prefix="markerflow-mot-") as folder:
@@ -73,7 +73,7 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
         config = {
             "GT_FOLDER": str(root / "gt"), "TRACKERS_FOLDER": str(root / "trackers"), "SKIP_SPLIT_FOL": True,
             # Frames after the last box add nothing to any score: TrackEval need not step through them.
-            "SEQ_INFO": {SEQUENCE: int(max(truth[:, 0].max(), rows[:, 0].max()))}, "BENCHMARK": "MOT17" if classes else "MOT15",
+            "SEQ_INFO": {SEQUENCE: _last_frame(truth, rows)}, "BENCHMARK": "MOT17" if classes else "MOT15",
             "TRACKERS_TO_EVAL": [TRACKER], "PRINT_CONFIG": False,
         }
         try:
@@ -81,6 +81,9 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
             data = dataset.get_preprocessed_seq_data(dataset.get_raw_seq_data(TRACKER, SEQUENCE), "pedestrian")
         except TrackEvalException as error:
             raise InputError(f"{result} against {gt}: {error}") from None
+    if not data["num_gt_ids"]:  # every score would read 0 and say nothing of the tracker
+        raise InputError(f"{gt}: TrackEval counts none of its boxes as ground truth (none marked to be "
+                         "considered, or none a pedestrian); is it a result file?")
     quiet = {"PRINT_CONFIG": False}
     hota = HOTA().eval_sequence(data)
     clear = CLEAR(quiet).eval_sequence(data)
@@ -96,9 +99,13 @@ def _length(gt: Path, seqinfo: Path | None, truth: np.ndarray, rows: np.ndarray)
     beside = gt.parent.parent / "seqinfo.ini"
     source = seqinfo if seqinfo is not None else (beside if beside.is_file() else None)
     if source is None:
-        return int(max(truth[:, 0].max(), rows[:, 0].max()))
+        return _last_frame(truth, rows)
     length = read_seqinfo(source).length
-    last = int(max(truth[:, 0].max(), rows[:, 0].max()))
+    last = _last_frame(truth, rows)
     if last > length:
         raise InputError(f"frame {last} is past the sequence's {length} frames ({source})")
     return length
+
+
+def _last_frame(truth: np.ndarray, rows: np.ndarray) -> int:
+    return int(max(truth[:, 0].max(), rows[:, 0].max(initial=1)))

@@ -38,7 +38,7 @@ import scipy.sparse as sp
 from formulations import build_window, get_formulation
 from formulations.boxes.births import BirthRates
 from formulations.boxes.candidates import box_window
-from formulations.boxes.conflicts import ConflictRule, conflict_resources
+from formulations.boxes.conflicts import ConflictRule, conflict_resources, distinct_chains
 from formulations.boxes.costs import BoxCostModel
 from formulations.boxes.geometry import corners
 from formulations.boxes.lifecycle import Lifecycle, born, reentries
@@ -127,8 +127,8 @@ def track_boxes(
         if lifecycle.returns_compete:  # a lost object's chain: a return or a newcomer
             returned[reentries(before.last_seen, taken, t0)] = True
             unclaimed[returned] = 0
-        chains = lifecycle.window_chains(frame, boxes, ~_explained(unclaimed, conflicting), returned, t0, m,
-                                         detections.n_frames)
+        chains = distinct_chains(lifecycle.window_chains(frame, boxes, ~_explained(unclaimed, conflicting), returned,
+                                                         t0, m, detections.n_frames), conflicting)
         barred: list[tuple[int, np.ndarray]] = []
         if lifecycle.returns_compete:
             chains, barred = tested_chains(chains, before, owner, frame, boxes, t0, volume, births.newcomer_cost)

@@ -30,6 +30,16 @@ def long_window_warning(window: int, detections: int, tracked: int) -> str | Non
             f"against its first frame's forecast, so long ones lose people; try --window {TUNED_WINDOW}")
 
 
+def no_track_warning(detections: int, tracked: int) -> str | None:
+    """A line when nothing was tracked: the result file is empty, which a wrong frame column
+    (e.g. frames numbered in steps) makes silently, as births need boxes in consecutive frames."""
+    if tracked or not detections:
+        return None
+    hits = Lifecycle().min_hits
+    return (f"warning: none of the {detections} detections is in a track (an object is born from {hits} overlapping "
+            f"boxes in consecutive frames); is column 1 the frame number, counted in steps of 1?")
+
+
 def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | None, images: Path | None,
               window: int, as_json: bool, newcomer_test: bool = True, occluded: bool = True) -> None:
     """Read ``detections``, track them window by window, write ``output``, print the figures;
@@ -61,3 +71,4 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
     else:
         out.print(" ".join(f"{key}={value}" for key, value in summary.items()), highlight=False)
     warn(long_window_warning(window, len(boxes.frame), len(run.tracks.frame)))
+    warn(no_track_warning(len(boxes.frame), len(run.tracks.frame)))
