@@ -81,3 +81,19 @@ BAD_INPUT: dict[str, Case] = {
 def test_bad_input_is_one_line_and_exit_code_2(case: Case, tmp_path: Path) -> None:
     args, words = case(tmp_path)
     assert_input_error(run_cli(*args), *words)
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["track", "x.c3d", "--window", "abc"], ["Invalid value for '--window'", "(see markerflow track --help)"]),
+    (["best-view", "c.csv", "--switch-cost", "abc", "--out", "o.csv"], ["Invalid value for '--switch-cost'"]),
+    (["track"], ["Missing argument 'input'"]),
+    (["tarck"], ["No such command 'tarck'", "(see markerflow --help)"]),
+])
+def test_a_usage_mistake_is_one_line_like_any_other(args: list[str], words: list[str]) -> None:
+    """Typer drew these as a six-line box under a usage line."""
+    assert_input_error(run_cli(*args), *words)
+
+
+def test_no_command_shows_the_help() -> None:
+    shown = run_cli()
+    assert "Usage: " in shown.stdout + shown.stderr and "error:" not in shown.stderr

@@ -1,5 +1,5 @@
 """``python -m service.cli``: the same command line as ``markerflow``."""
 
-from service.cli.app import app
+from service.cli.entry import run
 
-app()
+run()

@@ -260,6 +260,3 @@ def _guard(action) -> None:
         err.print(f"[red]error:[/red] {escape(str(error))}", highlight=False, soft_wrap=True)
         raise typer.Exit(2) from None
 
-
-if __name__ == "__main__":
-    app()

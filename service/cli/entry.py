@@ -1,0 +1,39 @@
+"""The ``markerflow`` program: the Typer app, with usage mistakes as one line like any other.
+
+Typer shows a bad option value (``--window abc``) as a usage line, a hint and a boxed error
+over six lines; scripts and users read every other mistake as one ``error:`` line on stderr
+with exit code 2 (``app._guard``), so these are printed the same way.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+from rich.markup import escape
+from typer.exceptions import TyperException
+
+from service.cli.app import app
+from service.cli.report import err
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line on ``argv`` (``sys.argv[1:]`` by default); the exit code."""
+    try:
+        code = app(args=argv, prog_name="markerflow", standalone_mode=False)
+    except TyperException as error:  # a usage mistake (click's UsageError, as Typer vendors it)
+        if not error.format_message():  # no command given: the help was the answer
+            return error.exit_code
+        context = getattr(error, "ctx", None)
+        command = context.command_path if context is not None else "markerflow"
+        err.print(f"[red]error:[/red] {escape(error.format_message())} (see {escape(command)} --help)",
+                  highlight=False, soft_wrap=True)
+        return error.exit_code
+    except typer.Abort:  # end of input at a prompt
+        err.print("aborted")
+        return 1
+    return code if isinstance(code, int) else 0
+
+
+def run() -> None:
+    sys.exit(main())
