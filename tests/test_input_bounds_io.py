@@ -142,14 +142,70 @@ def test_trc_rows_out_of_order_are_refused(tmp_path):
         read_labeled(path)
 
 
-def test_trc_frame_numbers_may_skip(tmp_path):
+def test_trc_frame_numbers_may_skip_and_are_written_back(tmp_path):
     path = write_table(tmp_path / "t.trc", take())
     lines = path.read_text().splitlines()
     for i in range(6, len(lines)):  # every other frame of a take at twice the rate
         frame, time, rest = lines[i].split("\t", 2)
         lines[i] = f"{2 * int(frame)}\t{time}\t{rest}"
     path.write_text("\n".join(lines) + "\n")
-    np.testing.assert_allclose(read_labeled(path).positions, take())
+    back = read_labeled(path)
+    np.testing.assert_allclose(back.positions, take())
+    assert _numbers(_relabeled(back, tmp_path / "out.trc")) == list(range(2, 61, 2))  # written back as they were
+
+
+def _relabeled(recording, path: Path) -> list[list[str]]:
+    """The table ``path`` written from ``recording`` as its labels, as rows of cells."""
+    labels = LabeledTrajectories(recording.names, recording.positions, np.zeros(recording.positions.shape[:2], bool),
+                                 recording.rate)
+    write_labeled(path, labels, recording.source)
+    text = path.read_text().splitlines()
+    return [line.split(",") for line in text[1:]] if path.suffix == ".csv" else [line.split("\t") for line in text[6:]]
+
+
+def _numbers(rows: list[list[str]]) -> list[int]:
+    return [int(row[0]) for row in rows]
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".trc"])
+def test_a_table_counting_its_frames_from_0_keeps_them(tmp_path, suffix):
+    path = write_table(tmp_path / f"t{suffix}", take())
+    first_row = 1 if suffix == ".csv" else 6
+    lines = path.read_text().splitlines()
+    separator = "," if suffix == ".csv" else "\t"
+    for i in range(first_row, len(lines)):
+        frame, rest = lines[i].split(separator, 1)
+        lines[i] = f"{int(frame) - 1}{separator}{rest}"
+    path.write_text("\n".join(lines) + "\n")
+    assert _numbers(_relabeled(read_labeled(path), tmp_path / f"out{suffix}")) == list(range(30))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".trc"])
+@pytest.mark.parametrize(("row", "message"), [
+    (12, "frame 12 at time 0.11 does not follow frame 12 at time 0.11; rows must be in order"),  # a row repeated
+    (None, "is 0.02 s after the row before, the rows' step is 0.01 s; rows must be evenly spaced in time"),
+])
+def test_table_rows_repeated_or_unevenly_timed_are_refused(tmp_path, suffix, row, message):
+    path = write_table(tmp_path / f"t{suffix}", take())
+    first_row = 1 if suffix == ".csv" else 6
+    lines = path.read_text().splitlines()
+    if row is None:  # frame 15 dropped: its neighbours 0.02 s apart
+        del lines[first_row + 14]
+    else:
+        lines.insert(first_row + row, lines[first_row + row - 1])
+    if suffix == ".trc":  # NumFrames as the rows now are
+        lines[2] = lines[2].replace("\t30\t", f"\t{len(lines) - first_row}\t", 1)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=message.replace("(", r"\(").replace(".", r"\.")):
+        read_labeled(path)
+
+
+def test_a_decimated_csv_labels_at_its_rows_rate(tmp_path):
+    path = write_table(tmp_path / "t.csv", take())
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(lines[:1] + lines[1::2]) + "\n")  # frames 1, 3, 5 ... at their own times
+    back = read_labeled(path)
+    assert back.rate == 50.0 and _numbers(_relabeled(back, tmp_path / "out.csv")) == list(range(1, 30, 2))
 
 
 # A take in the wrong unit: labeled, with a warning naming the unit read.
@@ -181,9 +237,21 @@ def test_one_marker_and_unlabeled_frames_have_no_scale_to_judge():
     assert scale_warning(positions[0], positions, 100.0, "mm") is None
 
 
-def test_cli_warns_of_a_take_in_metres_labelled_mm(tmp_path):
+def test_cli_warns_of_a_take_in_metres_labelled_mm_before_labeling(tmp_path):
+    """Every point in every gate makes such a take slow: the line comes first, not after."""
     path = write_c3d(tmp_path / "metres.c3d", take() / 1000.0, unit="mm")
-    run = subprocess.run([sys.executable, "-m", "service.cli", "-q", "track", str(path), "-o", str(tmp_path / "o.trc")],
+    run = subprocess.run([sys.executable, "-m", "service.cli", "track", str(path), "-o", str(tmp_path / "o.trc")],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
-    assert "warning: read in mm, the take does not look human-sized: markers 0.07 mm" in run.stderr
+    lines = run.stderr.splitlines()
+    assert lines[0].startswith("warning: read in mm, the take does not look human-sized: markers 0.07 mm"), lines
+    assert sum("human-sized" in line for line in lines) == 1 and any("labeling" in line for line in lines[1:])
+
+
+def test_model_and_eval_warn_of_a_take_in_metres_labelled_mm(tmp_path):
+    """``model`` blamed a lack of motion ("too static") and ``eval`` scored 0 % silently."""
+    path = write_c3d(tmp_path / "metres.c3d", take() / 1000.0, unit="mm")
+    for args in (["model", str(path), "--out", str(tmp_path / "m.json")],
+                 ["eval", str(path), "--scenario", str(Path(__file__).parents[1] / "configs" / "scenarios" / "clean.toml")]):
+        run = subprocess.run([sys.executable, "-m", "service.cli", *args], capture_output=True, text=True, timeout=300)
+        assert "the take does not look human-sized: markers 0.07 mm" in run.stderr, (args[0], run.stderr[-2000:])

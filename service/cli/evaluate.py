@@ -16,6 +16,7 @@ from service.evaluation.model_start import evaluate_from_model
 from service.evaluation.scenario import Scenario
 from service.io.formats import read_labeled
 from service.labeling.stats import doubtful_fraction
+from service.labeling.take_warnings import take_scale_warning
 
 
 def run_eval(
@@ -42,6 +43,7 @@ def run_eval(
     if never:
         warn(f"warning: {len(never)} marker{'s' if len(never) > 1 else ''} with no position in any frame left out: "
              f"{', '.join(never[:6])}{' ...' if len(never) > 6 else ''}")
+    warn(take_scale_warning(truth))
     result: Evaluation | CameraEvaluation
     with window_progress(f"labeling {trajectories.name}") as progress:
         if model is not None:

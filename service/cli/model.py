@@ -14,10 +14,11 @@ from formulations.subject.template import fit_template
 from service.capture.markerset import load_template
 from service.capture.model_input import MIN_SHARED
 from service.cli.output import check_writable_folder, check_writable_output
-from service.cli.report import out
+from service.cli.report import out, warn
 from service.errors import InputError
 from service.io.formats import read_labeled
 from service.io.recording import LabeledTrajectories, Recording
+from service.labeling.take_warnings import take_scale_warning
 
 
 def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset: str | None = None) -> None:
@@ -35,6 +36,9 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
     takes = [read_labeled(path).without_unlabeled() for path in inputs]  # *N: no marker
     _check_one_marker_set(takes, inputs)
+    for path, take in zip(inputs, takes):  # a wrong unit reads as "too static" or "cannot group" below
+        line = take_scale_warning(take)
+        warn(line.replace("warning: ", f"warning: {path.name}: ", 1) if line else None)
     names, positions, rate = _pool(takes)
     try:
         if markerset is not None:

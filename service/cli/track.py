@@ -28,7 +28,7 @@ from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
-from service.labeling.result_warnings import result_warnings
+from service.labeling.result_warnings import early_scale_warning, result_warnings
 from service.labeling.second_pass import PassChoice
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import (
@@ -91,6 +91,8 @@ def run_track(
     if second_pass is not None:
         options = replace(options, second_pass=second_pass)
     labeling = CaptureLabeling(capture, options)
+    unit = source.unit if source else "mm"
+    warn(early_scale_warning(capture, unit))
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
@@ -112,7 +114,7 @@ def run_track(
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
-    for line in result_warnings(capture, result, source.unit if source else "mm", start or 0):
+    for line in result_warnings(capture, result, unit, start or 0, spacing_judged=True):
         warn(line)
     warn(not_kept)
     warn(_absent_warning(absent, start or 0))

@@ -25,7 +25,8 @@ class SourceFile:
     Attributes:
         unit: The input's length unit (mm, cm or m): the output is written in it.
         first_frame: The input's number of its first frame, counted from 0 (the C3D
-            header's; a TRC's or markerflow CSV's first ``Frame#`` less 1, as they count from 1).
+            header's; a TRC's or markerflow CSV's first ``Frame#`` less 1, as they count from 1,
+            so -1 for a table whose rows count from 0).
         first_time: The input's time of its first frame, s (a TRC's or CSV's first ``Time``;
             0 for a C3D, which has no time column).
         c3d: A C3D input as ezc3d read it: a C3D output is this file with only its points,
@@ -37,13 +38,30 @@ class SourceFile:
     first_frame: int = 0
     c3d: Any = None
     first_time: float = 0.0
+    rows: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @staticmethod
-    def of_table(unit: str, first_number: float, first_time: float) -> SourceFile:
-        """A TRC's or CSV's numbering, from its first row's frame number (counted from 1; a
-        number that is not a whole one from 1 counts as 1) and time."""
-        whole = float(first_number).is_integer() and first_number >= 1
-        return SourceFile(unit, int(first_number) - 1 if whole else 0, first_time=float(first_time))
+    def of_table(unit: str, numbers: np.ndarray, times: np.ndarray) -> SourceFile:
+        """A TRC's or CSV's numbering: its rows' frame numbers (usually counted from 1, some
+        exporters from 0; a first number that is not a whole one from 0 counts as 1 for a
+        C3D output) and times, which table outputs write back row by row."""
+        first = float(numbers[0])
+        whole = first.is_integer() and first >= 0
+        return SourceFile(unit, int(first) - 1 if whole else 0, first_time=float(times[0]),
+                          rows=np.column_stack([numbers, times]).astype(float))
+
+    def numbering(self, start: int, n_frames: int, rate: float) -> list[tuple[str, str]]:
+        """Frame number and time cells of input frames ``start .. start + n_frames``: a table
+        input's own (frame numbers may skip, as in a decimated take), else counted on from
+        the input's first frame (``first_frame + 1``, as a C3D header and a TRC count)."""
+        if self.rows is not None and start + n_frames <= len(self.rows):
+            return [(_number_cell(number), repr(float(time))) for number, time in self.rows[start:start + n_frames]]
+        first = self.first_frame + start + 1
+        return [(str(first + f), repr(self.first_time + (start + f) / rate)) for f in range(n_frames)]
+
+
+def _number_cell(number: float) -> str:
+    return str(int(number)) if float(number).is_integer() else repr(float(number))
 
 
 @dataclass

@@ -19,6 +19,17 @@ from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, do
 from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning
 
 
+def early_scale_warning(capture: Capture, unit: str) -> str | None:
+    """The marker spacing's line, before labeling: of the labeled first frame, or of frame 0's
+    points when a subject model is to name them."""
+    if capture.points is None:
+        return None
+    first = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
+    if np.isfinite(first).all(axis=1).sum() < 2:
+        first = capture.points[0]
+    return scale_warning(first, first[None], capture.rate, unit)
+
+
 def doubtful_warning(fraction: float | None) -> str | None:
     """A line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
     if fraction is None or fraction <= DOUBTFUL_WARNING:
@@ -27,15 +38,17 @@ def doubtful_warning(fraction: float | None) -> str | None:
             "another reading of their window is nearly as likely); check them")
 
 
-def result_warnings(capture: Capture, result: LabeledTrajectories, unit: str = "mm", start: int = 0) -> list[str]:
+def result_warnings(capture: Capture, result: LabeledTrajectories, unit: str = "mm", start: int = 0,
+                    spacing_judged: bool = False) -> list[str]:
     """Every line that applies to ``result``, the labeling of ``capture`` (whose input was in
-    ``unit``, its labels starting at input frame ``start``)."""
+    ``unit``, its labels starting at input frame ``start``); ``spacing_judged``: the marker
+    spacing was judged before labeling (``early_scale_warning``), so only the speed is."""
     fraction = doubtful_fraction(result.confidence, result.occluded) if result.confidence.size else None
     lines = [
         doubtful_warning(fraction),
         fast_motion_warning(fast_markers(result.names, result.positions)),
-        scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit)
-        if capture.points is not None else None,
+        scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit,
+                      spacing=not spacing_judged) if capture.points is not None else None,
         coincident_warning(coincident_pairs(result.names, result.positions)),
     ]
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against

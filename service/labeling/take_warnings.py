@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from formulations.subject.contradiction import SegmentMisfit
+from service.io.recording import Recording
 from service.labeling.coincident import COINCIDENT_MM, sampled_distances
 
 FAST_RATIO = 0.5  # s > d / 2: the last position is nearer the neighbour's than the marker's own
@@ -80,20 +81,24 @@ SPACING_MM = (1.0, 5000.0)  # median nearest-neighbour distance in the labeled f
 MAX_SPEED_MM_S = 50_000.0  # median marker speed: a thrown ball's, not a limb's
 
 
-def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, unit: str) -> str | None:
+def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, unit: str,
+                  spacing: bool = True) -> str | None:
     """One line when the take does not look human-sized in ``unit``: the median spacing of
-    the labeled ``first_frame`` ``(N, 3)`` or the median speed of the labeled ``positions``
-    ``(F, N, 3)`` (mm, NaN unlabeled) outside ``SPACING_MM``/``MAX_SPEED_MM_S``; else None.
+    the labeled ``first_frame`` ``(N, 3)`` (with ``spacing``) or the median speed of the
+    labeled ``positions`` ``(F, N, 3)`` (mm, NaN unlabeled) outside
+    ``SPACING_MM``/``MAX_SPEED_MM_S``; else None. The spacing can be judged before labeling
+    (``track`` does, with ``positions`` its first frame alone): a take in metres read as mm
+    puts every point in every gate, and labels for minutes before a later line would say why.
 
     A warning, not an error: a surveyed site or a mm-sized model is possible, but a wrong
     unit otherwise labels without complaint (gates sized for mm miss points 1000x apart).
     """
     seen = first_frame[np.isfinite(first_frame).all(axis=1)]
     found: list[str] = []
-    if len(seen) >= 2:
-        spacing = float(np.median(cKDTree(seen).query(seen, k=2)[0][:, 1]))
-        if not SPACING_MM[0] <= spacing <= SPACING_MM[1]:
-            found.append(f"markers {spacing:.3g} mm from their nearest neighbour in the labeled frame "
+    if spacing and len(seen) >= 2:
+        apart = float(np.median(cKDTree(seen).query(seen, k=2)[0][:, 1]))
+        if not SPACING_MM[0] <= apart <= SPACING_MM[1]:
+            found.append(f"markers {apart:.3g} mm from their nearest neighbour in the labeled frame "
                          f"(expected {SPACING_MM[0]:g} mm to {SPACING_MM[1] / 1000:g} m)")
     steps = np.linalg.norm(np.diff(positions, axis=0), axis=2) if len(positions) > 1 else np.zeros(0)
     steps = steps[np.isfinite(steps)]
@@ -105,6 +110,14 @@ def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, u
     rate_too = " and frame rate" if speed > MAX_SPEED_MM_S else ""
     return (f"warning: read in {unit}, the take does not look human-sized: {'; '.join(found)}; "
             f"check the file's length unit{rate_too}")
+
+
+def take_scale_warning(take: Recording) -> str | None:
+    """``scale_warning`` of a labeled take, before anything is labeled or fitted: the spacing
+    of its fullest frame, the speed of its own labels (``eval`` and ``model`` read these)."""
+    frame, _ = take.fullest_frame()
+    unit = take.source.unit if take.source is not None else "mm"
+    return scale_warning(take.positions[frame], take.positions, take.rate, unit)
 
 
 def _median_or_nan(values: np.ndarray) -> np.ndarray:

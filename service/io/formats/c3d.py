@@ -99,7 +99,8 @@ def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d
     point["RATE"]["value"] = np.array([float(traj.rate)])
     point["LABELS"]["value"] = list(traj.names)
     point["UNITS"]["value"] = [source.unit]
-    c3d["header"]["points"]["first_frame"] = source.first_frame + start
+    # a C3D counts frames from 1: a table counted from 0 starts at its first (first_frame -1)
+    c3d["header"]["points"]["first_frame"] = max(source.first_frame + start, 0)
     c3d["data"]["points"] = np.ones((4, len(traj.names), traj.n_frames))
     c3d["data"]["meta_points"]["residuals"] = np.zeros((1, len(traj.names), traj.n_frames))
     return c3d

@@ -25,6 +25,33 @@ def require_file(path: str | Path) -> Path:
     return path
 
 
+EVEN_STEP = 0.1  # a row's time step may differ from the median step by this share: rounding, not a gap
+
+
+def check_rows(numbers: np.ndarray, times: np.ndarray, lines: list[str]) -> None:
+    """A table's rows go forward in frame number and time, evenly spaced in time.
+
+    Frame numbers may skip (a decimated take numbers every other frame) and are written
+    back as they were; but the labeler takes rows as evenly spaced, so a gap in time (a
+    dropped frame) or a repeated row is refused rather than labeled at the wrong speed.
+    ``lines``: where each row is, for the message (``path:line``).
+    """
+    steps, ticks = np.diff(numbers), np.diff(times)
+    back = np.flatnonzero(~((steps > 0) & (ticks > 0)))
+    if len(back):
+        row = int(back[0]) + 1
+        raise InputError(f"{lines[row]}: frame {numbers[row]:g} at time {times[row]:g} does not follow frame "
+                         f"{numbers[row - 1]:g} at time {times[row - 1]:g}; rows must be in order")
+    if len(ticks):
+        usual = float(np.median(ticks))
+        uneven = np.flatnonzero(np.abs(ticks - usual) > EVEN_STEP * usual)
+        if len(uneven):
+            row = int(uneven[0]) + 1
+            raise InputError(f"{lines[row]}: time {times[row]:g} is {ticks[row - 1]:g} s after the row before, the "
+                             f"rows' step is {usual:g} s; rows must be evenly spaced in time (a frame without "
+                             "samples is a row of empty cells)")
+
+
 def to_millimetres(values: np.ndarray, unit: str, path: Path) -> np.ndarray:
     """Scale lengths given in ``unit`` (mm, cm or m; case and spaces ignored) to mm.
 

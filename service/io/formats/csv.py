@@ -8,7 +8,13 @@ from pathlib import Path
 import numpy as np
 
 from service.errors import InputError
-from service.io.formats.conventions import hidden_samples, require_file, require_samples, sample_cells
+from service.io.formats.conventions import (
+    check_rows,
+    hidden_samples,
+    require_file,
+    require_samples,
+    sample_cells,
+)
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _AXES = ("x", "y", "z")
@@ -24,17 +30,17 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     marker's label is right, in every frame (occluded ones too: that it is occluded
     there), empty where no window said.
 
-    ``frame`` numbers the input's frames from 1 at its first, as a C3D's header and a
-    TRC's ``Frame#`` do (the labels of input frame ``start`` are frame
-    ``source.first_frame + start + 1``); ``time`` goes on from the input's
-    (``source.first_time``). Always mm: the table has no unit of its own.
+    ``frame`` and ``time`` are the input's (``SourceFile.numbering``): a table's own, else
+    counted from 1 at its first frame, as a C3D's header and a TRC's ``Frame#`` do (the
+    labels of input frame ``start`` are frame ``source.first_frame + start + 1``). Always
+    mm: the table has no unit of its own.
 
     Raises:
         InputError: the path cannot be written.
     """
     path = Path(path)
     source = source or SourceFile()
-    first = source.first_frame + start + 1
+    numbering = source.numbering(start, traj.n_frames, traj.rate)
     hidden = hidden_samples(traj)
     header = ["frame", "time"] + [f"{name}_{axis}" for name in traj.names for axis in _AXES]
     views = np.array(traj.view_names, dtype=object)[traj.best_view] if traj.view_names else None
@@ -46,7 +52,7 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
             writer = csv.writer(f)
             writer.writerow(header)
             writer.writerows(
-                [str(first + f), repr(source.first_time + (start + f) / traj.rate)] + sample_cells(traj.positions[f], hidden[f])
+                list(numbering[f]) + sample_cells(traj.positions[f], hidden[f])
                 + (list(views[f]) if views is not None else [])
                 + (_confidence_cells(traj.confidence[f]) if confidence else [])
                 for f in range(traj.n_frames)
@@ -93,12 +99,13 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
     table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in enumerate(rows[1:], start=2)])
     if len(table) < 2:
         raise InputError(f"{path}: needs at least two frames to infer the frame rate")
+    check_rows(table[:, 0], table[:, 1], [f"{path}:{line}" for line in range(2, len(table) + 2)])
     positions = table[:, 2:].reshape(len(table), len(names), 3)
     require_samples(names, positions, path)
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
-    labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 0], table[:, 1], path))
-    source = SourceFile.of_table("mm", table[0, 0], table[0, 1])
+    labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 1], path))
+    source = SourceFile.of_table("mm", table[:, 0], table[:, 1])
     if confidence is not None:
         labels.confidence = _named_confidence(confidence, names, path)
     if not with_views:
@@ -160,9 +167,11 @@ def _floats(row: list[str], width: int, path: Path, line: int) -> list[float]:
         raise InputError(f"{path}:{line}: {exc}") from None
 
 
-def _rate(frames: np.ndarray, times: np.ndarray, path: Path) -> float:
+def _rate(times: np.ndarray, path: Path) -> float:
+    """Rows per second: the labeler steps row by row (``check_rows``: evenly in time), so a
+    decimated table's frame numbers, which skip, do not give its rate."""
     span = times[-1] - times[0]
-    rate = (frames[-1] - frames[0]) / span if span > 0 else np.nan
+    rate = (len(times) - 1) / span if span > 0 else np.nan
     if not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"{path}: frame and time columns give no positive frame rate")
+        raise InputError(f"{path}: the time column gives no positive frame rate")
     return float(f"{rate:.9g}")  # the times' rounding off: 100 Hz, not 99.99999999999999

@@ -13,6 +13,7 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.conventions import (
+    check_rows,
     from_millimetres,
     hidden_samples,
     require_file,
@@ -65,17 +66,18 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
     require_samples(names, positions, path)
-    first_row = numbered[0][1].split("\t")  # Frame# and Time checked numbers by _check_order
-    source = SourceFile.of_table(header["Units"].strip().lower(), float(first_row[0]), float(first_row[1]))
+    cells = np.array([line.split("\t", 2)[:2] for _, line in numbered], dtype=float)  # numbers: _check_order
+    check_rows(cells[:, 0], cells[:, 1], [where for where, _ in numbered])
+    source = SourceFile.of_table(header["Units"].strip().lower(), cells[:, 0], cells[:, 1])
     return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
 
 
 def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
     """Write ``traj`` as a TRC table in ``source.unit`` (mm without a source); occluded cells empty.
 
-    ``Frame#`` counts from 1 at the input's first frame, so the labels of input frame
-    ``start`` are numbered ``source.first_frame + start + 1``; ``Time`` goes on from the
-    input's (``source.first_time``).
+    ``Frame#`` and ``Time`` are the input's (``SourceFile.numbering``): a table's own, else
+    counted from 1 at the input's first frame, so the labels of input frame ``start`` are
+    numbered ``source.first_frame + start + 1``.
 
     Raises:
         InputError: a marker name with a tab or line break (no TRC can hold it), or the path
@@ -84,7 +86,8 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     path = Path(path)
     check_trc_names(traj.names, path)
     source = source or SourceFile()
-    first = source.first_frame + start + 1
+    numbering = source.numbering(start, traj.n_frames, traj.rate)
+    first = numbering[0][0] if numbering else str(source.first_frame + start + 1)
     names = "\t".join(f"{name}\t\t" for name in traj.names)
     axes = "\t".join(f"X{i}\tY{i}\tZ{i}" for i in range(1, len(traj.names) + 1))
     header = [
@@ -99,8 +102,7 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     values = from_millimetres(traj.positions, source.unit)
     hidden = hidden_samples(traj)
     rows = [
-        "\t".join([str(first + f), repr(source.first_time + (start + f) / traj.rate)] + sample_cells(values[f], hidden[f]))
-        for f in range(traj.n_frames)
+        "\t".join(list(numbering[f]) + sample_cells(values[f], hidden[f])) for f in range(traj.n_frames)
     ]
     try:
         path.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
