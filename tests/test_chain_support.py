@@ -87,5 +87,5 @@ def test_a_reading_with_fewer_inliers_than_the_best_is_not_credited() -> None:
     short = Hypothesis(0, true.pose, np.array([0, 1, -1]), 0.0)  # the true pose, one inlier short
     by_segment[0] = [*by_segment[0], short]
     support = chain_support(geometry, by_segment, points)[0]
-    assert support[by_segment[0].index(true)] == 2
+    assert support[next(i for i, h in enumerate(by_segment[0]) if h is true)] == 2  # by identity: == compares arrays
     assert support[-1] == 0
