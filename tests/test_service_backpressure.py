@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -63,6 +64,19 @@ def test_a_key_reused_for_another_capture_is_422(guarded):
     reused = _post(client, ALICE, key="take-44", body=other)
     assert reused.status_code == 422, reused.text
     assert reused.json()["message"].startswith(f"Idempotency-Key: already used for another capture (job {first.json()['id']})")
+
+
+def test_concurrent_posts_of_two_captures_under_one_key_make_one_job_for_one_capture(guarded):
+    """Posted at once, each found no job under the key; the ones whose insert lost the race
+    were answered 202 with the winner's job, whatever capture they carried."""
+    client, _ = guarded
+    bodies = [DOCUMENT, json.dumps({**small_document(), "window": 3})] * 4
+    with ThreadPoolExecutor(len(bodies)) as pool:
+        answers = list(pool.map(lambda body: _post(client, ALICE, key="take-45", body=body), bodies))
+    accepted = {(answer.json()["id"], body) for answer, body in zip(answers, bodies) if answer.status_code == 202}
+    assert len(accepted) == 1, accepted  # one job, answered only to the capture it holds
+    refused = [answer for answer in answers if answer.status_code != 202]
+    assert len(refused) == 4 and all(a.status_code == 422 and "another capture" in a.json()["message"] for a in refused)
 
 
 def test_a_field_sent_twice_is_422(guarded):

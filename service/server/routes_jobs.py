@@ -68,14 +68,21 @@ async def submit_job(
     # read and checked even for a retry: a key reused for another capture must not answer with the first's job
     submission = await read_submission(request, settings.limits, upload=True)
     if earlier is not None:
-        if await run_in_threadpool(store.input, earlier.id) != submission.stored():
-            raise InputError(f"Idempotency-Key: already used for another capture (job {earlier.id}); use a new key")
+        await _same_capture(store, earlier, submission.stored())
         return _accepted(response, earlier)
     job, new = await run_in_threadpool(store.add, owner, submission.source, submission.stored(), submission.n_windows,
                                        idempotency_key, submission.upload)
-    if new:
-        await run_in_threadpool(request.app.state.executor.submit, job.id)
+    if not new:  # a concurrent POST with the key committed first: the same check as above
+        await _same_capture(store, job, submission.stored())
+        return _accepted(response, job)
+    await run_in_threadpool(request.app.state.executor.submit, job.id)
     return _accepted(response, job, list(submission.warnings))
+
+
+async def _same_capture(store: JobStore, earlier: Job, stored: bytes) -> None:
+    """A key reused for another capture must not answer with the first capture's job."""
+    if await run_in_threadpool(store.input, earlier.id) != stored:
+        raise InputError(f"Idempotency-Key: already used for another capture (job {earlier.id}); use a new key")
 
 
 def _accepted(response: Response, job: Job, warnings: list[str] | None = None) -> JobAccepted:
