@@ -97,3 +97,15 @@ def test_a_usage_mistake_is_one_line_like_any_other(args: list[str], words: list
 def test_no_command_shows_the_help() -> None:
     shown = run_cli()
     assert "Usage: " in shown.stdout + shown.stderr and "error:" not in shown.stderr
+
+
+@pytest.mark.parametrize(("db", "words"), [
+    ("{tmp}/no/such/folder/jobs.db", ["cannot open the job store (unable to open database file)"]),
+    (":memory:", ["in-memory SQLite database is private to each process"]),
+    ("sqlite://", ["in-memory SQLite database is private to each process"]),
+    ("nonsense://x", ["cannot open the job store"]),
+])
+def test_serve_refuses_a_store_it_cannot_use_in_one_line(tmp_path: Path, db: str, words: list[str]) -> None:
+    """A missing folder was uvicorn's 172-line start-up traceback; an in-memory database served,
+    and every job stayed queued (each worker process had its own empty database)."""
+    assert_input_error(run_cli("serve", "--db", db.format(tmp=tmp_path), "--port", "0"), *words)

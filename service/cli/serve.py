@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from service.errors import InputError
 from service.server.settings import load_settings
 
 
@@ -13,8 +14,32 @@ def run_serve(host: str | None, port: int | None, db: str | None, dask: str | No
     from service.server.serving import service_server
 
     settings = load_settings(config, host=host, port=port, db=database_url(db), dask=dask)
+    check_store(settings.db)
     # Read timeouts, and a bounded shutdown: neither a stalled client nor a long window holds a restart.
     service_server(create_app(settings), settings, settings.host, settings.port, "info").run()
+
+
+def check_store(url: str) -> None:
+    """Open the job store once before serving, so a database that cannot be opened is one
+    line, not uvicorn's traceback of the app's start-up (170 lines).
+
+    Raises:
+        InputError: ``--db <url, password hidden>: cannot open the job store (<the driver's reason>)``.
+    """
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from service.server.store import store_for
+
+    shown = make_url(url).render_as_string(hide_password=True)
+    try:
+        store_for(url).engine.dispose()
+    except SQLAlchemyError as error:
+        reason = str(getattr(error, "orig", None) or error).strip().splitlines()[0]
+        folder = " (does its folder exist, and can this user write there?)" if url.startswith("sqlite") else ""
+        raise InputError(f"--db {shown}: cannot open the job store ({reason}){folder}") from None
+    except ModuleNotFoundError as error:  # a dialect whose driver is not installed, e.g. mysql://
+        raise InputError(f"--db {shown}: no database driver for it ({error.name} is not installed)") from None
 
 
 def database_url(db: str | None) -> str | None:
