@@ -2,7 +2,8 @@
 
 On start it opens the store and the executor and re-queues every ``queued`` or
 ``running`` job, which resumes after its last stored window. Errors are JSON
-``{"message": ...}``: a user's mistake is a 4xx naming the field, and only a bug is a 500.
+``{"message": ...}``: a user's mistake is a 4xx naming the field, the store not answering a
+503 with Retry-After, and only a bug is a 500.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from fastapi.responses import JSONResponse
 from fastapi_offline import FastAPIOffline
+from sqlalchemy.exc import OperationalError
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -64,6 +66,7 @@ def create_app(settings: Settings) -> FastAPI:
     app.add_exception_handler(InputError, _input_error)  # type: ignore[arg-type]
     app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]
     app.add_exception_handler(HTTPException, _http_error)  # type: ignore[arg-type]
+    app.add_exception_handler(OperationalError, _store_down)  # type: ignore[arg-type]
     app.add_exception_handler(Exception, _bug)  # what CatchBugs cannot answer (a response under way)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]  # FastAPI's documented way to extend the schema
     return app
@@ -85,7 +88,7 @@ async def _lifespan(app: FastAPI):
     for job_id in unfinished:
         await run_in_threadpool(executor.submit, job_id)
     if unfinished:
-        log.info("resumed %d unfinished jobs", len(unfinished))
+        log.info("resumed %d unfinished job%s", len(unfinished), "s" * (len(unfinished) != 1))
     yield
     await run_in_threadpool(executor.close)
 
@@ -120,6 +123,14 @@ async def _validation_error(request: Request, error: RequestValidationError) -> 
 
 async def _http_error(request: Request, error: HTTPException) -> JSONResponse:
     return JSONResponse({"message": str(error.detail)}, status_code=error.status_code, headers=error.headers)
+
+
+async def _store_down(request: Request, error: OperationalError) -> JSONResponse:
+    """The database is down or full: not a bug, and over once it answers (jobs resume then)."""
+    log.warning("the job store failed on %s %s: %s", request.method, request.url.path, error.orig)
+    retry = str(request.app.state.settings.retry_after_seconds)
+    return JSONResponse({"message": "the job store is not answering; retry later"}, status_code=503,
+                        headers={"Retry-After": retry})
 
 
 async def _bug(request: Request, error: Exception) -> JSONResponse:

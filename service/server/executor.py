@@ -15,11 +15,18 @@ import uuid
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Protocol
 
-from service.server.job_process import JobWatch, worker_context
+from sqlalchemy.exc import OperationalError
+
+from service.server.job_process import JobWatch, StoreLost, worker_context
 from service.server.runner import run_job
-from service.server.store import store_for
+from service.server.store import ACTIVE, store_for
 
 log = logging.getLogger("markerflow.server")
+STORE_RETRY_SECONDS = (1.0, 4.0, 15.0, 60.0, 240.0)  # pauses before a job the store failed under runs again
+# A job held by another runner that has not moved for this long is run here: longer than a
+# window or a second pass takes (neither is stored until it ends), short against a restart.
+STALE_SECONDS = 300.0
+STANDBY_POLL_SECONDS = 5.0
 
 
 class Executor(Protocol):
@@ -48,6 +55,8 @@ class ProcessPoolExecutor:
         self._watches: dict[str, JobWatch] = {}
         self._deadline: float | None = None  # set when the shutdown begins
         self._lock = threading.Lock()
+        self._store_failures: dict[str, int] = {}  # per job, in a row: see _retry_later
+        self._closing = threading.Event()  # ends the stand-by watches
 
     def submit(self, job_id: str) -> None:
         self._pool.submit(self._watch, job_id)
@@ -58,12 +67,55 @@ class ProcessPoolExecutor:
                 return  # queued behind the pool when the shutdown began: resumed on restart
             watch = self._watches[job_id] = JobWatch(self._context, self.db_url, job_id)
         try:
-            watch.run()
-        except Exception:  # the store unreachable, say: the job stays where the store has it
+            if watch.run():
+                threading.Thread(target=self._stand_by, args=(job_id,), daemon=True,
+                                 name=f"markerflow-standby-{job_id}").start()
+            self._store_failures.pop(job_id, None)
+        except (StoreLost, OperationalError) as error:
+            self._retry_later(job_id, error)
+        except Exception:  # a bug in the watch itself: the job stays where the store has it
             log.exception("watching job %s failed", job_id)
         finally:
             with self._lock:
                 self._watches.pop(job_id, None)
+
+    def _retry_later(self, job_id: str, error: Exception) -> None:
+        """The store failed under the job (a database restart, a full disk): nothing runs it
+        now, so it is submitted again after a growing pause (it resumes after its last stored
+        window); after ``STORE_RETRY_SECONDS`` run out it is failed, if the store lets us."""
+        failures = self._store_failures[job_id] = self._store_failures.get(job_id, 0) + 1
+        reason = next(iter(str(error).splitlines()), type(error).__name__)
+        if failures > len(STORE_RETRY_SECONDS):
+            try:
+                store_for(self.db_url).fail(job_id, f"the job store failed {failures} times; last: {reason}")
+            except OperationalError:
+                log.error("job %s: the job store keeps failing (%s); it stays unfinished until a restart", job_id, reason)
+            return
+        pause = STORE_RETRY_SECONDS[failures - 1]
+        log.warning("job %s: the job store failed (%s); running it again in %g s", job_id, reason, pause)
+        timer = threading.Timer(pause, self.submit, args=(job_id,))
+        timer.daemon = True
+        timer.start()
+
+    def _stand_by(self, job_id: str) -> None:
+        """Another runner holds the job (another server on this store stored a window first):
+        watch it, and run it here once it has not moved for ``STALE_SECONDS`` (that server was
+        stopped or died, and would resume it only on its own restart). Two runners are safe:
+        a window is stored once, and the slower runner stops at it."""
+        store, seen, since = store_for(self.db_url), None, time.monotonic()
+        while not self._closing.wait(STANDBY_POLL_SECONDS):
+            try:
+                job = store.known(job_id)
+            except OperationalError:
+                continue
+            if job.state not in ACTIVE:
+                return
+            if (job.updated_at, job.windows_done) != seen:
+                seen, since = (job.updated_at, job.windows_done), time.monotonic()
+            elif time.monotonic() - since > STALE_SECONDS:
+                log.warning("job %s has not moved for %g s on its other runner; running it here", job_id, STALE_SECONDS)
+                self.submit(job_id)
+                return
 
     def cancel(self, job_id: str) -> None:
         """Stop the job's window now (the store already says ``cancelled``)."""
@@ -81,6 +133,7 @@ class ProcessPoolExecutor:
                     watch.stop_by(self._deadline)
 
     def close(self) -> None:
+        self._closing.set()
         self.stop_windows()
         self._pool.shutdown(wait=True, cancel_futures=True)
 

@@ -12,17 +12,25 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import time
 from multiprocessing.context import ForkServerContext
 
+from sqlalchemy.exc import OperationalError
+
 from service.server.runner import run_job
-from service.server.store import ACTIVE, store_for
+from service.server.store import ACTIVE, JobStore, store_for
 
 POLL_SECONDS = 0.02  # how often a watcher looks at its process (cancel latency is about this)
 STORE_POLL_SECONDS = 0.5  # how often it asks the store whether another server cancelled the job
 SERVER_POLL_SECONDS = 0.2  # how often a worker checks that its server is still there
 WORKER_NICENESS = 5  # windows yield the CPU to the server's requests (and its upload readers)
+STORE_LOST_EXIT = 75  # EX_TEMPFAIL: the worker stopped because the store failed; run the job again
+
+
+class StoreLost(Exception):
+    """The job's worker stopped because the store failed under it; the job has no runner now."""
 
 
 def worker_context() -> ForkServerContext:
@@ -39,7 +47,10 @@ def _work(db_url: str, job_id: str, server_pid: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the server, which stops its workers
     threading.Thread(target=_exit_with_server, args=(server_pid,), daemon=True).start()
     os.nice(WORKER_NICENESS)
-    run_job(db_url, job_id, stopping.is_set)
+    try:
+        run_job(db_url, job_id, stopping.is_set)
+    except OperationalError:
+        sys.exit(STORE_LOST_EXIT)
 
 
 def _exit_with_server(server_pid: int) -> None:
@@ -70,8 +81,10 @@ class JobWatch:
         if self._process.is_alive():
             self._process.terminate()
 
-    def run(self) -> None:
-        """Until the worker ends; a worker that dies by itself (a crash, the OOM killer) fails the job."""
+    def run(self) -> bool:
+        """Until the worker ends; a worker that dies by itself (a crash, the OOM killer) fails the
+        job. True when the worker ended leaving the job active in the store, not stopped by this
+        server: another runner stored a window first and holds the job (``WindowTaken``)."""
         store = store_for(self.db_url)
         self._process.start()
         asked = time.monotonic()
@@ -79,14 +92,25 @@ class JobWatch:
             self._process.join(POLL_SECONDS)
             if time.monotonic() - asked > STORE_POLL_SECONDS:
                 asked = time.monotonic()
-                if store.known(self.job_id).state not in ACTIVE:
+                if self._state(store) not in ACTIVE:
                     self.cancelled.set()
             if self.cancelled.is_set() or (self._deadline is not None and time.monotonic() > self._deadline):
                 self._process.kill()
                 self._process.join()
-                return
+                return False
+        if self._process.exitcode == STORE_LOST_EXIT and self._deadline is None:
+            raise StoreLost(f"job {self.job_id}: the store failed under its worker")
         if self._process.exitcode and self._deadline is None:
             store.fail(self.job_id, f"the job's worker process died ({_exit_reason(self._process.exitcode)})")
+            return False
+        return self._deadline is None and self._state(store) in ACTIVE
+
+    def _state(self, store: JobStore) -> str:
+        """The job's state, or "running" while the store does not answer (the worker finds out itself)."""
+        try:
+            return store.known(self.job_id).state
+        except OperationalError:
+            return "running"
 
 
 def _exit_reason(exitcode: int) -> str:

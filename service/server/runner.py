@@ -12,7 +12,9 @@ transaction that stores the result, and a restart before that refines the stored
 again.
 
 A window that raises fails the job with the window's index and message; the windows
-stored before it stay, and ``GET /v1/jobs/{id}/result?partial=true`` assembles them.
+stored before it stay, and ``GET /v1/jobs/{id}/result?partial=true`` assembles them. The store
+failing (a database restart, a full disk) does not fail the job, which could not be recorded
+anyway: the error goes up, and the executor runs the job again once the store answers.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import logging
 import os
 import socket
 from collections.abc import Callable
+
+from sqlalchemy.exc import OperationalError
 
 from service.capture.document import read_capture_document
 from service.errors import InputError
@@ -70,6 +74,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
                      result_warnings(capture, result, "the file's unit" if store.uploaded(job_id) else "mm"))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
+    except OperationalError:  # the store itself (down, disk full): the job is retried, not failed by it
+        raise
     except InputError as error:  # e.g. a formulation that cannot take one of the windows
         store.fail(job_id, f"{where}{error}")
     except Exception as error:  # a bug: the job fails with its name, the server keeps serving

@@ -71,12 +71,12 @@ class Settings(BaseSettings):
             url = make_url(db)
         except ArgumentError:
             raise ValueError(f"{db!r} is not a database URL (e.g. sqlite:///markerflow.db)") from None
-        if url.get_backend_name() == "sqlite" and url.database in (None, "", ":memory:"):
-            # each process (and pooled thread) would get its own empty database: jobs would
-            # be queued where no worker can see them, and stay queued
-            raise ValueError(f"{db!r}: an in-memory SQLite database is private to each process, and the "
-                             "service's workers run in their own; give a file path (e.g. sqlite:///markerflow.db)")
         if url.get_backend_name() == "sqlite":
+            if url.database in (None, "", ":memory:"):
+                # each process (and pooled thread) would get its own empty database: jobs
+                # would be queued where no worker can see them, and stay queued
+                raise ValueError(f"{db!r}: an in-memory SQLite database is private to each process, and the service's "
+                                 "workers run in their own; give a file path (e.g. sqlite:///markerflow.db)")
             url = url.set(database=str(Path(url.database).resolve()))
         return url.render_as_string(hide_password=False)
 
