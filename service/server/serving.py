@@ -11,6 +11,7 @@ exits within about ``shutdown_grace_seconds``.
 from __future__ import annotations
 
 import asyncio
+import copy
 from types import FrameType
 
 import uvicorn
@@ -79,8 +80,12 @@ class DrainingServer(uvicorn.Server):
 
 def service_server(app: FastAPI, settings: Settings, host: str, port: int, log_level: str) -> DrainingServer:
     """uvicorn serving ``app`` with the settings' read timeouts and shutdown grace."""
+    # markerflow's own lines ("resumed 3 unfinished jobs", a store outage) through uvicorn's
+    # handler at the same level: without a handler of their own only warnings showed
+    logging_config = copy.deepcopy(uvicorn.config.LOGGING_CONFIG)
+    logging_config["loggers"]["markerflow"] = {"handlers": ["default"], "level": log_level.upper(), "propagate": False}
     config = uvicorn.Config(
         app, host=host, port=port, log_level=log_level, http=head_timeout_protocol(settings.read_timeout_seconds),
-        timeout_graceful_shutdown=max(1, round(settings.shutdown_grace_seconds)),
+        timeout_graceful_shutdown=max(1, round(settings.shutdown_grace_seconds)), log_config=logging_config,
     )
     return DrainingServer(app, config)
