@@ -43,13 +43,15 @@ def take_spread(positions: Array, neighbours: NDArray[np.int64]) -> Array:
         positions: ``(F, N, 3)`` labeled positions, NaN where a marker has no label.
         neighbours: ``(N, K)`` each marker's neighbours.
     """
-    distance = np.linalg.norm(positions[:, :, None] - positions[:, neighbours], axis=3)  # (F, N, K)
-    enough = np.isfinite(distance).sum(axis=0) >= MIN_FRAMES
-    if not enough.any():
-        return np.full(neighbours.shape, np.nan)
-    low, high = np.nanpercentile(distance[:, enough], [10, 90], axis=0)
     spread = np.full(neighbours.shape, np.nan)
-    spread[enough] = np.maximum(((high - low) / DECILE_SPAN_SD) ** 2, SPREAD_FLOOR_MM2)
+    # marker by marker: (F, K) at a time, where (F, N, K, 3) at once took 200 MB for 5,200
+    # frames of 41 markers, and gigabytes for a long take assembled by the service
+    for m in range(len(neighbours)):
+        distance = np.linalg.norm(positions[:, m, None] - positions[:, neighbours[m]], axis=2)  # (F, K)
+        enough = np.isfinite(distance).sum(axis=0) >= MIN_FRAMES
+        if enough.any():
+            low, high = np.nanpercentile(distance[:, enough], [10, 90], axis=0)
+            spread[m, enough] = np.maximum(((high - low) / DECILE_SPAN_SD) ** 2, SPREAD_FLOOR_MM2)
     return spread
 
 
