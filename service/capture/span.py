@@ -17,8 +17,10 @@ def frame_span(start: int, end: int | None, n_frames: int) -> int:
     if n_frames < 2:
         raise InputError(f"the take has {n_frames} frame{'s' * (n_frames != 1)}; labeling needs at least 2")
     stop = n_frames if end is None else end
+    given = f"--start {start}" + (f" --end {end}" if end is not None else "")
     if not 0 <= start < n_frames or not start + 2 <= stop <= n_frames:
         raise InputError(
-            f"--start {start} --end {stop}: needs 0 <= start, start + 2 <= end <= {n_frames} frames"
+            f"{given}: frames are counted from 0 at the take's first, whatever its own numbering; "
+            f"the take has {n_frames}, so 0 <= start <= {n_frames - 2} and start + 2 <= end <= {n_frames}"
         )
     return stop

@@ -52,7 +52,7 @@ def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | 
         raise InputError(f"{path}: C3D file has zero frames")
     rate = float(c3d["header"]["points"]["frame_rate"])
     if not rate > 0:
-        raise InputError(f"{path}: C3D file has no point frame rate")
+        raise InputError(f"{path}: C3D point frame rate is {rate:g}; it must be a positive number of frames per second")
     units = list(c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])) or [""]
     positions = to_millimetres(points.transpose(2, 1, 0), units[0], path)
     require_samples(names, positions, path)

@@ -36,7 +36,9 @@ class C3dLayout:
     data_bytes: int  # bytes the declared frames occupy
 
     def check_limits(self, max_points: int | None, max_frames: int | None) -> None:
-        """Raises ``InputError`` for more points or frames than allowed (None: no limit)."""
+        """Raises ``InputError`` for no frames, or more points or frames than allowed (None: no limit)."""
+        if self.frames == 0:  # ezc3d's own message names its internal Data::frame accessor
+            raise InputError("the C3D file has no frames")
         if max_points is not None and self.points > max_points:
             raise InputError(f"{self.points} points exceeds the limit of {max_points} (limits.max_markers)")
         if max_frames is not None and self.frames > max_frames:
