@@ -255,3 +255,14 @@ def test_model_and_eval_warn_of_a_take_in_metres_labelled_mm(tmp_path):
                  ["eval", str(path), "--scenario", str(Path(__file__).parents[1] / "configs" / "scenarios" / "clean.toml")]):
         run = subprocess.run([sys.executable, "-m", "service.cli", *args], capture_output=True, text=True, timeout=300)
         assert "the take does not look human-sized: markers 0.07 mm" in run.stderr, (args[0], run.stderr[-2000:])
+
+
+def test_trc_values_past_the_named_columns_are_refused_but_trailing_blanks_are_not(tmp_path):
+    """A fifth marker's samples with no name in the header used to be dropped without a word."""
+    path = write_table(tmp_path / "t.trc", take())
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(lines[:6] + [line + "\t\t" for line in lines[6:]]) + "\n")
+    assert read_labeled(path).positions.shape == (30, 4, 3)
+    path.write_text("\n".join(lines[:6] + [line + "\t1.0\t2.0\t3.0" for line in lines[6:]]) + "\n")
+    with pytest.raises(InputError, match=r"t\.trc:7: 3 values past the 4 named markers' columns"):
+        read_labeled(path)

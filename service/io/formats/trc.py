@@ -200,8 +200,15 @@ def _check_order(numbered: list[tuple[str, str]]) -> None:
 
 
 def _row(line: str, n_markers: int, where: str) -> list[float]:
-    """The X Y Z cells of one frame; exporters may drop trailing blank cells."""
-    cells = line.split("\t")[2 : 2 + 3 * n_markers]
+    """The X Y Z cells of one frame; exporters may drop trailing blank cells, or add some.
+
+    Values past the named markers' columns are refused: they are samples of a marker the
+    header does not name, and would be dropped without a word."""
+    split = line.split("\t")
+    cells, extra = split[2 : 2 + 3 * n_markers], [cell for cell in split[2 + 3 * n_markers :] if cell.strip()]
+    if extra:
+        raise InputError(f"{where}: {len(extra)} values past the {n_markers} named markers' columns (a marker "
+                         "without a name in the header?)")
     cells += [""] * (3 * n_markers - len(cells))
     try:
         return [float(cell) if cell.strip() else np.nan for cell in cells]
