@@ -107,6 +107,18 @@ def test_camera_rejects_bad_parameters(changes, problem):
         simple_camera(**changes)
 
 
+def test_a_rotation_printed_to_5_decimals_is_taken_as_the_rotation_it_rounds():
+    """Refused before (|R R^T - I| = 7.7e-6 over a 1e-6 tolerance), as calibration files print it."""
+    exact = Camera.from_rvec(np.diag([800.0, 800.0, 1.0]) + [[0, 0, 320], [0, 0, 240], [0, 0, 0]], np.zeros(5),
+                             np.array([0.3, -1.2, 0.4]), np.array([10.0, 20.0, 2000.0]), (640, 480), "simple")
+    printed = simple_camera(K=exact.K, R=np.round(exact.R, 5), t=exact.t)
+    assert np.abs(printed.R @ printed.R.T - np.eye(3)).max() < 1e-12
+    points = np.random.default_rng(4).uniform(-300, 300, (20, 3))
+    np.testing.assert_allclose(printed.project(points), exact.project(points), atol=0.01)
+    with pytest.raises(ValueError, match="R is not a rotation .*; give it to 6 decimals, or as rvec"):
+        simple_camera(R=np.round(exact.R, 2))
+
+
 @needs_data
 def test_dlt_recovers_points_through_real_calibration():
     cameras = load_pose2sim_toml(POSE2SIM, units="mm")

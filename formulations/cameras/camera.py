@@ -24,6 +24,7 @@ import numpy.typing as npt
 # image edge with webcam-strength distortion (k1 = -0.34). Iterate to convergence instead.
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
 _DISTORTION_LENGTHS = (4, 5, 8, 12, 14)  # what OpenCV accepts
+ROTATION_ROUNDING = 1e-4  # |R R^T - I| of a rotation printed to 5 decimals is ~1e-5; a wrong matrix is ~0.01 or more
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,8 +64,14 @@ class Camera:
         if not (K[0, 0] > 0 and K[1, 1] > 0) or K[1, 0] or K[2, 0] or K[2, 1] or K[2, 2] != 1:
             self._fail(f"K is singular or not a pinhole matrix (fx={K[0, 0]:g}, fy={K[1, 1]:g}, last row {K[2].tolist()})")
         orthonormality = np.abs(self.R @ self.R.T - np.eye(3)).max()
-        if orthonormality > 1e-6 or abs(np.linalg.det(self.R) - 1.0) > 1e-6:
-            self._fail(f"R is not a rotation (|R R^T - I| = {orthonormality:.2g}, det = {np.linalg.det(self.R):.6g})")
+        if orthonormality > ROTATION_ROUNDING or abs(np.linalg.det(self.R) - 1.0) > ROTATION_ROUNDING:
+            self._fail(f"R is not a rotation (|R R^T - I| = {orthonormality:.2g}, det = {np.linalg.det(self.R):.6g}); "
+                       "give it to 6 decimals, or as rvec")
+        if orthonormality > 1e-12:  # a printed R, off by its rounding: the nearest rotation (a rotation stays bit-equal)
+            u, _, vt = np.linalg.svd(self.R)
+            rotation = u @ vt
+            rotation.flags.writeable = False
+            object.__setattr__(self, "R", rotation)
         try:
             size = np.array(self.image_size, dtype=float).reshape(2)
         except (TypeError, ValueError):
