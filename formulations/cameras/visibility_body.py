@@ -22,6 +22,7 @@ sideways, not inwards: use a subject model where it matters.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -133,7 +134,8 @@ def rigid_neighbours(track: Array, count: int, rigid_sd: float) -> Index:
     if not 1 <= count < n:
         raise FormulationError(f"visibility: need 1 <= rigid neighbours < {n} markers, got {count}")
     distance = np.linalg.norm(x[:, :, None] - x[:, None], axis=3)
-    with np.errstate(invalid="ignore"):
+    with warnings.catch_warnings():  # a pair never seen together is NaN here ("Mean of empty slice"), inf below
+        warnings.simplefilter("ignore", RuntimeWarning)
         mean, sd = np.nanmean(distance, axis=0), np.nanstd(distance, axis=0)
     mean, sd = np.nan_to_num(mean, nan=np.inf), np.nan_to_num(sd, nan=np.inf)
     score = np.where(sd <= rigid_sd, mean, 1e12 + sd)  # rigid first, nearest first

@@ -69,7 +69,13 @@ class MarkerViewChoice:
         positions = labels.positions
         if labels.filled.shape == positions.shape:
             positions = np.where(np.isnan(positions), labels.filled, positions)
-        quality = marker_quality(positions, self._visibility(labels.positions, positions, views >= 0), self.cameras)
+        detected = np.asarray(views >= 0)
+        visibility = self._visibility(labels.positions, positions, detected)
+        # a camera that took no marker in a frame is blind there (off, covered, its detections
+        # filed elsewhere): no clear ray makes it a view of any marker
+        seeing: np.ndarray = np.asarray(detected.any(axis=1))  # (F, C)
+        visibility = np.where(seeing[:, None, :], visibility, 0.0)
+        quality = marker_quality(positions, visibility, self.cameras)
         chosen = select_views(relative_costs(quality), self.switch_cost, self.window)
         return replace(labels, best_view=chosen, view_names=[camera.name for camera in self.cameras])
 
