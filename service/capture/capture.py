@@ -23,6 +23,7 @@ from service.capture.checks import (
     checked_names,
     checked_rate,
 )
+from service.capture.reprojection import frame0_offsets, frame0_problem
 from service.errors import InputError
 
 ASSOCIATIONS = ("joint-3d", "per-camera")
@@ -127,6 +128,9 @@ class Capture:
                 if len(outside):
                     raise InputError(f"detections[{f}] of camera {camera.name!r}: {pixels[outside[0]].tolist()} is "
                                      f"outside its {camera.image_size[0]}x{camera.image_size[1]} image")
+        problem = frame0_problem(cameras, frame0_offsets(cameras, self.first_frame, self.detections[0]))
+        if problem is not None and problem[0]:  # one camera off is a warning (result_warnings)
+            raise InputError(problem[1])
 
     @property
     def mode(self) -> str:

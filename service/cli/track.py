@@ -91,7 +91,7 @@ def run_track(
     if second_pass is not None:
         options = replace(options, second_pass=second_pass)
     labeling = CaptureLabeling(capture, options)
-    unit = source.unit if source else "mm"
+    unit = source.unit if source else ("the document's units" if input.suffix.lower() == ".json" else "mm")
     warn(early_scale_warning(capture, unit))
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:

@@ -39,12 +39,13 @@ from formulations.subject.take_learning import learn_from_take
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.formulation_spec import resolve_formulation
+from service.capture.reprojection import frame0_pixel_sigma
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
 from service.labeling.cloud import CloudChain
 from service.labeling.exchanged import exchanged_back, handed_back
 from service.labeling.extension import extended
-from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud
+from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud, matcher_gates
 from service.labeling.leftover_points import with_leftover_points
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
@@ -239,7 +240,8 @@ def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -
         return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)
     if options.association != "joint-3d":
         raise InputError(f"association {options.association!r} is not available; use joint-3d or per-camera")
-    cloud, matched = cross_camera_cloud(cameras, detections, capture.rate)
+    gates = matcher_gates(frame0_pixel_sigma(cameras, capture.first_frame, detections[0]))
+    cloud, matched = cross_camera_cloud(cameras, detections, capture.rate, *gates)
     return Joint3dChain(
         cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight, matched=matched,
         rig=Rig.of(cameras), detections=detections,

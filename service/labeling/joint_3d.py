@@ -89,9 +89,24 @@ class Joint3dChain(CloudChain):
         return views
 
 
+# The matcher's gates (px) are the larger of these defaults, chosen on 0.5 px simulated noise,
+# and GATE_SIGMAS times the detections' sd about frame 0's projections: real ChArUco corners
+# through caliscope's calibration sit 1.2 px (median) off, and at 2 / 3 px joint-3d labeled
+# every corner two corners over (RMSE 107 mm; 2.6 mm at 4 / 6 px).
+REPROJECTION_PX, EPIPOLAR_PX = 2.0, 3.0
+GATE_SIGMAS = (4.0, 6.0)  # reprojection RMS, epipolar distance: as the defaults' 2 : 3
+
+
+def matcher_gates(sigma_px: float | None) -> tuple[float, float]:
+    """``(epipolar_px, max_reprojection_px)`` for detections of per-axis sd ``sigma_px``
+    (``service.capture.reprojection.frame0_pixel_sigma``; None: the defaults)."""
+    sigma = sigma_px or 0.0
+    return max(EPIPOLAR_PX, GATE_SIGMAS[1] * sigma), max(REPROJECTION_PX, GATE_SIGMAS[0] * sigma)
+
+
 def cross_camera_cloud(
     cameras: list[Camera], detections: list[list[np.ndarray]], rate: float,
-    epipolar_px: float = 3.0, max_reprojection_px: float = 2.0, block_frames: int = 20,
+    epipolar_px: float = EPIPOLAR_PX, max_reprojection_px: float = REPROJECTION_PX, block_frames: int = 20,
 ) -> tuple[UnlabeledCloud, Sequence[CrossCameraPoints]]:
     """The cross-camera points of every frame as a cloud with detection resources.
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from service.capture.capture import Capture
+from service.capture.reprojection import frame0_offsets, frame0_problem
 from service.io.recording import LabeledTrajectories
 from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.lost_subject import unnamed_span, unnamed_warning
@@ -22,10 +23,8 @@ from service.labeling.take_warnings import fast_markers, fast_motion_warning, sc
 def early_scale_warning(capture: Capture, unit: str) -> str | None:
     """The marker spacing's line, before labeling: of the labeled first frame, or of frame 0's
     points when a subject model is to name them."""
-    if capture.points is None:
-        return None
     first = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
-    if np.isfinite(first).all(axis=1).sum() < 2:
+    if np.isfinite(first).all(axis=1).sum() < 2 and capture.points is not None:
         first = capture.points[0]
     return scale_warning(first, first[None], capture.rate, unit)
 
@@ -48,9 +47,13 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, unit: str = "
         doubtful_warning(fraction),
         fast_motion_warning(fast_markers(result.names, result.positions)),
         scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit,
-                      spacing=not spacing_judged) if capture.points is not None else None,
+                      spacing=not spacing_judged),
         coincident_warning(coincident_pairs(result.names, result.positions)),
     ]
+    if capture.points is None:
+        cameras, detections = capture.camera_frames()
+        problem = frame0_problem(cameras, frame0_offsets(cameras, capture.first_frame, detections[0]))
+        lines.append(problem[1] if problem is not None else None)
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against
         span = unnamed_span(result.occluded, np.array([len(p) for p in capture.points]), capture.rate)
         lines.append(unnamed_warning(span, capture.rate, start))
