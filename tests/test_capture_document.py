@@ -102,3 +102,23 @@ def test_malformed_json_is_one_line():
     with pytest.raises(InputError, match=r"^x\.json: Invalid JSON") as caught:
         read_capture_document(b'{"rate": 120,', "x.json")
     assert "\n" not in str(caught.value)
+
+
+def test_a_camera_given_no_frames_sees_nothing_as_one_left_out_does(camera_document: dict):
+    """``"cam": []`` was refused as a frame-count mismatch (cam: 0) though a camera left out is fine."""
+    blind = camera_document["cameras"][0]["name"]
+    empty, left_out = copy.deepcopy(camera_document), copy.deepcopy(camera_document)
+    empty["detections"][blind] = []
+    del left_out["detections"][blind]
+    as_empty = read_capture_document(json.dumps(empty), "doc").capture()
+    as_left_out = read_capture_document(json.dumps(left_out), "doc").capture()
+    assert all(len(frame[0]) == 0 for frame in as_empty.detections)
+    assert all(np.array_equal(a, b) for fa, fb in zip(as_empty.detections, as_left_out.detections) for a, b in zip(fa, fb))
+
+
+def test_detections_with_a_confidence_say_to_leave_it_out(camera_document: dict):
+    document = copy.deepcopy(camera_document)
+    name = document["cameras"][0]["name"]
+    document["detections"][name] = [[[u, v, 0.9] for u, v in frame] for frame in document["detections"][name]]
+    with pytest.raises(InputError, match=r"detections\.\w+\.0\.0: .* \(a detection is \[u, v\] pixels: leave its confidence out\)"):
+        read_capture_document(json.dumps(document), "doc")

@@ -153,8 +153,8 @@ class CaptureDocument(BaseModel):
         cameras = {camera.name: camera for camera in self.cameras}
         if len(cameras) != len(self.cameras):
             raise ValueError("camera names must be unique")
-        counts = {name: len(frames) for name, frames in detections.items()}
-        for name in counts:
+        counts = {name: len(frames) for name, frames in detections.items() if frames}  # []: sees nothing
+        for name in detections:
             if name not in cameras:
                 raise ValueError(f"detections.{name}: camera {name!r} is not in cameras ({', '.join(cameras)})")
         if len(set(counts.values())) > 1:
@@ -192,7 +192,7 @@ class CaptureDocument(BaseModel):
         documents, found = self.cameras or [], self.detections or {}  # both there: _consistent checked it
         cameras = [camera.camera(scale) for camera in documents]
         empty: list[list[Pixel]] = [[] for _ in range(self.n_frames)]
-        per_camera = [found.get(camera.name, empty) for camera in documents]
+        per_camera = [found.get(camera.name) or empty for camera in documents]  # left out or []: sees nothing
         detections = [
             [np.asarray(per_camera[c][f], dtype=float).reshape(-1, 2) for c in range(len(cameras))]
             for f in range(self.n_frames)
@@ -284,5 +284,7 @@ def describe_validation_error(error: ValidationError) -> str:
     first = problems[0]
     path = ".".join(str(part) for part in first["loc"])
     message = first["msg"].removeprefix("Value error, ")
+    if first["loc"][:1] == ("detections",) and first["type"] == "too_long":  # OpenPose-style (u, v, c)
+        message += " (a detection is [u, v] pixels: leave its confidence out)"
     more = f" (and {len(problems) - 1} more problems)" if len(problems) > 1 else ""
     return f"{path}: {message}{more}" if path else f"{message}{more}"
