@@ -120,5 +120,6 @@ def test_detections_with_a_confidence_say_to_leave_it_out(camera_document: dict)
     document = copy.deepcopy(camera_document)
     name = document["cameras"][0]["name"]
     document["detections"][name] = [[[u, v, 0.9] for u, v in frame] for frame in document["detections"][name]]
-    with pytest.raises(InputError, match=r"detections\.\w+\.0\.0: .* \(a detection is \[u, v\] pixels: leave its confidence out\)"):
+    said = r"detections\.\w+\.0\.0: .* \(a detection is \[u, v\] pixels: leave its confidence out\)"
+    with pytest.raises(InputError, match=said):
         read_capture_document(json.dumps(document), "doc")
