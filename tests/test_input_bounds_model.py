@@ -9,7 +9,7 @@ import pytest
 
 from formulations.errors import FormulationError
 from formulations.subject.model import Joint, Limb, Segment, SingleMarker, SubjectModel
-from service.capture.model_input import read_model
+from service.capture.model_input import check_shared_names, read_model
 from service.errors import InputError
 
 
@@ -39,6 +39,16 @@ def test_a_good_model_loads(tmp_path):
     (lambda d: d.__setitem__("marker_radius", float("nan")), "marker_radius"),
     (lambda d: d["singles"][0]["distances"].__setitem__(0, float("nan")), "single marker 'S'"),
     (lambda d: d["limbs"][0].__setitem__("length", float("inf")), "limb"),
+    # these were an SVD that did not converge, an AxisError, a KeyError, or silently bad gates:
+    (lambda d: d["segments"][0]["spread"].__setitem__(1, float("nan")), r"segment 'A': spread must be finite numbers >= 0"),
+    (lambda d: d["segments"][0]["spread"].__setitem__(1, -5.0), r"segment 'A': spread must be finite numbers >= 0"),
+    (lambda d: d["segments"][1].update(markers=[], coordinates=[], spread=[]), "segment 'B' has no markers"),
+    (lambda d: d["segments"][1]["spread"].pop(), "segment 'B': spread has 3 values for 4 markers"),
+    (lambda d: d["singles"][0].__setitem__("segments", ["nosuch"]), "single marker 'S': segment 'nosuch' is not in"),
+    (lambda d: d["singles"][0]["sd"].__setitem__(0, -1.0), "single marker 'S': sd must be"),
+    (lambda d: d["joints"][0].__setitem__("rms", float("nan")), "joint 'AB': rms must be"),
+    (lambda d: d["segments"][0].pop("spread"), r"a segment lacks 'spread' \(it holds name, markers, coordinates"),
+    (lambda d: d["segments"][1]["markers"].__setitem__(0, "A0"), "marker 'A0' is on two segments"),
 ])
 def test_bad_numbers_are_named(tmp_path, edit, match):
     data = _model()
@@ -61,3 +71,12 @@ def test_binary_file_is_not_a_model(tmp_path):
     with pytest.raises(InputError, match="not a text file") as error:
         read_model(path)
     assert "\n" not in str(error.value)
+
+
+def test_a_take_of_the_model_s_markers_in_another_case_is_told_so():
+    """85_02 ("Male:LFWT") against a model of 135_02 ("male:LFWT") read as "only 0 of 41 markers"."""
+    model = SubjectModel.from_json(json.dumps(_model()))
+    with pytest.raises(InputError, match=r"only 0 of its 8 markers are in the model .*; 8 differ from the model's "
+                                         r"only in upper/lower case\)"):
+        check_shared_names([f"{s.lower()}{i}" for s in "AB" for i in range(4)], model, "take.c3d")
+    check_shared_names(["*0", "*1", "A0"], model, "take.c3d")  # unlabeled trajectories are no marker set

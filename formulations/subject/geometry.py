@@ -78,7 +78,8 @@ class ModelGeometry:
     def of(cls, model: SubjectModel, sigmas: float = 3.0) -> ModelGeometry:
         names = [m for s in model.segments for m in s.markers] + [s.marker for s in model.singles]
         if len(set(names)) != len(names):
-            raise ValueError("a marker is on two segments of the model")
+            twice = next(name for name in names if names.count(name) > 1)
+            raise ValueError(f"marker {twice!r} is on two segments of the model (or a segment and a single)")
         index = {name: i for i, name in enumerate(names)}
         seg_index = {s.name: i for i, s in enumerate(model.segments)}
         r = model.marker_radius

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -102,27 +102,59 @@ def _decode(data: dict[str, Any]) -> SubjectModel:
     ]
     limbs = [Limb(b["segment"], (b["joints"][0], b["joints"][1]), float(b["length"])) for b in data["limbs"]]
     model = SubjectModel(
-        [Segment(**s) for s in data["segments"]], joints, limbs,
-        [SingleMarker(**m) for m in data["singles"]], float(data["marker_radius"]),
+        [_entry(Segment, s) for s in data["segments"]], joints, limbs,
+        [_entry(SingleMarker, m) for m in data["singles"]], float(data["marker_radius"]),
     )
     names = {s.name for s in model.segments}
     if not (np.isfinite(model.marker_radius) and model.marker_radius >= 0):
         raise ValueError(f"marker_radius must be a finite number >= 0 (mm), got {model.marker_radius}")
     for segment in model.segments:
+        if not segment.markers:
+            raise ValueError(f"segment {segment.name!r} has no markers")
         if len(segment.coordinates) != len(segment.markers) or any(len(c) != 3 for c in segment.coordinates):
             raise ValueError(f"segment {segment.name!r}: coordinates do not match its markers")
+        if len(segment.spread) != len(segment.markers):
+            raise ValueError(f"segment {segment.name!r}: spread has {len(segment.spread)} values for "
+                             f"{len(segment.markers)} markers")
         _finite(segment.coordinates, f"segment {segment.name!r}: coordinates")
+        _non_negative(segment.spread, f"segment {segment.name!r}: spread")
     for joint in model.joints:
         if not set(joint.segments) <= names:
             raise ValueError(f"joint {joint.name!r} names an unknown segment")
         if joint.rest is not None and np.asarray(joint.rest, dtype=float).shape != (3, 3):
             raise ValueError(f"joint {joint.name!r}: rest is not a 3 x 3 rotation")
         _finite([*joint.centres, *(joint.rest or [])], f"joint {joint.name!r}: centres and rest")
+        _non_negative([joint.rms], f"joint {joint.name!r}: rms")
     for limb in model.limbs:
         _finite([limb.length], f"limb of segment {limb.segment!r}: length")
     for single in model.singles:
+        unknown = [name for name in single.segments if name not in names]
+        if unknown or not (len(single.segments) == len(single.distances) == len(single.sd)):
+            raise ValueError(f"single marker {single.marker!r}: " + (f"segment {unknown[0]!r} is not in the model"
+                             if unknown else "segments, distances and sd differ in length"))
         _finite(single.distances, f"single marker {single.marker!r}: distances")
+        _non_negative(single.sd, f"single marker {single.marker!r}: sd")
     return model
+
+
+def _entry(kind: type, fields_of: Any) -> Any:
+    """``kind(**fields_of)``, naming a missing or unknown field (not ``__init__``'s wording)."""
+    expected = {f.name for f in fields(kind)}
+    required = {f.name for f in fields(kind) if f.default is MISSING}
+    given = set(fields_of) if isinstance(fields_of, dict) else set()
+    if not isinstance(fields_of, dict) or required - given or given - expected:
+        what = kind.__name__.lower().replace("singlemarker", "single marker")
+        problem = (f"lacks {sorted(required - given)[0]!r}" if required - given else
+                   f"has an unknown field {sorted(given - expected)[0]!r}" if given - expected else "is not an object")
+        raise ValueError(f"a {what} {problem} (it holds {', '.join(f.name for f in fields(kind))})")
+    return kind(**fields_of)
+
+
+def _non_negative(values: Any, what: str) -> None:
+    """A spread, an sd or an RMS is a length >= 0 (a negative one made gates that pass nothing)."""
+    array = np.asarray(values, dtype=float)
+    if not (np.isfinite(array) & (array >= 0)).all():
+        raise ValueError(f"{what} must be finite numbers >= 0 (mm)")
 
 
 def _finite(values: Any, what: str) -> None:
