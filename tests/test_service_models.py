@@ -156,6 +156,28 @@ def test_an_upload_with_a_model_keeps_its_partly_labeled_frame_0(client, take, t
     _refused(other, 422, "model: a subject model is a JSON object")
 
 
+def test_an_upload_of_unlabeled_trajectories_is_named_by_the_model_as_the_cli_names_it(client, take, tmp_path) -> None:
+    """The service refused it ("only 0 of its 12 markers are in the model (not in it: *0, *1 ...)")."""
+    names, positions = take
+    model = tmp_path / "subject.json"
+    model.write_text(_fit(client, _write(tmp_path / "rom.c3d", names, positions[:FIT])).text)
+    unlabeled = [f"*{i}" for i in range(len(names))]
+    upload = _write(tmp_path / "unlabeled.c3d", unlabeled, positions[FIT:])
+    job = client.post("/v1/jobs", files={"file": ("unlabeled.c3d", upload.read_bytes()),
+                                         "model": ("subject.json", model.read_text())}, data={"window": "10"})
+    assert job.status_code == 202, job.text
+    assert wait_for(client, job.json()["id"])["state"] == "done"
+    served = client.get(f"/v1/jobs/{job.json()['id']}/result").json()
+    run = CliRunner().invoke(app, ["track", str(upload), "--model", str(model), "--window", "10",
+                                   "--out", str(tmp_path / "cli.csv")])
+    assert run.exit_code == 0, run.output
+    as_csv = client.get(f"/v1/jobs/{job.json()['id']}/result", params={"format": "csv"}).content
+    assert as_csv == (tmp_path / "cli.csv").read_bytes()
+    order = [names.index(name) for name in served["markers"]]
+    right = np.linalg.norm(np.array(served["positions"], dtype=float) - positions[FIT:, order], axis=2) < 1e-3
+    assert right.mean() >= 0.99
+
+
 def test_static_take_needs_a_template(client, tmp_path: Path) -> None:
     names, still, centres = chain(6, segments=3, frames=60, motion=0.0)
     positions = np.concatenate([still, np.stack(centres, axis=1)], axis=1)

@@ -14,6 +14,7 @@ from formulations.subject.model import SubjectModel
 from service.capture.capture import Capture
 from service.capture.span import frame_span
 from service.errors import InputError
+from service.io.recording import is_unlabeled
 
 MIN_SHARED = 0.5  # of a labeled take's names the model must know: less is another marker set
 
@@ -50,12 +51,16 @@ def check_shared_names(take: list[str], model: SubjectModel, source: str) -> Non
         InputError: Fewer than half of the take's names are the model's; the line lists them.
     """
     known = set(model_names(model))
+    take = [name for name in take if not is_unlabeled(name)]  # *N: points for the model to name, no marker
     shared = [name for name in take if name in known]
     if len(shared) < MIN_SHARED * len(take):
         foreign = [name for name in take if name not in known]
+        folded = {name.casefold() for name in known}
+        case = sum(name.casefold() in folded for name in foreign)
+        hint = f"; {case} differ from the model's only in upper/lower case" if case else ""
         raise InputError(
             f"{source}: only {len(shared)} of its {len(take)} markers are in the model "
-            f"(not in it: {', '.join(foreign[:12])}{' ...' if len(foreign) > 12 else ''})"
+            f"(not in it: {', '.join(foreign[:12])}{' ...' if len(foreign) > 12 else ''}{hint})"
         )
 
 

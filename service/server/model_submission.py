@@ -47,7 +47,7 @@ def document_with_model(recording: Recording, model: dict, options: LabelingOpti
     """The upload as a capture document labeled from ``model`` and the labels of its frame 0."""
     subject = parse_model(json.dumps(model), "model")
     check_shared_names(recording.names, subject, f"file: {source}")
-    absent = recording.missing()[0]
+    absent = recording.without_unlabeled().missing()[0]  # over the markers, as capture.names (*N: points only)
     capture = capture_from_recording(recording)  # points shuffled; frame 0's labels
     labeled = [i for i, name in enumerate(capture.names) if not absent[i]]  # the model's singles if it lacks them
     points = capture.points or []
