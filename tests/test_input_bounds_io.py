@@ -237,15 +237,26 @@ def test_one_marker_and_unlabeled_frames_have_no_scale_to_judge():
     assert scale_warning(positions[0], positions, 100.0, "mm") is None
 
 
-def test_cli_warns_of_a_take_in_metres_labelled_mm_before_labeling(tmp_path):
-    """Every point in every gate makes such a take slow: the line comes first, not after."""
+def test_track_refuses_a_take_in_metres_labelled_mm_before_labeling(tmp_path):
+    """Every point in every gate: 20 frames of a walk ran for over ten minutes, the unit line
+    printed only at the start. Markers under 1 mm apart cannot be optical markers."""
     path = write_c3d(tmp_path / "metres.c3d", take() / 1000.0, unit="mm")
+    run = subprocess.run([sys.executable, "-m", "service.cli", "track", str(path), "-o", str(tmp_path / "o.trc")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2 and not (tmp_path / "o.trc").exists(), run.stderr[-2000:]
+    assert run.stderr.startswith("error: markers 0.07 mm from their nearest neighbour in the first frame: optical "
+                                 "markers are millimetres wide, so the take's length unit is wrong"), run.stderr
+    assert len(run.stderr.splitlines()) == 1
+
+
+def test_track_warns_before_labeling_of_a_take_a_thousand_times_too_big(tmp_path):
+    path = write_c3d(tmp_path / "km.c3d", take() * 1000.0, unit="mm")
     run = subprocess.run([sys.executable, "-m", "service.cli", "track", str(path), "-o", str(tmp_path / "o.trc")],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
     lines = run.stderr.splitlines()
-    assert lines[0].startswith("warning: read in mm, the take does not look human-sized: markers 0.07 mm"), lines
-    assert sum("human-sized" in line for line in lines) == 1 and any("labeling" in line for line in lines[1:])
+    assert lines[0].startswith("warning: read in mm, the take does not look human-sized: markers 7e+04 mm"), lines
+    assert any("labeling" in line for line in lines[1:])
 
 
 def test_model_and_eval_warn_of_a_take_in_metres_labelled_mm(tmp_path):

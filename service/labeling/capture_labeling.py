@@ -54,6 +54,7 @@ from service.labeling.per_camera import PerCameraChain
 from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
+from service.labeling.take_warnings import refuse_sub_millimetre
 
 
 class Association(WindowChain[Any], Protocol):
@@ -77,6 +78,9 @@ class CaptureLabeling:
     """
 
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
+        first = np.asarray(capture.first_frame, dtype=float)
+        refuse_sub_millimetre(first if np.isfinite(first).all(axis=1).sum() >= 2 or capture.points is None
+                              else capture.points[0])
         self.formulation = resolve_formulation(options.formulation)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
         self._frames, self._window = capture.n_frames, options.window

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from formulations.subject.contradiction import SegmentMisfit
+from service.errors import InputError
 from service.io.recording import Recording
 from service.labeling.coincident import COINCIDENT_MM, sampled_distances
 
@@ -93,13 +94,11 @@ def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, u
     A warning, not an error: a surveyed site or a mm-sized model is possible, but a wrong
     unit otherwise labels without complaint (gates sized for mm miss points 1000x apart).
     """
-    seen = first_frame[np.isfinite(first_frame).all(axis=1)]
     found: list[str] = []
-    if spacing and len(seen) >= 2:
-        apart = float(np.median(cKDTree(seen).query(seen, k=2)[0][:, 1]))
-        if not SPACING_MM[0] <= apart <= SPACING_MM[1]:
-            found.append(f"markers {apart:.3g} mm from their nearest neighbour in the labeled frame "
-                         f"(expected {SPACING_MM[0]:g} mm to {SPACING_MM[1] / 1000:g} m)")
+    apart = marker_spacing_mm(first_frame) if spacing else None
+    if apart is not None and not SPACING_MM[0] <= apart <= SPACING_MM[1]:
+        found.append(f"markers {apart:.3g} mm from their nearest neighbour in the labeled frame "
+                     f"(expected {SPACING_MM[0]:g} mm to {SPACING_MM[1] / 1000:g} m)")
     steps = np.linalg.norm(np.diff(positions, axis=0), axis=2) if len(positions) > 1 else np.zeros(0)
     steps = steps[np.isfinite(steps)]
     speed = float(np.median(steps)) * rate if len(steps) else 0.0
@@ -110,6 +109,27 @@ def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, u
     rate_too = " and frame rate" if speed > MAX_SPEED_MM_S else ""
     return (f"warning: read in {unit}, the take does not look human-sized: {'; '.join(found)}; "
             f"check the file's length unit{rate_too}")
+
+
+def marker_spacing_mm(frame: np.ndarray) -> float | None:
+    """Median distance from each position of ``frame`` ``(N, 3)`` (NaN rows skipped) to its
+    nearest other; None with fewer than two."""
+    seen = frame[np.isfinite(frame).all(axis=1)]
+    return float(np.median(cKDTree(seen).query(seen, k=2)[0][:, 1])) if len(seen) >= 2 else None
+
+
+def refuse_sub_millimetre(frame: np.ndarray) -> None:
+    """Refuse a take whose markers sit under ``SPACING_MM[0]`` apart: optical markers are
+    millimetres wide, so that is a wrong unit (metres read as mm), and labeling it puts
+    every point in every gate (20 frames of a walk ran for over ten minutes).
+
+    Raises:
+        InputError: ``markers X mm from their nearest neighbour ...``.
+    """
+    apart = marker_spacing_mm(frame)
+    if apart is not None and apart < SPACING_MM[0]:
+        raise InputError(f"markers {apart:.3g} mm from their nearest neighbour in the first frame: optical markers are "
+                         "millimetres wide, so the take's length unit is wrong (a file in metres read as mm?)")
 
 
 def take_scale_warning(take: Recording) -> str | None:
