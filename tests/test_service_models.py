@@ -119,6 +119,8 @@ def test_a_partly_labeled_first_frame_is_kept_and_the_model_names_the_rest(clien
     assert warned.status_code == 202, warned.text
     [warning] = warned.json()["warnings"]
     assert warning.startswith("warning: the labels of frame 0 do not fit 1 of the model's segments")
+    done = wait_for(client, warned.json()["id"])
+    assert done["state"] == "done" and warning in done["warnings"]  # kept with the result, not only in the 202
     nose = truth[:, names.index("S0M0")] + [0.0, 60.0, 0.0]  # a marker the model lacks: labeled, it becomes a single
     with_nose = {**document, "markers": [*names[:4], "NOSE"], "first_frame": [*truth[0, :4].tolist(), nose[0].tolist()],
                  "points": [[*frame, nose[f].tolist()] for f, frame in enumerate(points)]}

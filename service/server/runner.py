@@ -31,6 +31,7 @@ from service.errors import InputError
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import StaleOutcome, WindowOutcome
 from service.labeling.result_warnings import result_warnings
+from service.labeling.take_warnings import model_misfit_warning
 from service.server.results import trajectories_to_bytes
 from service.server.store import JobStore, WindowTaken, store_for
 
@@ -70,8 +71,10 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         # The kept windows replace the stored ones with the result, in one transaction: a
         # restart then finds either the first pass (and refines it again) or a finished job.
         result = labeling.result(kept)
+        misfit = model_misfit_warning(labeling.model_misfits, 0)  # said at submission too; kept with the result
         store.finish(job_id, trajectories_to_bytes(result), None if kept is outcomes else (kept, worker),
-                     result_warnings(capture, result, "the file's unit" if store.uploaded(job_id) else "mm"))
+                     result_warnings(capture, result, "the file's unit" if store.uploaded(job_id) else "mm")
+                     + ([misfit] if misfit else []))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except OperationalError:  # the store itself (down, disk full): the job is retried, not failed by it
