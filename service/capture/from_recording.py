@@ -50,7 +50,7 @@ def capture_from_span(
     markers = recording.without_unlabeled()
     if not markers.names:
         raise InputError(f"no marker is named: its {recording.n_markers} points are all unlabeled trajectories (*N); "
-                         "--model names them from a subject model")
+                         "--model names them from a subject model (without --keep-labels: there are no labels to keep)")
     present = ~markers.missing()[start]
     if not present.any():
         raise InputError(f"--start {start}: no marker is labeled in that frame{_hint(markers)}")

@@ -94,7 +94,9 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
     data = upload.file.read()
     if model is not None:
         if start is not None or end is not None:
-            raise InputError("start: a subject model labels the whole file; send start and end without a model")
+            given = "start" if start is not None else "end"
+            raise InputError(f"{given}: over HTTP a subject model labels the whole file (markerflow track --model "
+                             "takes --start and --end); send start and end without a model")
         document = document_with_model(recording, model, options, filename.name)
         return replace(_checked(document, filename.name, limits), upload=Upload(filename.suffix.lower(), data))
     if start is None:  # frame 0 is the labeled frame: every marker must be there
