@@ -80,6 +80,11 @@ def test_output_keeps_the_inputs_numbering_unit_analogs_and_parameters(tmp_path:
     assert point_labels[:own] == [*names, "EXTRA"] and all(label.startswith("*") for label in point_labels[own:])
     out_points, in_points = written["data"]["points"][:3, :own], given["data"]["points"][:3]
     np.testing.assert_allclose(out_points[:, -1], in_points[:, -1], atol=1e-6)  # EXTRA untouched
+    # and written once: its samples, free in the capture, also came out as an *N trajectory
+    stars = written["data"]["points"][:3, own:]
+    shown = written["data"]["meta_points"]["residuals"][0, own:] >= 0
+    again = np.linalg.norm(stars - in_points[:, -1:], axis=0) < 1e-6
+    assert not (again & shown).any()
     residual = written["data"]["meta_points"]["residuals"][0]
     assert (residual[: len(names), :FIT] < 0).all()  # before --start: not labeled
     labeled = residual[: len(names), FIT:] >= 0

@@ -29,6 +29,8 @@ from service.io.formats.conventions import (
 )
 from service.io.recording import UNLABELED_PREFIX, LabeledTrajectories, Recording, SourceFile, is_unlabeled
 
+SAME_SAMPLE = 1e-6  # in the file's unit: one input sample written back through mm (round off ~1e-12)
+
 
 def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | None = None) -> Recording:
     """Read the labeled 3D points of a C3D file, in millimetres.
@@ -85,7 +87,8 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     # points were in the capture, so they were labeled or are in the new *N
     if source.c3d is not None and traj.unlabeled.shape[0]:
         _clear_unlabeled(c3d, slice(at, at + traj.n_frames), path)
-    unlabeled = np.concatenate([outside, _placed(traj.unlabeled, source.unit, at, c3d["data"]["points"].shape[2])], axis=1)
+    placed = _placed(traj.unlabeled, source.unit, at, c3d["data"]["points"].shape[2])
+    unlabeled = np.concatenate([outside, _not_kept(placed, c3d, traj.names)], axis=1)
     if unlabeled.shape[1]:
         _with_unlabeled(c3d, unlabeled, path)
     channels = with_confidence(c3d, traj, at) if traj.confidence.size else {}
@@ -144,6 +147,22 @@ def _placed(unlabeled: np.ndarray, unit: str, start: int, frames: int) -> np.nda
     placed = np.full((3, unlabeled.shape[1], frames), np.nan)
     placed[:, :, start : start + len(unlabeled)] = from_millimetres(unlabeled, unit).T
     return placed
+
+
+def _not_kept(placed: np.ndarray, c3d: ezc3d.c3d, names: list[str]) -> np.ndarray:
+    """``placed`` ``(3, U, frames)`` without the samples a kept input point holds in that frame,
+    and without channels left empty: a copy keeps the points ``names`` does not label (a marker
+    a subject model lacks), whose samples, free in the capture, came out again as ``*N``."""
+    labels = point_labels(c3d)
+    kept = [i for i, label in enumerate(labels) if label not in names and not is_unlabeled(label)]
+    if not kept or not placed.shape[1]:
+        return placed
+    points = c3d["data"]["points"][:3, kept]  # (3, K, frames), the file's unit
+    valid = c3d["data"]["meta_points"]["residuals"][0, kept] >= 0  # (K, frames)
+    gap = np.linalg.norm(placed[:, :, None] - points[:, None], axis=0)  # (U, K, frames)
+    again: np.ndarray = np.asarray((np.where(valid[None], gap, np.inf) < SAME_SAMPLE).any(axis=1))  # (U, frames)
+    placed = np.where(again[None], np.nan, placed)
+    return placed[:, np.isfinite(placed).all(axis=0).any(axis=1)]
 
 
 def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
