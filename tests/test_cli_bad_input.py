@@ -109,3 +109,10 @@ def test_serve_refuses_a_store_it_cannot_use_in_one_line(tmp_path: Path, db: str
     """A missing folder was uvicorn's 172-line start-up traceback; an in-memory database served,
     and every job stayed queued (each worker process had its own empty database)."""
     assert_input_error(run_cli("serve", "--db", db.format(tmp=tmp_path), "--port", "0"), *words)
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1:8786x", "http://127.0.0.1:8000"])
+def test_serve_refuses_a_dask_address_it_cannot_use_in_one_line(tmp_path: Path, address: str) -> None:
+    """It was a 100-line start-up traceback (after a 30 s wait for an address that does not answer)."""
+    assert_input_error(run_cli("serve", "--db", str(tmp_path / "jobs.db"), "--port", "0", "--dask", address),
+                       f"--dask {address}: cannot reach the Dask scheduler (")

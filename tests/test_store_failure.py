@@ -139,3 +139,28 @@ def test_a_job_another_runner_holds_is_run_here_once_it_stops_moving(db, monkeyp
     _wait_for(lambda: len(_FlakyWatch.runs) == 2)
     pool.close()
     assert _FlakyWatch.runs == [job_id, job_id]
+
+
+class _EndedTask:
+    """A Dask future's end, as ``DaskExecutor._done`` sees it."""
+
+    def __init__(self, status: str) -> None:
+        self.status = status
+
+
+def test_a_dask_task_the_cluster_dropped_is_submitted_again(db, monkeypatch):
+    """Scheduler and worker killed together: the task ended neither finished nor erred, and the
+    job stayed running with nothing running it until the server restarted."""
+    job_id = _job(db)
+    submitted: list[str] = []
+    dask_pool = object.__new__(executor.DaskExecutor)  # no cluster: only the done callback is exercised
+    dask_pool.db_url, dask_pool._futures, dask_pool._drops = db, {}, {}
+    monkeypatch.setattr(dask_pool, "submit", submitted.append, raising=False)
+    dask_pool._done(job_id, "key", _EndedTask("cancelled"))
+    assert submitted == [job_id] and store_for(db).known(job_id).state == "queued"
+    for _ in executor.STORE_RETRY_SECONDS:
+        dask_pool._done(job_id, "key", _EndedTask("lost"))
+    dropped = len(executor.STORE_RETRY_SECONDS) + 1  # submitted again after each drop but the last
+    assert store_for(db).known(job_id).error == f"the Dask cluster dropped the job's task {dropped} times (last: lost)"
+    dask_pool._done(job_id, "key", _EndedTask("finished"))  # a finished task is the runner's business
+    assert len(submitted) == len(executor.STORE_RETRY_SECONDS)

@@ -15,6 +15,8 @@ def run_serve(host: str | None, port: int | None, db: str | None, dask: str | No
 
     settings = load_settings(config, host=host, port=port, db=database_url(db), dask=dask)
     check_store(settings.db)
+    if settings.dask:
+        check_dask(settings.dask)
     # Read timeouts, and a bounded shutdown: neither a stalled client nor a long window holds a restart.
     service_server(create_app(settings), settings, settings.host, settings.port, "info").run()
 
@@ -40,6 +42,25 @@ def check_store(url: str) -> None:
         raise InputError(f"--db {shown}: cannot open the job store ({reason}){folder}") from None
     except ModuleNotFoundError as error:  # a dialect whose driver is not installed, e.g. mysql://
         raise InputError(f"--db {shown}: no database driver for it ({error.name} is not installed)") from None
+
+
+DASK_CONNECT_SECONDS = 10.0  # a scheduler on the network answers in well under a second
+
+
+def check_dask(address: str) -> None:
+    """Reach the Dask scheduler once before serving: a wrong ``--dask`` was a 100-line start-up
+    traceback, after a 30 s wait.
+
+    Raises:
+        InputError: ``--dask <address>: cannot reach the Dask scheduler (<reason>)``.
+    """
+    from distributed import Client
+
+    try:
+        Client(address, timeout=DASK_CONNECT_SECONDS).close()
+    except (OSError, ValueError, TypeError) as error:  # timeouts are OSError; a malformed address ValueError
+        reason = next(iter(str(error).splitlines()), type(error).__name__)
+        raise InputError(f"--dask {address}: cannot reach the Dask scheduler ({reason})") from None
 
 
 def database_url(db: str | None) -> str | None:

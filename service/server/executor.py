@@ -155,6 +155,7 @@ class DaskExecutor:
         self.db_url = db_url
         self._client = Client(address)
         self._futures: dict[str, Any] = {}  # held so their done callbacks run
+        self._drops: dict[str, int] = {}  # per job: tasks the cluster dropped (``_resubmit``)
 
     def submit(self, job_id: str) -> None:
         from distributed import fire_and_forget
@@ -167,12 +168,26 @@ class DaskExecutor:
 
     def _done(self, job_id: str, key: str, future: Any) -> None:
         self._futures.pop(key, None)
-        if future.status != "error":
+        if future.status == "error":
+            reason = _dask_reason(future.exception())
+            if store_for(self.db_url).fail(job_id, f"the Dask cluster gave up on the job ({reason})"):
+                log.warning("job %s failed on Dask: %s", job_id, reason)
+        elif future.status != "finished":  # lost with the scheduler (cancelled, lost): no one runs it now
+            self._resubmit(job_id, future.status)
+
+    def _resubmit(self, job_id: str, status: str) -> None:
+        """Submit a job whose task the cluster dropped again, if it is still unfinished; after
+        ``len(STORE_RETRY_SECONDS)`` drops in a row it fails, saying so (it resumes after its
+        last stored window either way)."""
+        store = store_for(self.db_url)
+        if store.known(job_id).state not in ACTIVE:
             return
-        error = future.exception()
-        reason = f"{type(error).__name__}: {error}"
-        if store_for(self.db_url).fail(job_id, f"the Dask cluster gave up on the job ({reason})"):
-            log.warning("job %s failed on Dask: %s", job_id, reason)
+        drops = self._drops[job_id] = self._drops.get(job_id, 0) + 1
+        if drops > len(STORE_RETRY_SECONDS):
+            store.fail(job_id, f"the Dask cluster dropped the job's task {drops} times (last: {status})")
+            return
+        log.warning("job %s: its Dask task ended %s; submitting it again", job_id, status)
+        self.submit(job_id)
 
     def cancel(self, job_id: str) -> None:
         """Nothing to do here: the task sees the cancel in the store after its current window."""
@@ -182,3 +197,11 @@ class DaskExecutor:
 
     def close(self) -> None:
         self._client.close()
+
+
+def _dask_reason(error: BaseException) -> str:
+    """The cluster's reason in a few words: a ``KilledWorker``'s own text runs to a paragraph."""
+    if type(error).__name__ == "KilledWorker":
+        return "KilledWorker: its worker died on every try (distributed.scheduler.allowed-failures)"
+    text = next(iter(str(error).splitlines()), "")
+    return f"{type(error).__name__}: {text[:160]}"
