@@ -277,3 +277,16 @@ def test_trc_values_past_the_named_columns_are_refused_but_trailing_blanks_are_n
     path.write_text("\n".join(lines[:6] + [line + "\t1.0\t2.0\t3.0" for line in lines[6:]]) + "\n")
     with pytest.raises(InputError, match=r"t\.trc:7: 3 values past the 4 named markers' columns"):
         read_labeled(path)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".trc"])
+def test_times_printed_to_3_decimals_at_240_hz_are_even_enough(tmp_path, suffix):
+    """Steps of 0.004 and 0.005 s are rounding, not a dropped frame (which doubles a step)."""
+    path = write_table(tmp_path / f"t{suffix}", take())
+    first_row, separator = (1, ",") if suffix == ".csv" else (6, "\t")
+    lines = path.read_text().splitlines()
+    for i in range(first_row, len(lines)):
+        frame, _, rest = lines[i].split(separator, 2)
+        lines[i] = separator.join([frame, f"{(i - first_row) / 240:.3f}", rest])
+    path.write_text("\n".join(lines) + "\n")
+    assert read_labeled(path).positions.shape == (30, 4, 3)

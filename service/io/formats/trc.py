@@ -61,13 +61,12 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
         raise InputError(f"{path}: header says NumFrames {declared} but has {len(numbered)} rows")
     if not numbered:
         raise InputError(f"{path}: TRC file has zero frames")
-    _check_order(numbered)
+    cells = _frame_cells(numbered)
+    check_rows(cells[:, 0], cells[:, 1], [where for where, _ in numbered])
     rows = [_row(line, n_markers, where) for where, line in numbered]
     positions = np.array(rows).reshape(len(rows), n_markers, 3)
     positions = to_millimetres(positions, header["Units"], path)
     require_samples(names, positions, path)
-    cells = np.array([line.split("\t", 2)[:2] for _, line in numbered], dtype=float)  # numbers: _check_order
-    check_rows(cells[:, 0], cells[:, 1], [where for where, _ in numbered])
     source = SourceFile.of_table(header["Units"].strip().lower(), cells[:, 0], cells[:, 1])
     return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
 
@@ -179,24 +178,21 @@ def _names(line: str, n_markers: int, path: Path) -> list[str]:
     return names
 
 
-def _check_order(numbered: list[tuple[str, str]]) -> None:
-    """Frame# and Time must increase row by row, as OpenSim requires of Time.
+def _frame_cells(numbered: list[tuple[str, str]]) -> np.ndarray:
+    """``(rows, 2)`` each row's Frame# and Time (their order: ``check_rows``).
 
-    Refused rather than sorted: rows out of order are a broken export (a row whose
-    positions are another frame's), and a sorted table would hide that its output's
-    frames are not the input's rows.
+    Rows out of order are refused rather than sorted: they are a broken export (a row whose
+    positions are another frame's), and a sorted table would hide that its output's frames
+    are not the input's rows; OpenSim requires Time to increase too.
     """
-    previous: tuple[float, float] | None = None
+    cells = []
     for where, line in numbered:
-        cells = line.split("\t")
+        first = line.split("\t")[:2]
         try:
-            frame, time = float(cells[0]), float(cells[1] if len(cells) > 1 else "")
+            cells.append((float(first[0]), float(first[1] if len(first) > 1 else "")))
         except ValueError:
-            raise InputError(f"{where}: a row should start with its Frame# and Time, got {cells[:2]}") from None
-        if previous is not None and not (frame > previous[0] and time > previous[1]):
-            raise InputError(f"{where}: frame {cells[0].strip()} at time {cells[1].strip()} does not follow "
-                             f"frame {previous[0]:g} at time {previous[1]:g}; rows must be in order")
-        previous = (frame, time)
+            raise InputError(f"{where}: a row should start with its Frame# and Time, got {first}") from None
+    return np.array(cells)
 
 
 def _row(line: str, n_markers: int, where: str) -> list[float]:
