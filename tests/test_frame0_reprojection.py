@@ -67,7 +67,7 @@ def test_the_cross_camera_gates_widen_with_the_detections_noise_seen_at_frame_0(
     simulated = simulate_cameras(placed, rig, pixel_noise=2.5, merge_radius_px=3.0, occlusion_rate=0.1,
                                  occlusion_burst_frames=15, clutter_per_camera=2, seed=0)
     capture = capture_of(cameras, simulated)
-    sigma = frame0_pixel_sigma(cameras, capture.first_frame, capture.detections[0])
+    sigma = frame0_pixel_sigma(capture.frame0_distances())
     assert sigma is not None and 2.0 < sigma < 3.0  # the noise, recovered from frame 0 alone
     labels, _ = CaptureLabeling(capture, LabelingOptions()).label()
     error = np.linalg.norm(labels.positions - placed.positions, axis=2)

@@ -22,8 +22,9 @@ from service.capture.checks import (
     checked_frames,
     checked_names,
     checked_rate,
+    first_off_sensor,
 )
-from service.capture.reprojection import frame0_offsets, frame0_problem
+from service.capture.reprojection import frame0_distances, frame0_offsets, frame0_problem
 from service.errors import InputError
 
 ASSOCIATIONS = ("joint-3d", "per-camera")
@@ -122,13 +123,12 @@ class Capture:
         if len(cameras) < 2 or not all(isinstance(camera, Camera) for camera in cameras):
             raise InputError(f"camera mode needs at least 2 calibrated cameras (Camera), got {len(cameras)}")
         self.detections = checked_detections(self.detections, len(cameras))
-        for f, frame in enumerate(self.detections):
-            for camera, pixels in zip(cameras, frame):
-                outside = np.flatnonzero(~camera.in_image(pixels))
-                if len(outside):
-                    raise InputError(f"detections[{f}] of camera {camera.name!r}: {pixels[outside[0]].tolist()} is "
-                                     f"outside its {camera.image_size[0]}x{camera.image_size[1]} image")
-        problem = frame0_problem(cameras, frame0_offsets(cameras, self.first_frame, self.detections[0]))
+        for c, camera in enumerate(cameras):
+            off = first_off_sensor([frame[c] for frame in self.detections], camera.image_size)
+            if off is not None:
+                raise InputError(f"detections[{off[0]}] of camera {camera.name!r}: {off[2].tolist()} is "
+                                 f"outside its {camera.image_size[0]}x{camera.image_size[1]} image")
+        problem = frame0_problem(cameras, frame0_offsets(self.frame0_distances()))
         if problem is not None and problem[0]:  # one camera off is a warning (result_warnings)
             raise InputError(problem[1])
 
@@ -139,6 +139,12 @@ class Capture:
     @property
     def n_frames(self) -> int:
         return len(self.points) if self.points is not None else len(self.camera_frames()[1])
+
+    def frame0_distances(self) -> list[np.ndarray | None]:
+        """Camera mode: per camera, the labeled markers' projections' distances to frame 0's
+        detections (``service.capture.reprojection``)."""
+        cameras, detections = self.camera_frames()
+        return frame0_distances(cameras, np.asarray(self.first_frame, dtype=float), detections[0])
 
     def camera_frames(self) -> tuple[list[Camera], list[list[np.ndarray]]]:
         """Camera mode: the cameras and each frame's detections per camera.

@@ -98,6 +98,23 @@ def checked_detections(detections: object, n_cameras: int) -> list[list[np.ndarr
     return checked
 
 
+def first_off_sensor(frames: list, image_size: tuple[int, int]) -> tuple[int, int, np.ndarray] | None:
+    """``(frame, detection, pixel)`` of one camera's first detection off its sensor
+    (``[-0.5, size - 0.5]`` per axis, as ``Camera.in_image``) over its ``frames`` of
+    ``(D, 2)`` pixels, or None; all frames in one array test."""
+    counts = [len(frame) for frame in frames]
+    if not sum(counts):
+        return None
+    pixels = np.concatenate([np.asarray(frame, dtype=float).reshape(-1, 2) for frame in frames])
+    upper = np.asarray(image_size, dtype=float) - 0.5
+    outside = np.flatnonzero(((pixels < -0.5) | (pixels > upper)).any(axis=1))
+    if not len(outside):
+        return None
+    first = int(outside[0])
+    f = int(np.searchsorted(np.cumsum(counts), first, side="right"))
+    return f, first - sum(counts[:f]), pixels[first]
+
+
 def _float_array(value: object, where: str) -> np.ndarray:
     try:
         return np.asarray(value, dtype=float)

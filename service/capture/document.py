@@ -36,7 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
-from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE
+from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE, first_off_sensor
 from service.capture.model_input import model_names, parse_model, with_model
 from service.errors import InputError
 
@@ -224,18 +224,10 @@ class CaptureDocument(BaseModel):
 
 
 def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[int, int]) -> None:
-    """Every detection lies on the sensor ([-0.5, size - 0.5] per axis, as ``Camera.in_image``)."""
-    counts = [len(frame) for frame in frames]
-    if not sum(counts):
-        return
-    pixels = np.concatenate([np.asarray(frame, dtype=float).reshape(-1, 2) for frame in frames])
-    upper = np.asarray(image_size, dtype=float) - 0.5
-    outside = np.flatnonzero(((pixels < -0.5) | (pixels > upper)).any(axis=1))
-    if len(outside):
-        first = int(outside[0])
-        f = int(np.searchsorted(np.cumsum(counts), first, side="right"))
-        d = first - (sum(counts[:f]))
-        u, v = pixels[first]
+    """Every detection lies on the sensor (``first_off_sensor``), named by its document path."""
+    off = first_off_sensor(frames, image_size)
+    if off is not None:
+        f, d, (u, v) = off
         raise ValueError(
             f"detections.{camera}.{f}.{d}: ({u:g}, {v:g}) is outside the {image_size[0]}x{image_size[1]} image"
         )

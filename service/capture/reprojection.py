@@ -24,25 +24,27 @@ OFF_PX = 10.0  # a right camera's markers sit within a few pixels (noise, centro
 QUANTILE = 0.25  # of the markers' distances: judged on the best-seen quarter
 
 
-def frame0_offsets(cameras: list[Camera], first_frame: np.ndarray, detections: list[np.ndarray]) -> list[float | None]:
-    """Per camera the frame-0 offset in pixels (module doc); None where nothing can be judged
-    (no detection, or no labeled marker in front of it and on its sensor), inf when
-    detections exist but no marker projects onto the sensor."""
+def frame0_distances(cameras: list[Camera], first_frame: np.ndarray,
+                     detections: list[np.ndarray]) -> list[np.ndarray | None]:
+    """Per camera, each labeled marker's distance (px) from its projection (in front of the
+    camera and on its sensor) to the nearest frame-0 detection; None where the camera has no
+    detection or nothing is labeled, empty where no marker projects onto its sensor."""
     known = first_frame[np.isfinite(first_frame).all(axis=1)]
-    offsets: list[float | None] = []
+    distances: list[np.ndarray | None] = []
     for camera, pixels in zip(cameras, detections):
         if not len(pixels) or not len(known):
-            offsets.append(None)
+            distances.append(None)
             continue
-        ahead = known[(known @ camera.R.T + camera.t)[:, 2] > 0]
-        projected = camera.project(ahead)
-        projected = projected[camera.in_image(projected)]
-        if not len(projected):
-            offsets.append(float("inf"))
-            continue
-        distance = cKDTree(pixels).query(projected)[0]
-        offsets.append(float(np.quantile(distance, QUANTILE)))
-    return offsets
+        projected = camera.project(known[(known @ camera.R.T + camera.t)[:, 2] > 0])
+        distances.append(cKDTree(pixels).query(projected[camera.in_image(projected)])[0] if len(projected) else
+                         np.zeros(0))
+    return distances
+
+
+def frame0_offsets(distances: list[np.ndarray | None]) -> list[float | None]:
+    """Per camera the frame-0 offset in pixels (module doc) of ``frame0_distances``; None where
+    nothing can be judged, inf when detections exist but no marker projects onto the sensor."""
+    return [None if d is None else float(np.quantile(d, QUANTILE)) if len(d) else float("inf") for d in distances]
 
 
 def frame0_problem(cameras: list[Camera], offsets: list[float | None]) -> tuple[bool, str] | None:
@@ -64,18 +66,10 @@ def frame0_problem(cameras: list[Camera], offsets: list[float | None]) -> tuple[
 RAYLEIGH_MEDIAN = 1.1774  # median of |e| for a 2D error e with sd sigma per axis: sqrt(2 ln 2) sigma
 
 
-def frame0_pixel_sigma(cameras: list[Camera], first_frame: np.ndarray, detections: list[np.ndarray]) -> float | None:
-    """Per-axis sd (px) of a detection about the labeled first frame's projection, over every
-    camera and marker whose projection has a detection within ``OFF_PX`` (the others are not
-    seen there); None when fewer than 3 do. Calibration error is in it, as it should be: the
-    cross-camera matcher's gates must pass the detections as this calibration projects them."""
-    known = first_frame[np.isfinite(first_frame).all(axis=1)]
-    near: list[np.ndarray] = []
-    for camera, pixels in zip(cameras, detections):
-        ahead = known[(known @ camera.R.T + camera.t)[:, 2] > 0]
-        if not len(pixels) or not len(ahead):
-            continue
-        distance = cKDTree(pixels).query(camera.project(ahead))[0]
-        near.append(distance[distance <= OFF_PX])
-    pooled = np.concatenate(near) if near else np.zeros(0)
+def frame0_pixel_sigma(distances: list[np.ndarray | None]) -> float | None:
+    """Per-axis sd (px) of a detection about the labeled first frame's projection, from
+    ``frame0_distances`` within ``OFF_PX`` (the others are markers that camera does not see);
+    None when fewer than 3. Calibration error is in it, as it should be: the cross-camera
+    matcher's gates must pass the detections as this calibration projects them."""
+    pooled = np.concatenate([d[d <= OFF_PX] for d in distances if d is not None] or [np.zeros(0)])
     return float(np.median(pooled)) / RAYLEIGH_MEDIAN if len(pooled) >= 3 else None

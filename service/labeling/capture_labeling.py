@@ -54,7 +54,7 @@ from service.labeling.per_camera import PerCameraChain
 from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
-from service.labeling.take_warnings import refuse_sub_millimetre
+from service.labeling.take_warnings import refuse_sub_millimetre, spacing_frame
 
 
 class Association(WindowChain[Any], Protocol):
@@ -78,9 +78,7 @@ class CaptureLabeling:
     """
 
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
-        first = np.asarray(capture.first_frame, dtype=float)
-        refuse_sub_millimetre(first if np.isfinite(first).all(axis=1).sum() >= 2 or capture.points is None
-                              else capture.points[0])
+        refuse_sub_millimetre(spacing_frame(capture.first_frame, capture.points))
         self.formulation = resolve_formulation(options.formulation)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
         self._frames, self._window = capture.n_frames, options.window
@@ -244,7 +242,7 @@ def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -
         return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)
     if options.association != "joint-3d":
         raise InputError(f"association {options.association!r} is not available; use joint-3d or per-camera")
-    gates = matcher_gates(frame0_pixel_sigma(cameras, capture.first_frame, detections[0]))
+    gates = matcher_gates(frame0_pixel_sigma(capture.frame0_distances()))
     cloud, matched = cross_camera_cloud(cameras, detections, capture.rate, *gates)
     return Joint3dChain(
         cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight, matched=matched,

@@ -17,15 +17,13 @@ from service.io.recording import LabeledTrajectories
 from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.lost_subject import unnamed_span, unnamed_warning
 from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
-from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning
+from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning, spacing_frame
 
 
 def early_scale_warning(capture: Capture, unit: str) -> str | None:
     """The marker spacing's line, before labeling: of the labeled first frame, or of frame 0's
     points when a subject model is to name them."""
-    first = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
-    if np.isfinite(first).all(axis=1).sum() < 2 and capture.points is not None:
-        first = capture.points[0]
+    first = spacing_frame(capture.first_frame, capture.points)
     return scale_warning(first, first[None], capture.rate, unit)
 
 
@@ -50,11 +48,10 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, unit: str = "
                       spacing=not spacing_judged),
         coincident_warning(coincident_pairs(result.names, result.positions)),
     ]
-    if capture.points is None:
-        cameras, detections = capture.camera_frames()
-        problem = frame0_problem(cameras, frame0_offsets(cameras, capture.first_frame, detections[0]))
-        lines.append(problem[1] if problem is not None else None)
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against
         span = unnamed_span(result.occluded, np.array([len(p) for p in capture.points]), capture.rate)
         lines.append(unnamed_warning(span, capture.rate, start))
+    else:  # camera mode: a camera whose calibration or detections are off at frame 0
+        problem = frame0_problem(capture.camera_frames()[0], frame0_offsets(capture.frame0_distances()))
+        lines.append(problem[1] if problem is not None else None)
     return [line for line in lines if line is not None]

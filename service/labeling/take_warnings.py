@@ -118,6 +118,14 @@ def marker_spacing_mm(frame: np.ndarray) -> float | None:
     return float(np.median(cKDTree(seen).query(seen, k=2)[0][:, 1])) if len(seen) >= 2 else None
 
 
+def spacing_frame(first_frame: np.ndarray, points: list[np.ndarray] | None) -> np.ndarray:
+    """``(N, 3)`` the frame a take's marker spacing is judged on before labeling: the labeled
+    first frame, or frame 0's points where fewer than two markers are labeled (a subject model
+    is to name them)."""
+    first = np.asarray(first_frame, dtype=float).reshape(-1, 3)
+    return first if np.isfinite(first).all(axis=1).sum() >= 2 or not points else points[0]
+
+
 def refuse_sub_millimetre(frame: np.ndarray) -> None:
     """Refuse a take whose markers sit under ``SPACING_MM[0]`` apart: optical markers are
     millimetres wide, so that is a wrong unit (metres read as mm), and labeling it puts
