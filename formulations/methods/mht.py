@@ -159,6 +159,10 @@ def _feasible_best(
         if len(ranked) < k or len(found) >= j + probe:
             return found[:j], len(ranked) < k and len(found) <= j
         k *= 2
+    if not found and np.isfinite(f.miss).all():
+        # every ranked assignment held a resource twice: every object occluded holds none, so a
+        # hypothesis always has this child (it had none, and the search ended in an IndexError)
+        found = [(float(f.miss.sum()), f.occlusion.copy())]
     return found[:j], False
 
 
