@@ -6,6 +6,7 @@ before. Checked with ezc3d on the written file, not with markerflow's reader."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import ezc3d
@@ -63,7 +64,7 @@ def test_output_keeps_the_inputs_numbering_unit_analogs_and_parameters(tmp_path:
     _input_c3d(source, [*names, "EXTRA"], np.concatenate([positions, extra], axis=1) / 1000)
     out, printed = _track(tmp_path, source, model.to_json(), FIT)
     given, written = ezc3d.c3d(str(source)), ezc3d.c3d(str(out))
-    assert "is a new C3D of the labels alone" not in printed
+    assert "is a new C3D of the labels" not in printed
 
     assert written["header"]["points"]["first_frame"] == FIRST
     own = given["data"]["points"].shape[1]  # the input's points, then its samples before --start, unlabeled (*N)
@@ -103,7 +104,7 @@ def test_input_lacking_a_model_marker_keeps_numbering_and_unit_and_says_what_is_
     assert written["header"]["points"]["first_frame"] == FIRST + FIT  # the labeled span, numbered as in the input
     assert list(written["parameters"]["POINT"]["UNITS"]["value"]) == ["m"]
     assert "LAB" not in written["parameters"]
-    assert "warning: the input has no point for model markers S0M0, so out.c3d is a new C3D of the labels alone" in printed
+    assert "warning: the input has no point for model markers S0M0, so out.c3d is a new C3D of the labels" in printed
     assert [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]] == names
     given = ezc3d.c3d(str(source))["data"]["points"][:3, :, FIT:]
     labeled = written["data"]["meta_points"]["residuals"][0, 1:] >= 0
@@ -128,3 +129,39 @@ def test_real_take_keeps_its_numbering_and_parameters(tmp_path: Path) -> None:
     same = np.linalg.norm(points - given["data"]["points"][:3, :, start:end], axis=0) < 1e-3
     assert labeled.mean() >= 0.8 and same[labeled].all()
     assert (written["data"]["meta_points"]["residuals"][0, :own, :start] < 0).all()
+
+
+def _track_extra(tmp_path: Path, out: Path) -> tuple[list[str], np.ndarray, dict]:
+    """A model of 7 markers, a C3D take in metres with one more (``EXTRA``), tracked from frame
+    FIT into ``out`` with ``--json``: the model's names, the input's mm positions, the summary."""
+    names, positions, _ = chain(7, frames=FRAMES)
+    subject, source = tmp_path / "subject.json", tmp_path / "take.c3d"
+    subject.write_text(fit_subject(names, positions[:FIT]).model.to_json())
+    extra = positions[:, :1] + np.array([0.0, 0.0, 150.0])
+    taken = np.concatenate([positions, extra], axis=1)
+    _input_c3d(source, [*names, "EXTRA"], taken / 1000)
+    result = CliRunner().invoke(app, ["-q", "track", str(source), "--model", str(subject), "--start", str(FIT),
+                                      "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    return names, taken, json.loads(result.stdout)
+
+
+@pytest.mark.parametrize("suffix", [".trc", ".csv"])
+def test_a_table_from_a_model_keeps_the_inputs_markers_the_model_lacks(tmp_path: Path, suffix: str) -> None:
+    out = tmp_path / f"out{suffix}"
+    names, taken, _ = _track_extra(tmp_path, out)
+    written = read_labeled(out)
+    assert written.names[: len(names)] == names and "EXTRA" in written.names
+    np.testing.assert_allclose(written.positions[:, written.names.index("EXTRA")], taken[FIT:, -1], atol=1e-3)
+
+
+def test_the_leftover_count_is_of_what_the_c3d_copy_holds(tmp_path: Path) -> None:
+    """EXTRA's samples are free in the capture; the copy keeps them as EXTRA, not again as *N,
+    and the summary counts only the *N samples the file holds."""
+    out = tmp_path / "out.c3d"
+    _, _, summary = _track_extra(tmp_path, out)
+    written = ezc3d.c3d(str(out))
+    labels = [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]]
+    stars = [i for i, label in enumerate(labels) if label.startswith("*")]
+    held = int((written["data"]["meta_points"]["residuals"][0, stars, FIT:] >= 0).sum())
+    assert summary["unlabeled_points"] == held

@@ -19,11 +19,12 @@ from service.capture.model_input import check_shared_names, read_model, with_mod
 from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, counted, out, warn, window_progress
 from service.errors import InputError
-from service.io.formats import kept_source, read_labeled, write_labeled
+from service.io.formats import is_copy, kept_source, read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
-from service.io.recording import LabeledTrajectories, SourceFile
+from service.io.recording import LabeledTrajectories, Recording, SourceFile
 from service.labeling.absent_markers import with_absent
 from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.carried_markers import CarriedMarkers
 from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.leftover_points import leftover_note, leftover_summary
@@ -68,10 +69,12 @@ def run_track(
     labels_at = None if model else (start, end)  # a model names the markers; a relabel starts from the labels at start
     if keep_labels and input.suffix.lower() != ".json":  # a capture JSON's labels are kept anyway
         labels_at = (start or 0, end)
-    capture, options, source, absent = _read_input(input, shuffle, labels_at)
+    capture, options, recording, absent = _read_input(input, shuffle, labels_at)
+    source = None if recording is None else recording.source
     if output.suffix.lower() == ".trc":  # found before labeling, not after
         check_trc_names(capture.names + absent, output)
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
+    carried = None  # the input's markers the model lacks (``carried_markers``)
     unknown: list[str] = []  # markers labeled at start that the model lacks (--keep-labels)
     if model is not None:
         chosen = read_model(model)
@@ -84,6 +87,8 @@ def run_track(
         else:
             capture = with_model(capture, chosen, start or 0, end, input.suffix.lower() == ".json")
         source, not_kept = _kept(source, capture.names, output)
+        if recording is not None:
+            carried = CarriedMarkers.of(recording, capture.names, start or 0, capture.n_frames)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:
@@ -96,7 +101,10 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    write_labeled(output, with_absent(result, absent), source, start or 0)
+    written = with_absent(result, absent)
+    if carried is not None:  # the summary counts the leftover points the output holds
+        result, written = carried.without_their_samples(result), carried.written(written, is_copy(output, source))
+    write_labeled(output, written, source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
@@ -199,12 +207,13 @@ def _unnamed(capture: Capture, result: LabeledTrajectories) -> dict[str, Any] | 
 
 def _unknown_warning(unknown: list[str], start: int) -> str | None:
     """The markers labeled at ``start`` that the model lacks and no posed segment could measure
-    (``labeled_singles``): labeling from the model drops them."""
+    (``labeled_singles``): labeling from the model does not name them; the output carries the
+    input's samples under their names (``carried_markers``)."""
     if not unknown:
         return None
-    return (f"warning: {counted(len(unknown), 'marker')} labeled at frame {start} not in the model, not labeled: "
-            f"{', '.join(unknown[:12])}{' ...' if len(unknown) > 12 else ''} (fit the model on frames where they "
-            "are seen, or label without --model)")
+    return (f"warning: {counted(len(unknown), 'marker')} labeled at frame {start} not in the model, not labeled "
+            f"(written as the input has them): {', '.join(unknown[:12])}{' ...' if len(unknown) > 12 else ''} "
+            "(fit the model on frames where they are seen, or label without --model)")
 
 
 def _absent_warning(absent: list[str], start: int) -> str | None:
@@ -225,9 +234,10 @@ def _mm(value: object) -> str:
 
 def _read_input(
     input: Path, shuffle: bool, span: tuple[int | None, int | None] | None = None,
-) -> tuple[Capture, LabelingOptions, SourceFile | None, list[str]]:
-    """The capture, its options, the file that output written from it keeps (none for JSON),
-    and the markers left out because they are absent in its labeled frame.
+) -> tuple[Capture, LabelingOptions, Recording | None, list[str]]:
+    """The capture, its options, the recording read (its ``source`` is what output written
+    from it keeps; none for JSON), and the markers left out because they are absent in its
+    labeled frame.
 
     ``span`` (start, end) relabels a recording from its own labels: at ``start``
     (``capture_from_span``: markers absent there are left out), or when no start is given at
@@ -238,11 +248,11 @@ def _read_input(
     if input.suffix.lower() != ".json":
         recording = read_labeled(input)
         if span is None:
-            return capture_from_recording(recording, shuffle), LabelingOptions(), recording.source, []
+            return capture_from_recording(recording, shuffle), LabelingOptions(), recording, []
         if start is None:
             require_complete_first_frame(recording, input.name)
         capture, absent = capture_from_span(recording, start or 0, end, shuffle)
-        return capture, LabelingOptions(), recording.source, absent
+        return capture, LabelingOptions(), recording, absent
     if start is not None or end is not None:
         raise InputError("--start and --end of a capture JSON need --model: its labels are of frame 0 only")
     try:
@@ -260,8 +270,8 @@ def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[So
     if not lacking:
         return kept, None
     warning = (f"warning: the input has no point for model markers {', '.join(lacking[:6])}"
-               f"{' ...' if len(lacking) > 6 else ''}, so {output.name} is a new C3D of the labels alone (the input's "
-               "unit and frame numbering, but not its analog channels, events or other parameters)")
+               f"{' ...' if len(lacking) > 6 else ''}, so {output.name} is a new C3D of the labels and the input's "
+               "other markers (its unit and frame numbering, but not its analog channels, events or other parameters)")
     return kept, warning if output.suffix.lower() == ".c3d" else None
 
 

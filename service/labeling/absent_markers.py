@@ -11,12 +11,16 @@ import numpy as np
 from service.io.recording import LabeledTrajectories
 
 
-def with_absent(result: LabeledTrajectories, names: list[str]) -> LabeledTrajectories:
+def with_absent(
+    result: LabeledTrajectories, names: list[str], positions: np.ndarray | None = None,
+) -> LabeledTrajectories:
     """``result`` with markers ``names`` appended, occluded in every frame: written as missing,
-    so a relabeled file holds no label that markerflow did not give."""
+    so a relabeled file holds no label that markerflow did not give. With ``positions``
+    ``(frames, markers, 3)`` mm they hold those instead, occluded where NaN (``carried_markers``)."""
     if not names:
         return result
     frames, extra = result.n_frames, len(names)
+    held = np.full((frames, extra, 3), np.nan) if positions is None else np.asarray(positions, float)
 
     def widened(values: np.ndarray, fill: float | int) -> np.ndarray:
         if values.size == 0:
@@ -24,8 +28,9 @@ def with_absent(result: LabeledTrajectories, names: list[str]) -> LabeledTraject
         return np.concatenate([values, np.full((frames, extra, *values.shape[2:]), fill, dtype=values.dtype)], axis=1)
 
     return replace(
-        result, names=[*result.names, *names], positions=widened(result.positions, np.nan),
-        occluded=widened(result.occluded, True), point_index=widened(result.point_index, -1),
+        result, names=[*result.names, *names], positions=np.concatenate([result.positions, held], axis=1),
+        occluded=np.concatenate([result.occluded, ~np.isfinite(held).all(axis=2)], axis=1),
+        point_index=widened(result.point_index, -1),
         filled=widened(result.filled, np.nan), best_view=widened(result.best_view, -1),
         confidence=widened(result.confidence, np.nan),
     )

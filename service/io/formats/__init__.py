@@ -61,6 +61,12 @@ def kept_source(source: SourceFile | None, names: list[str]) -> tuple[SourceFile
     return (replace(source, c3d=None) if lacking else source), lacking
 
 
+def is_copy(path: str | Path, source: SourceFile | None) -> bool:
+    """Output to ``path`` is a copy of the input C3D ``source`` (``write_c3d``), keeping what
+    the labels do not replace."""
+    return Path(path).suffix.lower() == ".c3d" and source is not None and source.c3d is not None
+
+
 def check_output(path: str | Path) -> None:
     """Fail early, before long work, if ``path`` cannot take labeled output.
 

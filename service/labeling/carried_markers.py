@@ -1,0 +1,62 @@
+"""The input's markers a subject model lacks, carried into the output as the input had them.
+
+Labeling from a model names the model's markers only. A .c3d copy of the input keeps its
+other points untouched (``write_c3d``); a TRC or CSV table, or a new C3D (the input lacks a
+model marker), would drop them: they are appended here as their own columns, the input's
+samples under the input's names, so the output still holds everything the input did.
+
+Their samples were points of the capture like any other: the ones no model marker took
+also came out as leftover ``*N`` trajectories. ``without_their_samples`` takes those out, for
+every output (the C3D copy included), so a sample is written once and the summary's count
+of leftover points is of points that are nowhere else in the output.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from service.io.recording import LabeledTrajectories, Recording, is_unlabeled
+from service.labeling.absent_markers import with_absent
+
+SAME_SAMPLE_MM = 1e-6  # a capture point is the input's sample copied, not recomputed: exact up to round-off
+
+
+@dataclass(frozen=True)
+class CarriedMarkers:
+    """The input's named markers a model lacks over the labeled span.
+
+    Attributes:
+        names: Their input names (the input's own ``*N`` trajectories are not among them: a
+            relabel replaces those).
+        positions: ``(frames, markers, 3)`` mm, the span's input samples, NaN where missing.
+    """
+
+    names: list[str]
+    positions: np.ndarray
+
+    @classmethod
+    def of(cls, recording: Recording, labeled: list[str], start: int, frames: int) -> CarriedMarkers:
+        """The markers of ``recording`` not in ``labeled``, input frames ``start .. start + frames - 1``."""
+        named = set(labeled)
+        columns = [i for i, name in enumerate(recording.names) if name not in named and not is_unlabeled(name)]
+        return cls([recording.names[i] for i in columns], recording.positions[start : start + frames, columns])
+
+    def without_their_samples(self, result: LabeledTrajectories) -> LabeledTrajectories:
+        """``result`` whose leftover channels no longer hold these markers' samples (a channel
+        left empty is dropped)."""
+        leftover = result.unlabeled
+        if not self.names or not leftover.size:
+            return result
+        gap = np.linalg.norm(leftover[:, :, None] - self.positions[:, None], axis=3)  # (frames, U, K)
+        again = (np.nan_to_num(gap, nan=np.inf) < SAME_SAMPLE_MM).any(axis=2)
+        leftover = np.where(again[..., None], np.nan, leftover)
+        return replace(result, unlabeled=leftover[:, np.isfinite(leftover).all(axis=2).any(axis=0)])
+
+    def written(self, result: LabeledTrajectories, copy: bool) -> LabeledTrajectories:
+        """What output of ``result`` holds: without these markers' samples among the leftover
+        channels, and, unless the output is a ``copy`` of the input C3D (which keeps them
+        itself), with these markers as further columns, occluded where missing."""
+        result = self.without_their_samples(result)
+        return result if copy else with_absent(result, self.names, self.positions)
