@@ -85,3 +85,21 @@ def test_a_job_the_cluster_gives_up_on_fails_with_the_reason_and_keeps_its_windo
     assert erred["error"] == "the Dask cluster gave up on the job (RuntimeError: the worker's environment is broken)"
     assert partial.status_code == 200 and not all(map(all, partial.json()["occluded"]))
     assert lost["state"] == "failed" and "KilledWorker" in lost["error"] and lost["windows_done"] == 0
+
+
+def test_a_job_queued_on_a_cluster_without_a_worker_says_why(tmp_path):
+    """It sat ``queued`` with nothing said; once a worker connects it runs."""
+    body = document_json(generated_capture(frames=30, seed=3), OPTIONS)
+    with (
+        LocalCluster(n_workers=0, processes=True, dashboard_address=None) as cluster,
+        serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}", dask=cluster.scheduler_address)) as client,
+    ):
+        answer = client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
+        assert answer.status_code == 202
+        said = f"the Dask cluster at {cluster.scheduler_address} has no worker: queued jobs wait until one connects"
+        assert any(line.startswith(said) for line in answer.json()["warnings"]), answer.json()
+        status = client.get(f"/v1/jobs/{answer.json()['id']}").json()
+        assert status["state"] == "queued" and any(line.startswith(said) for line in status["warnings"])
+        cluster.scale(1)
+        done = wait_for(client, answer.json()["id"], timeout=120)
+    assert done["state"] == "done" and not any(line.startswith(said) for line in done["warnings"])

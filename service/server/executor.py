@@ -36,6 +36,9 @@ class Executor(Protocol):
 
     def stop_windows(self) -> None: ...
 
+    def waiting(self) -> str | None:
+        """Why a queued job may not start soon, when this executor knows of a reason."""
+
     def close(self) -> None: ...
 
 
@@ -132,6 +135,10 @@ class ProcessPoolExecutor:
                 for watch in self._watches.values():
                     watch.stop_by(self._deadline)
 
+    def waiting(self) -> str | None:
+        """None: a queued job starts as soon as a job ahead of it ends."""
+        return None
+
     def close(self) -> None:
         self._closing.set()
         self.stop_windows()
@@ -161,6 +168,8 @@ class DaskExecutor:
         from distributed import fire_and_forget
 
         key = f"markerflow-job-{job_id}-{uuid.uuid4().hex[:8]}"
+        if (idle := self.waiting()) is not None:
+            log.warning("job %s: %s", job_id, idle)
         future = self._client.submit(run_job, self.db_url, job_id, key=key, pure=False)
         self._futures[key] = future
         future.add_done_callback(lambda done: self._done(job_id, key, done))
@@ -194,6 +203,13 @@ class DaskExecutor:
 
     def stop_windows(self) -> None:
         """Nothing to do here: Dask tasks run on without this server (``fire_and_forget``)."""
+
+    def waiting(self) -> str | None:
+        """A cluster without a worker runs nothing: its queued jobs wait for one to connect."""
+        if self._client.nthreads():
+            return None
+        return (f"the Dask cluster at {self._client.scheduler.address} has no worker: queued jobs wait until one "
+                f"connects (dask worker {self._client.scheduler.address})")
 
     def close(self) -> None:
         self._client.close()

@@ -40,9 +40,18 @@ async def _job(request: Request, job_id: str, owner: str) -> Job:
 
 async def _status(request: Request, job: Job) -> JobStatus:
     windows = await run_in_threadpool(_store(request).windows, job.id)
-    warnings = await run_in_threadpool(_store(request).warnings, job.id) if job.state == "done" else []
+    warnings = await run_in_threadpool(job_warnings, request, job)
     return JobStatus(**JobSummary.of(job).model_dump(), windows=[WindowSummary.of_stored(w) for w in windows],
                      warnings=warnings)
+
+
+def job_warnings(request: Request, job: Job) -> list[str]:
+    """What the job's status says beside its figures: once done, what the labeling warns of; while
+    queued, why it may not start soon (``Executor.waiting``). Blocking: the store and the cluster."""
+    if job.state == "done":
+        return _store(request).warnings(job.id)
+    idle = request.app.state.executor.waiting() if job.state == "queued" else None
+    return [idle] if idle else []
 
 
 @router.post(
@@ -76,7 +85,8 @@ async def submit_job(
         await _same_capture(store, job, submission.stored())
         return _accepted(response, job)
     await run_in_threadpool(request.app.state.executor.submit, job.id)
-    return _accepted(response, job, list(submission.warnings))
+    idle = await run_in_threadpool(request.app.state.executor.waiting)
+    return _accepted(response, job, [*submission.warnings, *([idle] if idle else [])])
 
 
 async def _same_capture(store: JobStore, earlier: Job, stored: bytes) -> None:

@@ -75,13 +75,15 @@ class JobStatus(JobSummary):
         "Once done, what the labeling warns of, as markerflow track prints it: most labels doubtful, markers "
         "moving further per frame than they are apart, a take not human-sized in its unit, copied columns, "
         "a stretch where no marker is labeled though points are there. An integral window is optimal under "
-        "the model, not proven right: these are what the certificate does not see."))
+        "the model, not proven right: these are what the certificate does not see. While queued, why the job "
+        "may not start soon (a Dask cluster with no worker)."))
 
 
 class JobAccepted(JobSummary):
     links: dict[str, str] = Field(description="Status, events and result URLs of the job.")
     warnings: list[str] = Field(default_factory=list, description="What the check of this submission found doubtful "
-                                "(a subject model its labeled frame does not fit); none for a repeated Idempotency-Key.")
+                                "(a subject model its labeled frame does not fit), and why it may not start soon (a Dask cluster "
+                                "with no worker); none for a repeated Idempotency-Key.")
 
 
 class JobPage(BaseModel):

@@ -15,6 +15,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
 from starlette.responses import Response
 
+from service.server.routes_jobs import job_warnings
 from service.server.store import ACTIVE
 from service.web import actions, job_files
 from service.web.access import owned_job, page
@@ -57,7 +58,7 @@ async def job_page(request: Request, job_id: str, markers: Annotated[list[str] |
     context = {"job": job, "active": job.state in ACTIVE, "options": job_options(db, job.id), "windows": windows,
                "summary": certificate_summary(windows) if windows else None, "labels": labels,
                "doubtful": doubtful_share(windows),
-               "warnings": await run_in_threadpool(store.warnings, job.id) if job.state == "done" else []}
+               "warnings": await run_in_threadpool(job_warnings, request, job)}
     if labels is not None:
         chosen = chosen_markers(labels, markers or [])
         counts = [(name, *(int(mask[:, m].sum()) for _, mask in state_masks(labels)))
