@@ -18,7 +18,10 @@ marker the model lacks counts as missing where present):
 - correct: the marker took its own point;
 - wrong: it took a point, but another marker's (its own was present);
 - missing: its own point was present, it took none;
-- extra: it took a point in a frame where it has none of its own.
+- extra: it took a point in a frame where it has none of its own;
+- in breaks: labels (points taken) inside the summary's shape breaks, where a label left the
+  shape its rigid neighbours keep (``service/labeling/shape_doubt.py``); right there: how
+  many of those are right (what ``SHAPE_BREAK_CONFIDENCE`` stands for).
 
 Accuracy = correct / (marker-frames present in the file), over the labeled frames, frame
 `start` included; "off jumps" the same without the marker-frames where the file's own labels
@@ -75,6 +78,8 @@ class Row:
     extra: int = 0
     on_jumps: int = 0  # present marker-frames where the file's label jumped
     correct_on_jumps: int = 0
+    in_breaks: int = 0  # labels inside the summary's shape breaks
+    right_in_breaks: int = 0
     wall: float = float("nan")
     seconds: float = float("nan")
     failure: str = ""
@@ -82,12 +87,13 @@ class Row:
     def cells(self) -> str:
         present = self.correct + self.wrong + self.missing
         if self.failure:
-            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | | |"
+            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | | | | |"
         off_jumps = (self.correct - self.correct_on_jumps) / (present - self.on_jumps)
+        right_there = f"{self.right_in_breaks / self.in_breaks:.0%}" if self.in_breaks else "-"
         return (f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.correct / present:.2%} | "
                 f"{off_jumps:.2%} | "
-                f"{self.wrong} | {self.missing} | {self.extra} | {present} | {self.wall:.1f} | "
-                f"{self.frames / self.seconds:.0f} |")
+                f"{self.wrong} | {self.missing} | {self.extra} | {present} | {self.in_breaks} | {right_there} | "
+                f"{self.wall:.1f} | {self.frames / self.seconds:.0f} |")
 
 
 def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: list[str] | None = None) -> None:
@@ -95,11 +101,7 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: l
 
     ``labeled``: the markers markerflow labeled (a model's); the file's others, which a .c3d
     output keeps as the input had them, count as missing where present."""
-    theirs = output.positions if output.n_frames == truth.n_frames else None
-    if theirs is None:  # an output holding only the labeled frames
-        theirs = np.full(truth.positions.shape[:1] + (output.n_markers, 3), np.nan)
-        theirs[rows][: output.n_frames] = output.positions[: rows.stop - rows.start]
-    missing_out = output.missing() if output.n_frames == truth.n_frames else np.isnan(theirs).any(axis=2)
+    theirs, missing_out = _aligned(truth, output, rows)
     jumped = label_jumps(truth)[rows]
     for i, name in enumerate(truth.names):
         if name not in output.names or (labeled is not None and name not in labeled):
@@ -114,6 +116,29 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: l
         row.extra += int((~own & took).sum())
         row.on_jumps += int((own & jumped[:, i]).sum())
         row.correct_on_jumps += int((own & took & same & jumped[:, i]).sum())
+
+
+def _aligned(truth: Recording, output: Recording, rows: slice) -> tuple[np.ndarray, np.ndarray]:
+    """The output's positions and missing mask over the truth's frames."""
+    theirs = output.positions if output.n_frames == truth.n_frames else None
+    if theirs is None:  # an output holding only the labeled frames
+        theirs = np.full(truth.positions.shape[:1] + (output.n_markers, 3), np.nan)
+        theirs[rows][: output.n_frames] = output.positions[: rows.stop - rows.start]
+    missing_out = output.missing() if output.n_frames == truth.n_frames else np.isnan(theirs).any(axis=2)
+    return theirs, missing_out
+
+
+def score_breaks(truth: Recording, output: Recording, rows: slice, breaks: list[dict], row: Row) -> None:
+    """Count the labels inside the summary's shape breaks (``service.labeling.shape_doubt``) and
+    how many of them are right: what ``SHAPE_BREAK_CONFIDENCE`` stands for."""
+    theirs, missing_out = _aligned(truth, output, rows)
+    for each in breaks:
+        i, j = truth.names.index(each["marker"]), output.names.index(each["marker"])
+        frames = slice(rows.start + each["frames"][0], rows.start + each["frames"][1])
+        took = ~missing_out[frames, j]
+        same = np.linalg.norm(theirs[frames, j] - truth.positions[frames, i], axis=1) <= SAME_POINT_MM
+        row.in_breaks += int(took.sum())
+        row.right_in_breaks += int((took & same & ~truth.missing()[frames, i]).sum())
 
 
 def run(command: list[str], row: Row) -> dict | None:
@@ -162,8 +187,9 @@ def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, rou
                "--formulation", formulation]
     if not (partial and route.model and start > 0):  # no frame before the start: nothing to fit a model on
         row = Row(name, Route().label(start), end - start, truth.n_markers)
-        if run(command, row) is not None:
+        if (summary := run(command, row)) is not None:
             score(truth, read_labeled(out), slice(start, end), row)
+            score_breaks(truth, read_labeled(out), slice(start, end), summary["shape_breaks"], row)
         return row
     row = Row(name, route.label(start), end - start, truth.n_markers)
     present = np.where(missing[:, :, None], np.nan, truth.positions)
@@ -175,7 +201,8 @@ def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, rou
     model_path = folder / f"{name}.json"
     model_path.write_text(model.to_json())
     command += ["--model", str(model_path), *(["--keep-labels"] if route.keep_labels else [])]
-    if run(command, row) is not None:
+    if (summary := run(command, row)) is not None:
+        score_breaks(truth, read_labeled(out), slice(start, end), summary["shape_breaks"], row)
         # with its labels kept, the start frame's markers the model lacks are labeled too (as singles)
         kept = [n for i, n in enumerate(truth.names) if route.keep_labels and not missing[start, i]]
         score(truth, read_labeled(out), slice(start, end), row, [*model_names(model), *kept])
@@ -196,8 +223,9 @@ def main() -> None:
     args = parser.parse_args()
     fractions = [(k + 1) / (args.starts + 1) for k in range(args.starts)] if args.starts else [0.5 if args.half else None]
     cap = args.cap or (600 if args.starts else 0)
-    print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | wall s | frames/s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | in breaks | "
+          "right there | wall s | frames/s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     means = []
     with tempfile.TemporaryDirectory() as folder:
         for recording in RECORDINGS:

@@ -51,10 +51,10 @@ def test_one_camera_off_is_a_warning_naming_it():
     turned[1] = replace(turned[1], R=turned[1].R.T)  # camera -> world given as world -> camera
     changed = _with(capture, cameras=turned)
     labels, _ = CaptureLabeling(changed, LabelingOptions(window=6)).label()
-    lines = [line for line in result_warnings(changed, labels) if "lands off frame 0's detections" in line]
+    lines = [line for line in result_warnings(changed, labels, []) if "lands off frame 0's detections" in line]
     assert len(lines) == 1 and f"in 1 of {len(turned)} cameras ({turned[1].name}: " in lines[0]
     right, _ = CaptureLabeling(capture, LabelingOptions(window=6)).label()
-    assert not [line for line in result_warnings(capture, right) if "frame 0's detections" in line]
+    assert not [line for line in result_warnings(capture, right, []) if "frame 0's detections" in line]
 
 
 def test_the_cross_camera_gates_widen_with_the_detections_noise_seen_at_frame_0():

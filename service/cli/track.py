@@ -31,6 +31,7 @@ from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
 from service.labeling.result_warnings import early_scale_warning, result_warnings
 from service.labeling.second_pass import PassChoice
+from service.labeling.shape_doubt import shape_break_summary
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import (
     fast_markers,
@@ -109,6 +110,7 @@ def run_track(
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
     summary["handed_back"] = handover_summary(labeling.handovers, capture.names)
+    summary["shape_breaks"] = shape_break_summary(labeling.shape_breaks, result.names)
     summary["model_misfits"] = [asdict(misfit) for misfit in labeling.model_misfits]
     if as_json:
         print(json.dumps(summary, allow_nan=False))
@@ -122,7 +124,7 @@ def run_track(
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
-    for line in result_warnings(capture, result, unit, start or 0, spacing_judged=True):
+    for line in result_warnings(capture, result, labeling.shape_breaks, unit, start or 0, spacing_judged=True):
         warn(line)
     warn(not_kept)
     warn(_absent_warning(absent, start or 0))
@@ -152,7 +154,8 @@ def track_summary(
     rigid pairs' disagreement with the first frame, and the one kept), None when no second
     pass applied; ``exchanged_back``, the pairs whose labels the first frame's shape gave
     back over the take (``service.labeling.exchanged``: markers, frames from 0 [start, stop));
-    and ``handed_back``, the tracks given back to the marker they continue (owner, taker, frames).
+    ``handed_back``, the tracks given back to the marker they continue (owner, taker, frames);
+    and ``shape_breaks``, the labels that left their rigid neighbours (``service.labeling.shape_doubt``).
     """
     noise = TakeNoise.of(result.positions) if _has_runs(result.positions) else None
     return {

@@ -29,6 +29,7 @@ from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
+from formulations.markers.shape_breaks import ShapeBreak
 from formulations.markers.take_exchange import TakeExchange
 from formulations.markers.take_handover import Handover
 from formulations.subject.contradiction import SegmentMisfit, labeled_misfits
@@ -52,6 +53,7 @@ from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
 from service.labeling.per_camera import PerCameraChain
 from service.labeling.second_pass import PassChoice, Stop, second_pass
+from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 from service.labeling.take_warnings import refuse_sub_millimetre, spacing_frame
@@ -89,6 +91,7 @@ class CaptureLabeling:
         self.handovers: list[Handover] = []  # tracks given back to their owners, likewise
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
+        self.shape_breaks: list[ShapeBreak] = []  # labels off their rigid neighbours in the last result (``shape_doubt``)
         self.model_misfits: list[SegmentMisfit] = []  # segments the user's labels say the model gets wrong
         model = capture.model
         if model is not None and capture.points is not None:
@@ -142,8 +145,9 @@ class CaptureLabeling:
         both sightings (``gap_ends``) and refilled from rigid donors where both sides have
         three (``rigid_fill``; with a model also ``joint_tracks`` and ``pose_fill``); in camera
         mode with each marker's best view per frame (``service.best_view.markers``); with every
-        label's confidence, ``calibrated`` as reported (else the windows' raw ones); 3D points
-        no marker took kept as unlabeled trajectories (``leftover_points``)."""
+        label's confidence, ``calibrated`` as reported (else the windows' raw ones), and then
+        doubtful where a label left its rigid neighbours (``shape_doubt``); 3D points no marker
+        took kept as unlabeled trajectories (``leftover_points``)."""
         labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)
@@ -153,7 +157,10 @@ class CaptureLabeling:
             labels = with_leftover_points(labels, self._points)
         else:
             labels = self._view_choice.attach(labels, self._association.views(outcomes))
-        return _reported(labels) if calibrated else labels
+        if not calibrated:
+            return labels
+        labels, self.shape_breaks = shape_doubted(_reported(labels))
+        return labels
 
     def _labeled(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
         """The windows' labels with their confidence, tracks extended over free points and

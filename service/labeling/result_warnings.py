@@ -2,7 +2,8 @@
 after its summary, and a job's status and page show once it is done.
 
 An integral window is optimal under the model, not proven right: a take whose labels are
-mostly doubtful, whose markers move further per frame than they are apart, that is not
+mostly doubtful, whose labels leave the shape of their rigid neighbours, whose markers move
+further per frame than they are apart, that is not
 human-sized in its unit, has copied columns, or where no marker is labeled though points are
 there, is labeled wrongly in ways the certificate does not see. These lines say so.
 """
@@ -11,11 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from formulations.markers.shape_breaks import ShapeBreak
 from service.capture.capture import Capture
 from service.capture.reprojection import frame0_offsets, frame0_problem
 from service.io.recording import LabeledTrajectories
 from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.lost_subject import unnamed_span, unnamed_warning
+from service.labeling.shape_doubt import shape_break_warning
 from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
 from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning, spacing_frame
 
@@ -35,14 +38,16 @@ def doubtful_warning(fraction: float | None) -> str | None:
             "another reading of their window is nearly as likely); check them")
 
 
-def result_warnings(capture: Capture, result: LabeledTrajectories, unit: str = "mm", start: int = 0,
-                    spacing_judged: bool = False) -> list[str]:
+def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[ShapeBreak], unit: str = "mm",
+                    start: int = 0, spacing_judged: bool = False) -> list[str]:
     """Every line that applies to ``result``, the labeling of ``capture`` (whose input was in
-    ``unit``, its labels starting at input frame ``start``); ``spacing_judged``: the marker
-    spacing was judged before labeling (``early_scale_warning``), so only the speed is."""
+    ``unit``, its labels starting at input frame ``start``) with its ``breaks`` (``shape_doubt``);
+    ``spacing_judged``: the marker spacing was judged before labeling (``early_scale_warning``),
+    so only the speed is."""
     fraction = doubtful_fraction(result.confidence, result.occluded) if result.confidence.size else None
     lines = [
         doubtful_warning(fraction),
+        shape_break_warning(breaks, result.names, start),
         fast_motion_warning(fast_markers(result.names, result.positions)),
         scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit,
                       spacing=not spacing_judged),

@@ -73,7 +73,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         result = labeling.result(kept)
         misfit = model_misfit_warning(labeling.model_misfits, 0)  # said at submission too; kept with the result
         store.finish(job_id, trajectories_to_bytes(result), None if kept is outcomes else (kept, worker),
-                     result_warnings(capture, result, "the file's unit" if store.uploaded(job_id) else "mm")
+                     result_warnings(capture, result, labeling.shape_breaks,
+                                     "the file's unit" if store.uploaded(job_id) else "mm")
                      + ([misfit] if misfit else []))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
