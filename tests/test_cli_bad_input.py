@@ -43,6 +43,12 @@ def existing_file(tmp: Path) -> Path:
     return tmp / "taken"
 
 
+def copied(tmp: Path, name: str = "take.c3d") -> Path:
+    """A copy of a real take (its bytes) the output must not replace."""
+    (tmp / name).write_bytes(CMU.read_bytes())
+    return tmp / name
+
+
 def track(tmp: Path, source: Path, *more: str) -> list[str | Path]:
     return ["track", source, "--out", tmp / "x.c3d", *more]
 
@@ -73,6 +79,9 @@ BAD_INPUT: dict[str, Case] = {
     "track out folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.c3d"], ["nowhere", "cannot write"]),
     "track csv folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.csv"], ["nowhere", "cannot write"]),
     "track out folder unwritable": lambda t: (["track", CMU, "-o", "/proc/x.c3d"], ["/proc", "cannot write"]),
+    "track out is the input": lambda t: (["track", copied(t), "--start", "0", "-o", t / "." / "take.c3d"],
+                                         ["take.c3d", "is the input"]),
+    "boxes out is the input": lambda t: (["boxes", copied(t, "det.txt"), "-o", t / "det.txt"], ["det.txt", "is the input"]),
     "demo out is a file": lambda t: (["demo", "--out", existing_file(t), "--frames", "20"], ["taken", "folder"]),
 }
 

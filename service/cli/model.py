@@ -31,7 +31,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         raise InputError(f"{output}: a subject model is written as JSON; name it .json")
     check_writable_folder(output.parent)
     if centres is not None:
-        check_writable_output(centres)
+        check_writable_output(centres, *inputs)
     if markerset is not None and centres is not None:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
     takes = [read_labeled(path).without_unlabeled() for path in inputs]  # *N: no marker

@@ -9,14 +9,28 @@ from service.errors import InputError
 from service.io.formats import check_output
 
 
-def check_writable_output(path: Path) -> None:
-    """A supported suffix in an existing folder (``check_output``) that takes a file.
+def check_writable_output(path: Path, *inputs: Path) -> None:
+    """A supported suffix in an existing folder (``check_output``) that takes a file, and
+    none of ``inputs``: writing over the take being read would lose it for good.
 
     Raises:
-        InputError: unsupported suffix, a missing folder, or one this user cannot write in.
+        InputError: unsupported suffix, a missing folder, one this user cannot write in, or
+            an input's own path.
     """
     check_output(path)
+    check_not_input(path, *inputs)
     check_writable_folder(path.parent)
+
+
+def check_not_input(path: Path, *inputs: Path) -> None:
+    """Refuse an output that is one of ``inputs``: the labels would replace the take for good.
+
+    Raises:
+        InputError: ``path`` names the same file as an input (links and relative paths resolved).
+    """
+    for given in inputs:
+        if path.resolve() == given.resolve():
+            raise InputError(f"{path}: is the input {given}; write the output to another file")
 
 
 def check_writable_folder(folder: Path) -> None:

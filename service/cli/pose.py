@@ -39,7 +39,7 @@ def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | No
     ``refine``: polish each keypoint fit after the APF (``service.pose.run.fit_keypoints``)."""
     if output.suffix.lower() != ".trc":
         raise InputError(f"{output}: the pose is written as .trc")
-    check_writable_output(output)
+    check_writable_output(output, input)
     if not rate > 0:
         raise InputError(f"--rate must be positive, got {rate}")
     try:

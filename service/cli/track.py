@@ -64,7 +64,7 @@ def run_track(
     Prints one line, or with ``as_json`` one JSON object (``track_summary``), on stdout,
     and a warning on stderr when many labels are doubtful.
     """
-    check_writable_output(output)
+    check_writable_output(output, input)
     if keep_labels and model is None:
         raise InputError("--keep-labels keeps the --start frame's labels for a --model to complete: give --model")
     labels_at = None if model else (start, end)  # a model names the markers; a relabel starts from the labels at start
