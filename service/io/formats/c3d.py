@@ -29,6 +29,7 @@ from service.io.formats.conventions import (
 )
 from service.io.recording import UNLABELED_PREFIX, LabeledTrajectories, Recording, SourceFile, is_unlabeled
 
+PARAMETER_ENTRIES = 255  # a C3D parameter's dimension is one byte: past it, LABELS2, LABELS3 ...
 SAME_SAMPLE = 1e-6  # in the file's unit: one input sample written back through mm (round off ~1e-12)
 
 
@@ -180,11 +181,27 @@ def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
     if "camera_masks" in meta and meta["camera_masks"].size:
         masks = np.zeros((meta["camera_masks"].shape[0], present.shape[1], points.shape[2]), bool)
         meta["camera_masks"] = np.concatenate([meta["camera_masks"], masks], axis=1)
-    point = c3d["parameters"]["POINT"]
     names = [f"{UNLABELED_PREFIX}{first + k}" for k in range(present.shape[1])]
-    last = max((k for k in point if re.fullmatch(r"LABELS\d*", k)), key=lambda k: int(k[len("LABELS"):] or 1))
-    # past 255 points the labels go on in LABELS2, LABELS3 ...: the new ones after the last
-    point[last]["value"] = list(point[last]["value"]) + names
+    _append(c3d, "LABELS", names)
+    _append(c3d, "DESCRIPTIONS", [""] * len(names))  # ezc3d blanks every description if one is lacking
+
+
+def _append(c3d: ezc3d.c3d, stem: str, entries: list[str]) -> None:
+    """``entries`` after the last of POINT's ``stem``, ``stem``2, ... (none: nothing to keep),
+    filling each to ``PARAMETER_ENTRIES`` and going on in a new one, as C3D readers expect."""
+    point = c3d["parameters"]["POINT"]
+    groups = [k for k in point if re.fullmatch(rf"{stem}\d*", k)]
+    if not groups:
+        return
+    last = max(groups, key=lambda k: int(k[len(stem):] or 1))
+    values = list(point[last]["value"])
+    room = max(PARAMETER_ENTRIES - len(values), 0)
+    point[last]["value"] = values + entries[:room]
+    number, rest = int(last[len(stem):] or 1), entries[room:]
+    while rest:
+        number += 1
+        c3d.add_parameter("POINT", f"{stem}{number}", rest[:PARAMETER_ENTRIES])
+        rest = rest[PARAMETER_ENTRIES:]
 
 
 def _columns(labels: list[str], names: list[str], path: Path) -> list[int]:

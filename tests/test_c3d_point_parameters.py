@@ -1,0 +1,56 @@
+"""A C3D copy that gains unlabeled ``*N`` points keeps the input's point descriptions and
+stays a C3D past 255 points. ezc3d blanked every description when the new points had none,
+and a file already in LABELS2 got a LABELS2 longer than 255, which ezc3d wrote and then
+could not read ("cannot write (None)" after the whole labeling). Read back with ezc3d.
+(Past 255 points in all, ezc3d's own writer drops the descriptions.)"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import ezc3d
+import numpy as np
+import pytest
+
+from service.io.formats import read_labeled, write_labeled
+from service.io.recording import LabeledTrajectories
+
+FRAMES = 6
+
+
+def _input(path: Path, markers: int) -> Path:
+    rng = np.random.default_rng(markers)
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = np.array([100.0])
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = [f"M{i}" for i in range(markers)]
+    c3d["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    c3d.add_parameter("POINT", "DESCRIPTIONS", [f"plate {i}" for i in range(min(markers, 255))])
+    points = np.ones((4, markers, FRAMES))
+    points[:3] = rng.uniform(-1000, 1000, (3, markers, FRAMES))
+    c3d["data"]["points"] = points
+    c3d.write(str(path))
+    return path
+
+
+def _entries(c3d: ezc3d.c3d, stem: str) -> list[str]:
+    point = c3d["parameters"]["POINT"]
+    groups = sorted((k for k in point if k.rstrip("0123456789") == stem), key=lambda k: int(k[len(stem):] or 1))
+    return [str(v).strip() for k in groups for v in point[k]["value"]]
+
+
+@pytest.mark.parametrize(("markers", "leftover"), [(20, 3), (200, 55), (240, 30), (300, 250)])
+def test_unlabeled_points_added_keep_descriptions_and_labels_readable(tmp_path: Path, markers: int,
+                                                                      leftover: int) -> None:
+    source = _input(tmp_path / "in.c3d", markers)
+    take = read_labeled(source)
+    unlabeled = np.random.default_rng(1).uniform(-500, 500, (FRAMES, leftover, 3))
+    labels = LabeledTrajectories(take.names, take.positions, np.zeros((FRAMES, markers), bool), take.rate,
+                                 unlabeled=unlabeled)
+    write_labeled(tmp_path / "out.c3d", labels, take.source)
+    given, written = ezc3d.c3d(str(source)), ezc3d.c3d(str(tmp_path / "out.c3d"))
+    names = _entries(written, "LABELS")
+    assert len(names) == markers + leftover == written["data"]["points"].shape[1]
+    assert names[:markers] == take.names and all(n.startswith("*") for n in names[markers:])
+    if markers + leftover <= 255:  # past that ezc3d's writer drops POINT:DESCRIPTIONS (its own limit)
+        assert _entries(written, "DESCRIPTIONS")[:markers] == _entries(given, "DESCRIPTIONS")[:markers]
+    assert read_labeled(tmp_path / "out.c3d").names[:markers] == take.names
