@@ -224,6 +224,10 @@ def test_piped_track_prints_progress_lines_one_summary_line_and_json(tmp_path: P
     assert 0.0 <= summary["gap_median"] <= summary["gap_max"] < 1e-9 and summary["seconds"] > 0
     assert summary["exchanged_back"] == []  # a clean take: the first frame's shape finds nothing to give back
     assert summary["handed_back"] == []  # ... and no track was taken over
+    assert summary["shape_breaks"] == []  # ... and no label left its segment
+    assert summary["certificate"] == "optimal under the model"
+    greedy = run_cli("-q", "track", CMU, "--out", tmp_path / "z.csv", "--json", "--end", "60", "-f", "nn-hungarian")
+    assert json.loads(greedy.stdout)["certificate"] == "none: this formulation proves no bound on any window"
 
 
 def test_help_texts_show_bracketed_words_and_cite_what_exists() -> None:

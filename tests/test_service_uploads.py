@@ -87,6 +87,8 @@ def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path)
     racing = DATA / "c3d_kineticstoolkit" / "kinematics_racing_full.c3d"
     refused = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())})
     assert refused.status_code == 422 and "start=17 labels from" in refused.json()["message"]
+    past = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())}, data={"start": "17", "end": "9000"})
+    assert past.status_code == 422 and past.json()["message"].startswith("start=17 end=9000: frames are counted from 0")
     answer = client.post("/v1/jobs", files={"file": (racing.name, racing.read_bytes())},
                          data={"start": "17", "end": "120"})
     assert answer.status_code == 202, answer.text

@@ -41,7 +41,8 @@ def run_best_view(costs_path: Path, output: Path, switch_cost: float, window: in
     greedy = sum(int(np.count_nonzero(np.diff(np.argmin(obj.costs, axis=1)))) for obj in objects)
     frames = sum(len(obj.frames) for obj in objects)
     out.print(
-        f"{costs_path.name}: {len(objects)} objects, {len(cameras)} cameras, {frames} object-frames -> {output} "
+        f"{costs_path.name}: {counted(len(objects), 'object')}, {counted(len(cameras), 'camera')}, "
+        f"{frames} object-frames -> {output} "
         f"({counted(switches, 'switch', 'switches')}; the per-frame best would switch {counted(greedy, 'time')})",
         highlight=False,
     )

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import shutil
+import sys
 from pathlib import Path
 
 from service.capture.document import CaptureDocument
@@ -39,7 +42,17 @@ def run_demo(folder: Path, frames: int, seed: int) -> None:
     kept = leftover_summary(result.result)
     out.print(f"Wrote {c3d} (the points no marker took, {kept['unlabeled_points']} of them, as "
               f"{kept['unlabeled_trajectories']} unlabeled trajectories *N), {png} and the unlabeled input as {capture} "
-              f"(try: markerflow track {capture} --out {folder / 'relabeled.csv'})")
+              f"(try: {_command()} track {capture} --out {folder / 'relabeled.csv'})")
+
+
+def _command() -> str:
+    """``markerflow`` as this shell can run it: the name when it is on PATH, else the path of
+    the one running (``make demo`` runs ``.venv/bin/markerflow``, which no PATH holds yet)."""
+    running = Path(sys.argv[0])
+    if shutil.which("markerflow") or running.name != "markerflow":
+        return "markerflow"
+    near = os.path.relpath(running)
+    return str(running.resolve()) if near.startswith("..") else near
 
 
 def _write_capture(path: Path, simulated: SimulatedCapture) -> None:

@@ -22,6 +22,7 @@ PLAIN_EVERY_SECONDS = 10.0  # piped progress: a line at least this often,
 PLAIN_LINES = 10  # and about this many lines per run
 
 CERTIFICATE = "optimal under the model"  # what an integral window proves: not that its labels are right
+NO_CERTIFICATE = "none: this formulation proves no bound on any window"  # nn-hungarian, dp-sequential, mht's cut search
 
 LABELS = {
     "label_accuracy": ("label accuracy", "{:.4%}"),

@@ -17,7 +17,7 @@ from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
 from service.capture.model_input import check_shared_names, read_model, with_model
 from service.cli.output import check_writable_output
-from service.cli.report import CERTIFICATE, counted, out, warn, window_progress
+from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, warn, window_progress
 from service.errors import InputError
 from service.io.formats import is_copy, kept_source, read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
@@ -139,7 +139,8 @@ def track_summary(
     """The figures ``markerflow track --json`` prints: size, occluded share, certificate, doubt, noise, time.
 
     ``certificate`` says what an integral window proves: optimal under the model, not
-    right. ``doubtful_fraction`` and ``reacquired`` (marker -> frames) are those of
+    right; or, when no window has a bound (a frame-by-frame or greedy formulation), that
+    none does. ``doubtful_fraction`` and ``reacquired`` (marker -> frames) are those of
     ``service.labeling.stats``. ``noise_mm`` is the take's measurement noise read back
     from the labeled positions (``TakeNoise``: the robust scale of the constant-acceleration
     residual, mean over the axes); None when too little was seen to say. ``fast_markers``
@@ -165,7 +166,7 @@ def track_summary(
         "occluded_fraction": float(result.occluded.mean()),
         "noise_mm": None if noise is None else finite_or_none(float(noise.measurement_mm.mean())),
         **certificate_figures(windows),
-        "certificate": CERTIFICATE,
+        "certificate": CERTIFICATE if any(w.integral or np.isfinite(w.gap) for w in windows) else NO_CERTIFICATE,
         "doubtful_fraction": doubtful_fraction(result.confidence, result.occluded),
         "reacquired": reacquisitions(result.names, result.occluded),
         "fast_markers": [vars(fast) for fast in fast_markers(result.names, result.positions)],

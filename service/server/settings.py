@@ -102,8 +102,8 @@ class Settings(BaseSettings):
         """
         if not self.tokens and not is_loopback(self.host):
             raise InputError(
-                f"refusing to serve on {self.host} without tokens: add a [tokens] table to the config "
-                "(see configs/service.toml) or bind to 127.0.0.1"
+                f"refusing to serve on {self.host} without tokens: put at least one token in the config's "
+                "[tokens] table (owner = \"secret of 16+ characters\", see configs/service.toml) or bind to 127.0.0.1"
             )
 
 

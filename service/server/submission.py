@@ -106,6 +106,8 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
         document = CaptureDocument.of(capture, options)
     except ValidationError as error:
         raise InputError(describe_validation_error(error)) from None
+    except InputError as error:  # worded for the command line: here the fields are start= and end=
+        raise InputError(str(error).replace("--start ", "start=").replace("--end ", "end=")) from None
     kept = Upload(filename.suffix.lower(), data, start or 0, tuple(absent))
     return replace(_checked(document, filename.name, limits), upload=kept)
 
