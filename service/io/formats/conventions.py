@@ -25,6 +25,29 @@ def require_file(path: str | Path) -> Path:
     return path
 
 
+# Lab PCs export tables in UTF-8 (spreadsheets with a byte-order mark) or in Windows' own
+# code page; a name decoded wrongly would be written wrongly, so nothing is replaced.
+TEXT_ENCODINGS = ("utf-8-sig", "cp1252")
+
+
+def read_text(path: Path) -> str:
+    """The text of table file ``path``, in the first of ``TEXT_ENCODINGS`` that decodes it whole.
+
+    Raises:
+        InputError: it cannot be read, or is text in neither (a binary file, another code page).
+    """
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    for encoding in TEXT_ENCODINGS:
+        try:
+            return data.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+    raise InputError(f"{path}: not text in UTF-8 or Windows-1252 (save it as UTF-8)")
+
+
 # A row's time step may differ from the median step by this share: a dropped frame doubles
 # it (+100 %), where times printed to 3 decimals at 240 Hz step 0.004 or 0.005 s (+25 %).
 EVEN_STEP = 0.5

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ from service.errors import InputError
 from service.io.formats.conventions import (
     check_rows,
     hidden_samples,
+    read_text,
     require_file,
     require_samples,
     sample_cells,
@@ -87,9 +89,7 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
     """The labels of a ``write_csv`` table, and its numbering (first frame less 1, first time)."""
     path = require_file(path)
     try:
-        # utf-8-sig: spreadsheets often save with a byte-order mark.
-        with path.open(newline="", encoding="utf-8-sig", errors="replace") as f:
-            rows = list(csv.reader(f))
+        rows = list(csv.reader(io.StringIO(read_text(path), newline="")))
     except csv.Error as exc:
         raise InputError(f"{path}: not a CSV table ({exc})") from exc
     rows, confidence = _split_confidence(rows, path)

@@ -16,6 +16,7 @@ from service.io.formats.conventions import (
     check_rows,
     from_millimetres,
     hidden_samples,
+    read_text,
     require_file,
     require_samples,
     sample_cells,
@@ -41,7 +42,7 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
             name twice or an infinite or absurd coordinate (``require_samples``).
     """
     path = require_file(path)
-    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    lines = read_text(path).splitlines()
     if not lines or not lines[0].startswith("PathFileType"):
         raise InputError(f"{path}: not a TRC file (no PathFileType header)")
     if len(lines) < _FIRST_DATA_LINE - 1:
