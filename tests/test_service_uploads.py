@@ -14,7 +14,7 @@ from service_fixtures import serving, wait_for
 from service.capture.capture import LabelingOptions
 from service.capture.from_recording import capture_from_recording, capture_from_span
 from service.io.formats import read_labeled, write_labeled
-from service.labeling.absent_markers import with_absent
+from service.labeling.absent_markers import in_order, with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.server.settings import Settings
 
@@ -98,7 +98,8 @@ def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path)
     recording = read_labeled(racing)
     capture, absent = capture_from_span(recording, 17, 120)
     labels, _ = CaptureLabeling(capture, LabelingOptions()).label()
-    write_labeled(tmp_path / "library.c3d", with_absent(labels, absent), recording.source, 17)
+    whole = in_order(with_absent(labels, absent), recording.names)
+    write_labeled(tmp_path / "library.c3d", whole, recording.source, 17)
     assert absent and served == (tmp_path / "library.c3d").read_bytes()
 
 

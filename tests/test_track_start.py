@@ -91,6 +91,8 @@ def test_trc_output_holds_the_span_numbered_as_in_the_input(tmp_path: Path) -> N
     assert code == 0, stderr
     rows = [line.split("\t") for line in out.read_text().splitlines()[5:] if line.strip()]
     assert len(rows) == END - START
+    # the columns in the input's order, the marker absent at START among them where it was (it came last)
+    assert [name for name in out.read_text().splitlines()[3].split("\t")[2:] if name] == _take(tmp_path / "again.c3d")[0]
     assert [int(row[0]) for row in (rows[0], rows[-1])] == [FIRST + START + 1, FIRST + END]  # TRC counts from 1
 
 

@@ -22,7 +22,7 @@ from service.errors import InputError
 from service.io.formats import is_copy, kept_source, read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
-from service.labeling.absent_markers import with_absent
+from service.labeling.absent_markers import in_order, with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.carried_markers import CarriedMarkers
 from service.labeling.coincident import coincident_pairs
@@ -105,7 +105,7 @@ def run_track(
     written = with_absent(result, absent)
     if carried is not None:  # the summary counts the leftover points the output holds
         result, written = carried.without_their_samples(result), carried.written(written, is_copy(output, source))
-    write_labeled(output, written, source, start or 0)
+    write_labeled(output, written if recording is None else in_order(written, recording.names), source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)

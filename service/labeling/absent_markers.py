@@ -34,3 +34,18 @@ def with_absent(
         filled=widened(result.filled, np.nan), best_view=widened(result.best_view, -1),
         confidence=widened(result.confidence, np.nan),
     )
+
+
+PER_MARKER = ("positions", "occluded", "point_index", "filled", "best_view", "confidence")
+
+
+def in_order(result: LabeledTrajectories, order: list[str]) -> LabeledTrajectories:
+    """``result``'s markers in ``order``'s column order, any it has that ``order`` lacks after
+    them: a relabel's output keeps the input's columns where they were (the absent markers
+    were appended last, and a table read by column position moved)."""
+    rank = {name: i for i, name in enumerate(order)}
+    index = sorted(range(len(result.names)), key=lambda m: rank.get(result.names[m], len(order) + m))
+    if index == list(range(len(result.names))):
+        return result
+    arrays = {name: getattr(result, name)[:, index] for name in PER_MARKER if getattr(result, name).size}
+    return replace(result, names=[result.names[m] for m in index], **arrays)

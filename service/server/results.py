@@ -18,8 +18,8 @@ import numpy as np
 from service.capture.document import read_capture_document
 from service.errors import InputError
 from service.io.formats import kept_source, read_labeled, write_labeled
-from service.io.recording import LabeledTrajectories, SourceFile
-from service.labeling.absent_markers import with_absent
+from service.io.recording import LabeledTrajectories, Recording
+from service.labeling.absent_markers import in_order, with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
 from service.server.store import JobStore
@@ -93,19 +93,20 @@ def render(traj: LabeledTrajectories, format: str, upload: Upload | None = None)
             if upload is None:
                 write_labeled(path, traj)
             else:
-                whole = with_absent(traj, list(upload.absent))
-                write_labeled(path, whole, _source(upload, whole.names, Path(folder)), upload.start)
+                recording = _recording(upload, Path(folder))
+                whole = in_order(with_absent(traj, list(upload.absent)), recording.names)
+                write_labeled(path, whole, kept_source(recording.source, whole.names)[0], upload.start)
         except InputError as error:  # the writers name their path: the caller sees only the file's name
             raise InputError(str(error).replace(str(path), path.name)) from None
         return path.read_bytes()
 
 
-def _source(upload: Upload, names: list[str], folder: Path) -> SourceFile | None:
-    """What output keeps of the uploaded file (``kept_source``). The file was read whole, in a
-    bounded child, when the job was accepted: reading it again is safe."""
+def _recording(upload: Upload, folder: Path) -> Recording:
+    """The uploaded file, for its column order and what output keeps of it (``kept_source``).
+    It was read whole, in a bounded child, when the job was accepted: reading it again is safe."""
     path = folder / f"upload{upload.suffix}"
     path.write_bytes(upload.data)
-    return kept_source(read_labeled(path).source, names)[0]
+    return read_labeled(path)
 
 
 def job_file(store: JobStore, job_id: str, format: str, done: bool) -> bytes:
