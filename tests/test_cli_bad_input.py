@@ -22,6 +22,11 @@ def nan_first_frame_c3d(tmp: Path) -> Path:
     return write_c3d(tmp / "gap.c3d", labels, points)
 
 
+def all_missing_c3d(tmp: Path) -> Path:
+    labels, points = cmu_points(60)
+    return write_c3d(tmp / "none.c3d", labels, np.full_like(points, np.nan))
+
+
 def blank_labels_c3d(tmp: Path) -> Path:
     _, points = cmu_points(60)
     return write_c3d(tmp / "blank.c3d", [""] * 3, points[:, :3])
@@ -74,6 +79,7 @@ BAD_INPUT: dict[str, Case] = {
     ),
     "track nan first frame": lambda t: (track(t, nan_first_frame_c3d(t)), ["Male:RBWT", "first frame"]),
     "eval nan first frame": lambda t: (evaluate(t, nan_first_frame_c3d(t)), ["Male:RBWT", "first frame"]),
+    "c3d with every sample missing": lambda t: (track(t, all_missing_c3d(t)), ["none.c3d", "holds no point to label"]),
     "c3d without points": lambda t: (track(t, no_points_c3d(t)), ["empty.c3d", "no labeled points"]),
     "c3d with blank labels": lambda t: (track(t, blank_labels_c3d(t)), ["blank.c3d", "no point labels"]),
     "track out folder missing": lambda t: (["track", CMU, "-o", t / "nowhere" / "x.c3d"], ["nowhere", "cannot write"]),

@@ -81,6 +81,8 @@ def _start_hint(recording: Recording, start: str) -> str:
     """Which ``start`` to give: the fullest frame, or, when frame 0 is as full as any, that
     ``start`` 0 labels from it; and a marker no frame has, if any."""
     best, count = recording.fullest_frame()
+    if count == 0:
+        return "no frame has a marker's position: the take holds no point to label"
     if best == 0:
         hint = (f"no frame has all {recording.n_markers}: {start}0 labels from frame 0, the absent markers "
                 "written missing")
