@@ -105,7 +105,9 @@ def run_track(
     written = with_absent(result, absent)
     if carried is not None:  # the summary counts the leftover points the output holds
         result, written = carried.without_their_samples(result), carried.written(written, is_copy(output, source))
-    write_labeled(output, written if recording is None else in_order(written, recording.names), source, start or 0)
+    if recording is not None and model is None:  # a relabel's columns as the input's (a model's: the model's)
+        written = in_order(written, recording.names)
+    write_labeled(output, written, source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
