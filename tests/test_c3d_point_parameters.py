@@ -54,3 +54,27 @@ def test_unlabeled_points_added_keep_descriptions_and_labels_readable(tmp_path: 
     if markers + leftover <= 255:  # past that ezc3d's writer drops POINT:DESCRIPTIONS (its own limit)
         assert _entries(written, "DESCRIPTIONS")[:markers] == _entries(given, "DESCRIPTIONS")[:markers]
     assert read_labeled(tmp_path / "out.c3d").names[:markers] == take.names
+
+
+def test_each_label_keeps_the_residual_and_camera_mask_of_the_sample_it_took(tmp_path: Path) -> None:
+    """They were 0 and cleared on every label (every labeled sample "gap-filled", seen by no
+    camera); they go with the sample, also when the labels put it under another name."""
+    source = _input(tmp_path / "in.c3d", 4)
+    c3d = ezc3d.c3d(str(source))
+    rng = np.random.default_rng(2)
+    c3d["data"]["meta_points"]["residuals"] = rng.uniform(0.1, 2.0, (1, 4, FRAMES)).round(2)
+    c3d["data"]["meta_points"]["camera_masks"] = rng.random((7, 4, FRAMES)) < 0.5
+    c3d.write(str(source))
+    take = read_labeled(source)
+    given = ezc3d.c3d(str(source))["data"]["meta_points"]
+    swapped = take.positions[:, [1, 0, 2, 3]]  # M0 and M1 exchanged: each holds the other's sample
+    hidden = np.zeros((FRAMES, 4), bool)
+    hidden[2, 3] = True
+    labels = LabeledTrajectories(take.names, np.where(hidden[..., None], np.nan, swapped), hidden, take.rate)
+    write_labeled(tmp_path / "out.c3d", labels, take.source)
+    meta = ezc3d.c3d(str(tmp_path / "out.c3d"))["data"]["meta_points"]
+    order = [1, 0, 2, 3]
+    shown = ~hidden.T
+    np.testing.assert_allclose(meta["residuals"][0, :4][shown], given["residuals"][0, order][shown], atol=0.01)
+    assert (meta["camera_masks"][:, :4][:, shown] == given["camera_masks"][:, order][:, shown]).all()
+    assert meta["residuals"][0, 3, 2] < 0 and not meta["camera_masks"][:, 3, 2].any()  # occluded: no sample

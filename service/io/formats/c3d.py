@@ -19,6 +19,7 @@ import numpy as np
 from service.errors import InputError
 from service.io.formats.c3d_analog import ChannelParameters, fix_channels, joined_values, with_confidence
 from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout
+from service.io.formats.c3d_quality import SAME_SAMPLE, SampleQuality
 from service.io.formats.conventions import (
     from_millimetres,
     hidden_samples,
@@ -30,7 +31,6 @@ from service.io.formats.conventions import (
 from service.io.recording import UNLABELED_PREFIX, LabeledTrajectories, Recording, SourceFile, is_unlabeled
 
 PARAMETER_ENTRIES = 255  # a C3D parameter's dimension is one byte: past it, LABELS2, LABELS3 ...
-SAME_SAMPLE = 1e-6  # in the file's unit: one input sample written back through mm (round off ~1e-12)
 
 
 def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | None = None) -> Recording:
@@ -112,10 +112,9 @@ def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d
 
 def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: int, path: Path) -> np.ndarray:
     """Replace the points ``traj`` names (in place): the labels in frames ``start ..``, missing
-    in every other frame. Camera masks of those points are cleared: the cameras that saw an
-    input point say nothing of the label it now carries. Returns ``(3, U, frames)`` the input
-    samples of those points outside the labeled frames, one channel per point that has any
-    (NaN elsewhere): they are kept, unlabeled."""
+    in every other frame, each with the residual and camera mask of the input sample it took
+    (``c3d_quality``). Returns ``(3, U, frames)`` the input samples of those points outside the
+    labeled frames, one channel per point that has any (NaN elsewhere): they are kept, unlabeled."""
     points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
     columns = _columns(_labels(c3d, points.shape[1], path), traj.names, path)
     frames = slice(start, start + traj.n_frames)
@@ -127,12 +126,15 @@ def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: in
     outside[:, frames] = False
     kept = np.where(outside, own, np.nan)[:, outside.any(axis=1)]
     hidden = hidden_samples(traj)
+    values = np.where(hidden[..., None], np.nan, from_millimetres(traj.positions, unit)).T  # (3, M, F')
+    residuals, masks = SampleQuality.of(points, meta).taken(values, start)
     points[:3, columns], meta["residuals"][0, columns] = 0.0, -1.0
     # (0, 0, 0) under residual -1: readers that ignore residuals see the usual zero gap.
-    points[:3, columns, frames] = np.where(hidden[..., None], 0.0, from_millimetres(traj.positions, unit)).T
-    meta["residuals"][0, columns, frames] = np.where(hidden, -1.0, 0.0).T
-    if "camera_masks" in meta and meta["camera_masks"].size:
+    points[:3, columns, frames] = np.nan_to_num(values, nan=0.0)
+    meta["residuals"][0, columns, frames] = np.where(hidden.T, -1.0, residuals)
+    if masks is not None:
         meta["camera_masks"][:, columns] = False
+        meta["camera_masks"][:, columns, frames] = masks
     return kept
 
 
