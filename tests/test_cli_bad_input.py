@@ -48,6 +48,11 @@ def existing_file(tmp: Path) -> Path:
     return tmp / "taken"
 
 
+def folder(tmp: Path, name: str) -> Path:
+    (tmp / name).mkdir()
+    return tmp / name
+
+
 def copied(tmp: Path, name: str = "take.c3d") -> Path:
     """A copy of a real take (its bytes) the output must not replace."""
     (tmp / name).write_bytes(CMU.read_bytes())
@@ -88,6 +93,7 @@ BAD_INPUT: dict[str, Case] = {
     "track out is the input": lambda t: (["track", copied(t), "--start", "0", "-o", t / "." / "take.c3d"],
                                          ["take.c3d", "is the input"]),
     "boxes out is the input": lambda t: (["boxes", copied(t, "det.txt"), "-o", t / "det.txt"], ["det.txt", "is the input"]),
+    "track out is a folder": lambda t: (["track", CMU, "-o", folder(t, "out.c3d")], ["out.c3d", "is a folder"]),
     "demo out is a file": lambda t: (["demo", "--out", existing_file(t), "--frames", "20"], ["taken", "folder"]),
 }
 
@@ -103,6 +109,7 @@ def test_bad_input_is_one_line_and_exit_code_2(case: Case, tmp_path: Path) -> No
     (["best-view", "c.csv", "--switch-cost", "abc", "--out", "o.csv"], ["Invalid value for '--switch-cost'"]),
     (["track"], ["Missing argument 'input'"]),
     (["tarck"], ["No such command 'tarck'", "(see markerflow --help)"]),
+    (["track", "x.c3d", "-o", "y.c3d", "-q"], ["No such option: -q, which goes before the command: markerflow -q track"]),
 ])
 def test_a_usage_mistake_is_one_line_like_any_other(args: list[str], words: list[str]) -> None:
     """Typer drew these as a six-line box under a usage line."""

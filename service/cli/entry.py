@@ -7,7 +7,9 @@ with exit code 2 (``app._guard``), so these are printed the same way.
 
 from __future__ import annotations
 
+import signal
 import sys
+from types import FrameType
 
 import typer
 from rich.markup import escape
@@ -26,14 +28,39 @@ def main(argv: list[str] | None = None) -> int:
             return error.exit_code
         context = getattr(error, "ctx", None)
         command = context.command_path if context is not None else "markerflow"
-        err.print(f"[red]error:[/red] {escape(error.format_message())} (see {escape(command)} --help)",
-                  highlight=False, soft_wrap=True)
+        message = error.format_message()
+        if message.startswith(("No such option: -q", "No such option: --quiet")):  # a program option, not the command's
+            message += f", which goes before the command: markerflow -q {command.removeprefix('markerflow ')} ..."
+        err.print(f"[red]error:[/red] {escape(message)} (see {escape(command)} --help)", highlight=False, soft_wrap=True)
         return error.exit_code
     except typer.Abort:  # end of input at a prompt
         err.print("aborted")
         return 1
+    except Terminated:
+        return _interrupted(143)
+    if code == CTRL_C:
+        return _interrupted(CTRL_C)
     return code if isinstance(code, int) else 0
 
 
+CTRL_C = 130  # Typer's exit code for a Ctrl-C, which it returns silently; no command exits so itself
+
+
+class Terminated(Exception):
+    """SIGTERM, raised in the main thread so that every ``finally`` runs: a half-written
+    output's temporary file is removed and the file the user had stays as it was."""
+
+
+def _interrupted(code: int) -> int:
+    err.print("interrupted: stopped before the end, no output written (an earlier file at the output path is "
+              "untouched)", highlight=False, soft_wrap=True)
+    return code
+
+
+def _terminate(signum: int, frame: FrameType | None) -> None:
+    raise Terminated
+
+
 def run() -> None:
+    signal.signal(signal.SIGTERM, _terminate)
     sys.exit(main())

@@ -71,9 +71,11 @@ def check_output(path: str | Path) -> None:
     """Fail early, before long work, if ``path`` cannot take labeled output.
 
     Raises:
-        InputError: unsupported suffix, or a folder that does not exist.
+        InputError: unsupported suffix, a folder that does not exist, or a folder as the path.
     """
     _by_suffix(_WRITERS, path, "write")
+    if Path(path).is_dir():
+        raise InputError(f"{path}: is a folder; name the output file")
     folder = Path(path).parent
     if not folder.is_dir():
         raise InputError(f"{path}: cannot write there, folder {folder} does not exist")

@@ -8,9 +8,7 @@ other parameter group, the frame numbering, the point rate and the length unit a
 from __future__ import annotations
 
 import copy
-import os
 import re
-import secrets
 from pathlib import Path
 
 import ezc3d
@@ -28,6 +26,7 @@ from service.io.formats.conventions import (
     to_millimetres,
     zero_gaps_to_nan,
 )
+from service.io.formats.replace_file import replacing
 from service.io.recording import UNLABELED_PREFIX, LabeledTrajectories, Recording, SourceFile, is_unlabeled
 
 PARAMETER_ENTRIES = 255  # a C3D parameter's dimension is one byte: past it, LABELS2, LABELS3 ...
@@ -271,18 +270,16 @@ def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
     other ending (``OUT.C3D`` would be left empty and ``OUT.C3D.c3d`` written), writes nothing,
     silently, where it cannot open the file, and a failure must not leave a half file in place
     of one the user had."""
-    name = str(path.with_name(f".{path.stem}-{secrets.token_hex(6)}.c3d"))  # ezc3d creates it, umask applies
-    try:
-        c3d.write(name)
-        fix_channels(name, channels)
-        if not os.path.isfile(name) or os.path.getsize(name) == 0:
+    with replacing(path, ".c3d") as temp:  # ezc3d creates it, umask applies
+        c3d.write(str(temp))
+        fix_channels(str(temp), channels)
+        if not temp.is_file() or temp.stat().st_size == 0:
             raise InputError(f"{path}: cannot write there")
-        os.replace(name, path)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
-    finally:
-        if os.path.exists(name):
-            os.remove(name)
+        try:  # ezc3d says nothing of a full disk: the file it leaves is short of its own header
+            _check_layout(temp, None, None)
+        except InputError:
+            raise InputError(f"{path}: cannot write (the file came out short: is the disk full?); any earlier "
+                             "file there is untouched") from None
 
 
 def _first_line(exc: Exception) -> str:

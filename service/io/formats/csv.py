@@ -17,6 +17,7 @@ from service.io.formats.conventions import (
     require_samples,
     sample_cells,
 )
+from service.io.formats.replace_file import replacing
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _AXES = ("x", "y", "z")
@@ -49,18 +50,15 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     header += [f"{name}_best_view" for name in traj.names] if views is not None else []
     confidence = traj.confidence.size > 0
     header += [f"{name}{_CONFIDENCE}" for name in traj.names] if confidence else []
-    try:
-        with path.open("w", newline="", encoding="utf-8") as f:
-            writer = csv.writer(f)
-            writer.writerow(header)
-            writer.writerows(
-                list(numbering[f]) + sample_cells(traj.positions[f], hidden[f])
-                + (list(views[f]) if views is not None else [])
-                + (_confidence_cells(traj.confidence[f]) if confidence else [])
-                for f in range(traj.n_frames)
-            )
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
+    with replacing(path) as temp, temp.open("w", newline="", encoding="utf-8") as table:
+        writer = csv.writer(table)
+        writer.writerow(header)
+        writer.writerows(
+            list(numbering[f]) + sample_cells(traj.positions[f], hidden[f])
+            + (list(views[f]) if views is not None else [])
+            + (_confidence_cells(traj.confidence[f]) if confidence else [])
+            for f in range(traj.n_frames)
+        )
 
 
 def read_csv(path: str | Path) -> Recording:

@@ -23,6 +23,7 @@ from service.io.formats.conventions import (
     to_millimetres,
     zero_gaps_to_nan,
 )
+from service.io.formats.replace_file import replacing
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _KEYS = ("DataRate", "NumFrames", "NumMarkers", "Units")
@@ -104,10 +105,8 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     rows = [
         "\t".join(list(numbering[f]) + sample_cells(values[f], hidden[f])) for f in range(traj.n_frames)
     ]
-    try:
-        path.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write ({exc.strerror})") from exc
+    with replacing(path) as temp:
+        temp.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
 
 
 

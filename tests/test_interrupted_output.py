@@ -1,0 +1,80 @@
+"""A write that fails or is interrupted leaves the file the user had, and says so.
+
+TRC and CSV were written straight over the output path: a full disk left a cut file in
+place of a good one, and a Ctrl-C during the write a shorter CSV that reads back as a valid
+take. A full disk under ezc3d left a short C3D and the run "succeeded". A Ctrl-C or SIGTERM
+ended the command with no word at all."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import DATA
+from test_cli import REPO
+
+from service.errors import InputError
+from service.io.formats import c3d as c3d_format
+from service.io.formats import csv as csv_format
+from service.io.formats import write_labeled
+from service.io.recording import LabeledTrajectories
+
+CMU_135 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
+
+
+def _labels(frames: int = 50) -> LabeledTrajectories:
+    positions = np.random.default_rng(0).uniform(-900, 900, (frames, 5, 3))
+    return LabeledTrajectories([f"M{i}" for i in range(5)], positions, np.zeros((frames, 5), bool), 100.0)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".trc", ".c3d"])
+def test_an_interrupted_write_leaves_the_earlier_file_and_no_debris(tmp_path: Path, suffix: str, monkeypatch) -> None:
+    out = tmp_path / f"out{suffix}"
+    out.write_text("the earlier, good file")
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    target = {".csv": (csv_format.csv, "writer"), ".trc": (Path, "write_text"), ".c3d": (c3d_format, "fix_channels")}
+    monkeypatch.setattr(*target[suffix], interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_labeled(out, _labels())
+    assert out.read_text() == "the earlier, good file" and os.listdir(tmp_path) == [out.name]
+
+
+def test_a_short_c3d_from_a_full_disk_is_an_error_not_a_result(tmp_path: Path, monkeypatch) -> None:
+    out = tmp_path / "out.c3d"
+    written = c3d_format.fix_channels
+
+    def disk_full(name: str, channels: object) -> None:  # what ezc3d leaves on ENOSPC: the file cut short
+        written(name, channels)
+        with open(name, "r+b") as f:
+            f.truncate(os.path.getsize(name) // 2)
+
+    monkeypatch.setattr(c3d_format, "fix_channels", disk_full)
+    with pytest.raises(InputError, match=r"out.c3d: cannot write \(the file came out short: is the disk full\?\)"):
+        write_labeled(out, _labels(2000))
+    assert not out.exists() and os.listdir(tmp_path) == []
+
+
+@pytest.mark.skipif(not CMU_135.exists(), reason="needs ../shared/data")
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_ctrl_c_or_sigterm_mid_take_says_so_and_keeps_the_earlier_output(tmp_path: Path, signum: int,
+                                                                        code: int) -> None:
+    out = tmp_path / "out.csv"
+    out.write_text("the earlier, good file")
+    command = [sys.executable, "-m", "service.cli", "track", str(CMU_135), "--out", str(out)]
+    with subprocess.Popen(command, cwd=REPO, stderr=subprocess.PIPE, text=True) as run:
+        assert run.stderr is not None
+        first = run.stderr.readline()  # the first progress line: labeling is under way
+        assert first.startswith("labeling 135_02.c3d: "), first
+        run.send_signal(signum)
+        rest = run.stderr.read()
+    assert run.returncode == code
+    assert rest.strip().splitlines()[-1].startswith("interrupted: stopped before the end, no output written")
+    assert out.read_text() == "the earlier, good file"
