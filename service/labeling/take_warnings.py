@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 from formulations.subject.contradiction import SegmentMisfit
 from service.errors import InputError
 from service.io.recording import Recording
-from service.labeling.coincident import COINCIDENT_MM, sampled_distances
+from service.labeling.coincident import COINCIDENT_MM, sampled_rows
 
 FAST_RATIO = 0.5  # s > d / 2: the last position is nearer the neighbour's than the marker's own
 LISTED = 4  # markers named in the warning line
@@ -47,12 +47,7 @@ def fast_markers(names: list[str], positions: np.ndarray) -> list[FastMarker]:
         return []
     steps = np.linalg.norm(np.diff(positions, axis=0), axis=2)  # (F-1, N), NaN unless both labeled
     step = _median_or_nan(steps)
-    apart = sampled_distances(positions)  # (S, N, N)
-    apart[:, np.arange(len(names)), np.arange(len(names))] = np.nan
-    apart[apart < COINCIDENT_MM] = np.nan  # a copied column is no neighbour (``coincident``)
-    nearest = np.where(np.isfinite(apart), apart, np.inf)
-    closest = np.argmin(nearest, axis=2)  # (S, N)
-    distance = np.min(nearest, axis=2)
+    closest, distance = _nearest(positions)  # (S, N) each
     distance[~np.isfinite(distance)] = np.nan
     spacing = _median_or_nan(distance)
     flagged = np.flatnonzero(step > FAST_RATIO * spacing)  # NaN compares False: unknowns are not flagged
@@ -61,6 +56,19 @@ def fast_markers(names: list[str], positions: np.ndarray) -> list[FastMarker]:
         for n in flagged
     ]
     return sorted(found, key=lambda f: f.neighbour_mm / f.step_mm)
+
+
+def _nearest(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(S, N)`` each marker's nearest other marker and its distance on the sampled frames
+    (``sampled_rows``; inf where none is labeled with it); a copied column is no neighbour."""
+    closest, distance = [], []
+    for n, apart in enumerate(sampled_rows(positions)):
+        apart[:, n] = np.nan
+        apart[apart < COINCIDENT_MM] = np.nan  # (``coincident``)
+        nearest = np.where(np.isfinite(apart), apart, np.inf)
+        closest.append(np.argmin(nearest, axis=1))
+        distance.append(np.min(nearest, axis=1))
+    return np.stack(closest, axis=1), np.stack(distance, axis=1)
 
 
 def fast_motion_warning(fast: list[FastMarker]) -> str | None:
