@@ -94,6 +94,8 @@ def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path)
     assert answer.status_code == 202, answer.text
     job = wait_for(client, answer.json()["id"], timeout=120)
     assert job["state"] == "done", job
+    # as track says it: the markers absent at the start, numbered as the file's frames
+    assert any(line.startswith("warning: 6 markers absent at frame 17, not labeled") for line in job["warnings"]), job
     served = client.get(f"/v1/jobs/{job['id']}/result", params={"format": "c3d"}).content
     recording = read_labeled(racing)
     capture, absent = capture_from_span(recording, 17, 120)

@@ -22,7 +22,7 @@ from service.errors import InputError
 from service.io.formats import is_copy, kept_source, read_labeled, write_labeled
 from service.io.formats.trc import check_trc_names
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
-from service.labeling.absent_markers import in_order, with_absent
+from service.labeling.absent_markers import absent_warning, in_order, with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.carried_markers import CarriedMarkers
 from service.labeling.coincident import coincident_pairs
@@ -129,7 +129,7 @@ def run_track(
     for line in result_warnings(capture, result, labeling.shape_breaks, unit, start or 0, spacing_judged=True):
         warn(line)
     warn(not_kept)
-    warn(_absent_warning(absent, start or 0))
+    warn(absent_warning(absent, start or 0))
     warn(_unknown_warning(unknown, start or 0))
     warn(model_misfit_warning(labeling.model_misfits, start or 0))
 
@@ -220,13 +220,6 @@ def _unknown_warning(unknown: list[str], start: int) -> str | None:
     return (f"warning: {counted(len(unknown), 'marker')} labeled at frame {start} not in the model, not labeled "
             f"(written as the input has them): {', '.join(unknown[:12])}{' ...' if len(unknown) > 12 else ''} "
             "(fit the model on frames where they are seen, or label without --model)")
-
-
-def _absent_warning(absent: list[str], start: int) -> str | None:
-    if not absent:
-        return None
-    return (f"warning: {counted(len(absent), 'marker')} absent at frame {start}, not labeled (written missing): "
-            f"{', '.join(absent[:12])}{' ...' if len(absent) > 12 else ''}")
 
 
 def _has_runs(positions: np.ndarray, order: int = 3) -> bool:

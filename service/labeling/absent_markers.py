@@ -11,6 +11,15 @@ import numpy as np
 from service.io.recording import LabeledTrajectories
 
 
+def absent_warning(absent: list[str], start: int) -> str | None:
+    """The line naming the markers a relabel from frame ``start`` leaves out, or None."""
+    if not absent:
+        return None
+    markers = f"{len(absent)} marker{'s' if len(absent) > 1 else ''}"
+    return (f"warning: {markers} absent at frame {start}, not labeled (written missing): "
+            f"{', '.join(absent[:12])}{' ...' if len(absent) > 12 else ''}")
+
+
 def with_absent(
     result: LabeledTrajectories, names: list[str], positions: np.ndarray | None = None,
 ) -> LabeledTrajectories:

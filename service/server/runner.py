@@ -28,6 +28,7 @@ from sqlalchemy.exc import OperationalError
 
 from service.capture.document import read_capture_document
 from service.errors import InputError
+from service.labeling.absent_markers import absent_warning
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import StaleOutcome, WindowOutcome
 from service.labeling.result_warnings import result_warnings
@@ -72,10 +73,12 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         # restart then finds either the first pass (and refines it again) or a finished job.
         result = labeling.result(kept)
         misfit = model_misfit_warning(labeling.model_misfits, 0)  # said at submission too; kept with the result
+        upload = store.upload(job_id)  # frames numbered as the file's, from its start, as track says them
+        start, unit = (upload.start, "the file's unit") if upload is not None else (0, "mm")
+        absent = absent_warning(list(upload.absent), upload.start) if upload is not None else None
         store.finish(job_id, trajectories_to_bytes(result), None if kept is outcomes else (kept, worker),
-                     result_warnings(capture, result, labeling.shape_breaks,
-                                     "the file's unit" if store.uploaded(job_id) else "mm")
-                     + ([misfit] if misfit else []))
+                     result_warnings(capture, result, labeling.shape_breaks, unit, start)
+                     + [line for line in (absent, misfit) if line])
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except OperationalError:  # the store itself (down, disk full): the job is retried, not failed by it
