@@ -231,3 +231,29 @@ def test_tokens_and_the_memory_bound(take, tmp_path: Path) -> None:
         anonymous.headers["Authorization"] = f"Bearer {SECRET}"
         _refused(_fit(anonymous, long), 422,
                  "file: long.trc: fitting 3480 frames x 16 markers needs about 54 MiB, over the limit of 48 MiB")
+
+
+def test_a_model_with_start_and_end_labels_that_span_as_track_does(client, take, tmp_path) -> None:
+    """Refused before ("over HTTP a subject model labels the whole file"); now the span's first
+    frame keeps its labels and the model names the rest, as ``track --model --keep-labels``."""
+    names, positions = take
+    model = tmp_path / "subject.json"
+    model.write_text(_fit(client, _write(tmp_path / "rom.c3d", names, positions[:FIT])).text)
+    whole = positions.copy()
+    whole[FIT : FIT + 5, 2] = np.nan  # S0M2 absent at the start: the model names it once back
+    upload = _write(tmp_path / "whole.c3d", names, whole)
+    span = {"window": "10", "start": str(FIT), "end": str(FIT + HELD)}
+    job = client.post("/v1/jobs", files={"file": ("whole.c3d", upload.read_bytes()),
+                                         "model": ("subject.json", model.read_text())}, data=span)
+    assert job.status_code == 202, job.text
+    assert wait_for(client, job.json()["id"])["state"] == "done"
+    as_csv = client.get(f"/v1/jobs/{job.json()['id']}/result", params={"format": "csv"}).content
+    run = CliRunner().invoke(app, ["track", str(upload), "--model", str(model), "--keep-labels", "--window", "10",
+                                   "--start", str(FIT), "--end", str(FIT + HELD), "--out", str(tmp_path / "cli.csv")])
+    assert run.exit_code == 0, run.output
+    assert as_csv == (tmp_path / "cli.csv").read_bytes()
+    rows = as_csv.decode().splitlines()
+    assert len(rows) == 1 + HELD and rows[1].startswith(f"{FIT + 1},")  # numbered as the file's frames
+    past = client.post("/v1/jobs", files={"file": ("whole.c3d", upload.read_bytes()),
+                                          "model": ("subject.json", model.read_text())}, data={"start": "9999"})
+    _refused(past, 422, "start=9999: frames are counted from 0")

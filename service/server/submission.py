@@ -22,6 +22,7 @@ from service.capture.capture import LabelingOptions
 from service.capture.document import CaptureDocument, describe_validation_error
 from service.capture.formulation_spec import formulation_from_table
 from service.capture.from_recording import capture_from_span, require_complete_first_frame
+from service.capture.span import frame_span
 from service.errors import InputError
 from service.io.isolated import ReaderBounds, read_isolated
 from service.io.recording import Recording
@@ -92,16 +93,13 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
     recording = read_upload(upload, filename, limits)
     upload.file.seek(0)
     data = upload.file.read()
-    if model is not None:
-        if start is not None or end is not None:
-            given = "start" if start is not None else "end"
-            raise InputError(f"{given}: over HTTP a subject model labels the whole file (markerflow track --model "
-                             "takes --start and --end); send start and end without a model")
-        document = document_with_model(recording, model, options, filename.name)
-        return replace(_checked(document, filename.name, limits), upload=Upload(filename.suffix.lower(), data))
-    if start is None:  # frame 0 is the labeled frame: every marker must be there
+    if start is None and model is None:  # frame 0 is the labeled frame: every marker must be there
         require_complete_first_frame(recording, "file", "start=", "; or send a subject model as 'model'")
     try:
+        if model is not None:  # frames start .. end - 1, their first's labels kept (track --model --keep-labels)
+            document = document_with_model(_span(recording, start or 0, end), model, options, filename.name)
+            return replace(_checked(document, filename.name, limits), upload=Upload(filename.suffix.lower(), data,
+                                                                                    start or 0))
         capture, absent = capture_from_span(recording, start or 0, end)
         document = CaptureDocument.of(capture, options)
     except ValidationError as error:
@@ -110,6 +108,12 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
         raise InputError(str(error).replace("--start ", "start=").replace("--end ", "end=")) from None
     kept = Upload(filename.suffix.lower(), data, start or 0, tuple(absent))
     return replace(_checked(document, filename.name, limits), upload=kept)
+
+
+def _span(recording: Recording, start: int, end: int | None) -> Recording:
+    """Frames ``start .. end - 1`` of ``recording`` (``frame_span`` checks them)."""
+    stop = frame_span(start, end, recording.n_frames)
+    return replace(recording, positions=recording.positions[start:stop])
 
 
 def _frame_field(value: str | UploadFile | None, field: str) -> int | None:
