@@ -6,6 +6,7 @@ could not read ("cannot write (None)" after the whole labeling). Read back with 
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 import ezc3d
@@ -78,3 +79,22 @@ def test_each_label_keeps_the_residual_and_camera_mask_of_the_sample_it_took(tmp
     np.testing.assert_allclose(meta["residuals"][0, :4][shown], given["residuals"][0, order][shown], atol=0.01)
     assert (meta["camera_masks"][:, :4][:, shown] == given["camera_masks"][:, order][:, shown]).all()
     assert meta["residuals"][0, 3, 2] < 0 and not meta["camera_masks"][:, 3, 2].any()  # occluded: no sample
+
+
+@pytest.mark.parametrize("scale", [-0.01, 0.5])
+def test_the_header_scale_is_the_parameters_so_strict_readers_open_the_file(tmp_path: Path, scale: float) -> None:
+    """ezc3d wrote -1 in the header whatever POINT:SCALE said (-0.01 on Vicon's files); py-c3d
+    refuses such a file ("inconsistent scale factor"). A positive (integer-data) scale becomes
+    negative: the data are written as floats."""
+    source = _input(tmp_path / "in.c3d", 4)
+    c3d = ezc3d.c3d(str(source))
+    c3d["parameters"]["POINT"]["SCALE"]["value"] = np.array([scale])
+    c3d.write(str(source))
+    take = read_labeled(source)
+    write_labeled(tmp_path / "out.c3d", LabeledTrajectories(take.names, take.positions, np.zeros((FRAMES, 4), bool),
+                                                           take.rate), take.source)
+    header = (tmp_path / "out.c3d").read_bytes()[:16]
+    written = ezc3d.c3d(str(tmp_path / "out.c3d"))
+    assert struct.unpack("<f", header[12:16])[0] == pytest.approx(-abs(scale))
+    assert written["parameters"]["POINT"]["SCALE"]["value"][0] == pytest.approx(-abs(scale))
+    np.testing.assert_allclose(read_labeled(tmp_path / "out.c3d").positions, take.positions, atol=1e-4)

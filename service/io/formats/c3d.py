@@ -16,7 +16,7 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.c3d_analog import ChannelParameters, fix_channels, joined_values, with_confidence
-from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout
+from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout, match_header_scale
 from service.io.formats.c3d_quality import SAME_SAMPLE, SampleQuality
 from service.io.formats.conventions import (
     from_millimetres,
@@ -271,8 +271,10 @@ def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
     silently, where it cannot open the file, and a failure must not leave a half file in place
     of one the user had."""
     with replacing(path, ".c3d") as temp:  # ezc3d creates it, umask applies
+        scale = _float_scale(c3d)
         c3d.write(str(temp))
         fix_channels(str(temp), channels)
+        match_header_scale(str(temp), scale)
         if not temp.is_file() or temp.stat().st_size == 0:
             raise InputError(f"{path}: cannot write there")
         try:  # ezc3d says nothing of a full disk: the file it leaves is short of its own header
@@ -280,6 +282,14 @@ def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
         except InputError:
             raise InputError(f"{path}: cannot write (the file came out short: is the disk full?); any earlier "
                              "file there is untouched") from None
+
+
+def _float_scale(c3d: ezc3d.c3d) -> float:
+    """POINT:SCALE made negative (ezc3d writes float data whatever the input stored), its
+    magnitude kept: in float files it scales the residual byte."""
+    scale = c3d["parameters"]["POINT"]["SCALE"]
+    scale["value"] = -np.abs(np.asarray(scale["value"], dtype=float))
+    return float(scale["value"][0])
 
 
 def _first_line(exc: Exception) -> str:

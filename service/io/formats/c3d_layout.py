@@ -126,3 +126,18 @@ def _parameter_bytes(data: bytes, at: int, limit: int, record: int) -> int:
     if at + 2 + count > limit:
         raise InputError(f"C3D parameter record at byte {record} overruns the next record")
     return 2 + count + abs(kind) * math.prod(data[at + 2 : at + 2 + count])
+
+
+def match_header_scale(path: str, scale: float) -> None:
+    """Set the header's point scale (words 7-8) to ``scale``, the file's POINT:SCALE, in the
+    file's own float format: ezc3d writes -1 there whatever the parameter says, and readers
+    that hold the two to agree (py-c3d) refuse the file. Nothing is done to a DEC file (its
+    float format is not IEEE) or where ``scale`` is not negative (float data)."""
+    with open(path, "r+b") as f:
+        header = f.read(BLOCK)
+        f.seek((header[0] - 1) * BLOCK + 3)
+        processor = f.read(1)[0]
+        if processor not in (84, MIPS) or not scale < 0:
+            return
+        f.seek(12)
+        f.write(struct.pack(">f" if processor == MIPS else "<f", scale))
