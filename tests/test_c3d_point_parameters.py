@@ -13,8 +13,9 @@ import ezc3d
 import numpy as np
 import pytest
 
+from service.errors import InputError
 from service.io.formats import read_labeled, write_labeled
-from service.io.recording import LabeledTrajectories
+from service.io.recording import LabeledTrajectories, SourceFile
 
 FRAMES = 6
 
@@ -98,3 +99,14 @@ def test_the_header_scale_is_the_parameters_so_strict_readers_open_the_file(tmp_
     assert struct.unpack("<f", header[12:16])[0] == pytest.approx(-abs(scale))
     assert written["parameters"]["POINT"]["SCALE"]["value"][0] == pytest.approx(-abs(scale))
     np.testing.assert_allclose(read_labeled(tmp_path / "out.c3d").positions, take.positions, atol=1e-4)
+
+
+def test_frame_numbers_past_what_a_c3d_header_holds_are_refused_in_one_line(tmp_path: Path) -> None:
+    """A TRC trimmed from a long take, numbered from 70001: the C3D's header wrapped it to 4465
+    and markerflow then read its own file as truncated."""
+    labels = LabeledTrajectories(["A", "B"], np.zeros((5, 2, 3)) + 100.0, np.zeros((5, 2), bool), 100.0)
+    write_labeled(tmp_path / "late.trc", labels, SourceFile(first_frame=70000))
+    take = read_labeled(tmp_path / "late.trc")
+    with pytest.raises(InputError, match=r"out.c3d: a C3D numbers frames up to 65535 and these run from 70000"):
+        write_labeled(tmp_path / "out.c3d", labels, take.source)
+    assert not (tmp_path / "out.c3d").exists()

@@ -17,6 +17,7 @@ import numpy as np
 from service.errors import InputError
 from service.io.formats.c3d_analog import ChannelParameters, fix_channels, joined_values, with_confidence
 from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout, match_header_scale
+from service.io.formats.c3d_parameters import append_entries, check_frame_numbers, float_scale
 from service.io.formats.c3d_quality import SAME_SAMPLE, SampleQuality
 from service.io.formats.conventions import (
     from_millimetres,
@@ -28,8 +29,6 @@ from service.io.formats.conventions import (
 )
 from service.io.formats.replace_file import replacing
 from service.io.recording import UNLABELED_PREFIX, LabeledTrajectories, Recording, SourceFile, is_unlabeled
-
-PARAMETER_ENTRIES = 255  # a C3D parameter's dimension is one byte: past it, LABELS2, LABELS3 ...
 
 
 def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | None = None) -> Recording:
@@ -81,7 +80,10 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     source = source or SourceFile()
     at = 0 if source.c3d is None else start
     # a copy: ezc3d's write extends the LABELS list it is given
-    c3d = _new_c3d(traj, source, start) if source.c3d is None else copy.deepcopy(source.c3d)
+    try:
+        c3d = _new_c3d(traj, source, start) if source.c3d is None else copy.deepcopy(source.c3d)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
     outside = _with_labels(c3d, traj, source.unit, at, path)
     # gathered (``unlabeled`` has the frames, with or without channels): the input's own *N
     # points were in the capture, so they were labeled or are in the new *N
@@ -103,7 +105,7 @@ def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d
     point["LABELS"]["value"] = list(traj.names)
     point["UNITS"]["value"] = [source.unit]
     # a C3D counts frames from 1: a table counted from 0 starts at its first (first_frame -1)
-    c3d["header"]["points"]["first_frame"] = max(source.first_frame + start, 0)
+    c3d["header"]["points"]["first_frame"] = check_frame_numbers(max(source.first_frame + start, 0), traj.n_frames)
     c3d["data"]["points"] = np.ones((4, len(traj.names), traj.n_frames))
     c3d["data"]["meta_points"]["residuals"] = np.zeros((1, len(traj.names), traj.n_frames))
     return c3d
@@ -183,26 +185,8 @@ def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
         masks = np.zeros((meta["camera_masks"].shape[0], present.shape[1], points.shape[2]), bool)
         meta["camera_masks"] = np.concatenate([meta["camera_masks"], masks], axis=1)
     names = [f"{UNLABELED_PREFIX}{first + k}" for k in range(present.shape[1])]
-    _append(c3d, "LABELS", names)
-    _append(c3d, "DESCRIPTIONS", [""] * len(names))  # ezc3d blanks every description if one is lacking
-
-
-def _append(c3d: ezc3d.c3d, stem: str, entries: list[str]) -> None:
-    """``entries`` after the last of POINT's ``stem``, ``stem``2, ... (none: nothing to keep),
-    filling each to ``PARAMETER_ENTRIES`` and going on in a new one, as C3D readers expect."""
-    point = c3d["parameters"]["POINT"]
-    groups = [k for k in point if re.fullmatch(rf"{stem}\d*", k)]
-    if not groups:
-        return
-    last = max(groups, key=lambda k: int(k[len(stem):] or 1))
-    values = list(point[last]["value"])
-    room = max(PARAMETER_ENTRIES - len(values), 0)
-    point[last]["value"] = values + entries[:room]
-    number, rest = int(last[len(stem):] or 1), entries[room:]
-    while rest:
-        number += 1
-        c3d.add_parameter("POINT", f"{stem}{number}", rest[:PARAMETER_ENTRIES])
-        rest = rest[PARAMETER_ENTRIES:]
+    append_entries(c3d, "LABELS", names)
+    append_entries(c3d, "DESCRIPTIONS", [""] * len(names))  # ezc3d blanks every description if one is lacking
 
 
 def _columns(labels: list[str], names: list[str], path: Path) -> list[int]:
@@ -271,7 +255,7 @@ def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
     silently, where it cannot open the file, and a failure must not leave a half file in place
     of one the user had."""
     with replacing(path, ".c3d") as temp:  # ezc3d creates it, umask applies
-        scale = _float_scale(c3d)
+        scale = float_scale(c3d)
         c3d.write(str(temp))
         fix_channels(str(temp), channels)
         match_header_scale(str(temp), scale)
@@ -282,14 +266,6 @@ def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
         except InputError:
             raise InputError(f"{path}: cannot write (the file came out short: is the disk full?); any earlier "
                              "file there is untouched") from None
-
-
-def _float_scale(c3d: ezc3d.c3d) -> float:
-    """POINT:SCALE made negative (ezc3d writes float data whatever the input stored), its
-    magnitude kept: in float files it scales the residual byte."""
-    scale = c3d["parameters"]["POINT"]["SCALE"]
-    scale["value"] = -np.abs(np.asarray(scale["value"], dtype=float))
-    return float(scale["value"][0])
 
 
 def _first_line(exc: Exception) -> str:
