@@ -37,3 +37,16 @@ def test_a_binary_file_named_trc_is_refused_in_one_line(tmp_path: Path) -> None:
     junk.write_bytes(b"PathFileType\t4\n\x81\x8d\x8f\x90\x9d" * 10)
     with pytest.raises(InputError, match=r"junk.trc: not text in UTF-8 or Windows-1252"):
         read_labeled(junk)
+
+
+@pytest.mark.parametrize(("rate", "decimals", "rows", "read"), [
+    (120.0, 3, 124, 120.0),  # read 119.96 from times rounded to milliseconds
+    (69.99, 6, 700, 69.99),  # a rate that is not whole stays what the times say
+    (100.0, 9, 50, 100.0),
+])
+def test_a_csv_rate_is_read_through_the_rounding_of_its_times(tmp_path: Path, rate: float, decimals: int, rows: int,
+                                                              read: float) -> None:
+    times = [f"{k / rate:.{decimals}f}" for k in range(rows)]
+    lines = ["frame,time,A_x,A_y,A_z"] + [f"{k + 1},{t},{k}.0,0,0" for k, t in enumerate(times)]
+    (tmp_path / "t.csv").write_text("\n".join(lines) + "\n")
+    assert read_labeled(tmp_path / "t.csv").rate == read
