@@ -106,6 +106,7 @@ def test_the_warning_is_one_stderr_line_above_the_share(capsys: pytest.CaptureFi
     captured = capsys.readouterr()
     assert captured.out == "" and len(captured.err.splitlines()) == 1
     assert captured.err.startswith(f"warning: {DOUBTFUL_WARNING + 0.001:.1%} of the labels are doubtful")
+    assert captured.err.strip().endswith("markerflow track writes them with each label's confidence")  # eval's: no labels
 
 
 def test_track_reports_the_doubtful_share_of_the_confidences_it_writes(tmp_path: Path) -> None:

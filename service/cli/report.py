@@ -61,8 +61,9 @@ def print_summary(summary: dict, title: str) -> None:
 
 
 def warn_doubtful(fraction: float | None) -> None:
-    """One stderr line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
-    warn(doubtful_warning(fraction))
+    """``eval``'s stderr line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful: it
+    writes no labels to check, so the line says where they are."""
+    warn(doubtful_warning(fraction, "markerflow track writes them with each label's confidence"))
 
 
 def counted(count: int, noun: str, plural: str | None = None) -> str:

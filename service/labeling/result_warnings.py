@@ -30,12 +30,12 @@ def early_scale_warning(capture: Capture, unit: str) -> str | None:
     return scale_warning(first, first[None], capture.rate, unit)
 
 
-def doubtful_warning(fraction: float | None) -> str | None:
-    """A line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful."""
+def doubtful_warning(fraction: float | None, advice: str = "check them") -> str | None:
+    """A line when more than ``DOUBTFUL_WARNING`` of the labels are doubtful, ending ``advice``."""
     if fraction is None or fraction <= DOUBTFUL_WARNING:
         return None
     return (f"warning: {fraction:.1%} of the labels are doubtful (confidence below {REPORTED_DOUBTFUL_BELOW:.1%}: "
-            "another reading of their window is nearly as likely); check them")
+            f"another reading of their window is nearly as likely); {advice}")
 
 
 def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[ShapeBreak], unit: str = "mm",
