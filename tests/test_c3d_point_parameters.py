@@ -110,3 +110,21 @@ def test_frame_numbers_past_what_a_c3d_header_holds_are_refused_in_one_line(tmp_
     with pytest.raises(InputError, match=r"out.c3d: a C3D numbers frames up to 65535 and these run from 70000"):
         write_labeled(tmp_path / "out.c3d", labels, take.source)
     assert not (tmp_path / "out.c3d").exists()
+
+
+def test_relabeling_markerflows_own_output_does_not_grow_it(tmp_path: Path) -> None:
+    """Each run emptied the file's *N points over the labeled frames and appended as many new
+    ones: 74 -> 75 -> 76 points on walking2. The emptied ones are filled first."""
+    source = _input(tmp_path / "in.c3d", 6)
+    unlabeled = np.random.default_rng(3).uniform(-500, 500, (FRAMES, 2, 3))
+    for run in range(3):
+        take = read_labeled(source)
+        named = [i for i, name in enumerate(take.names) if not name.startswith("*")]
+        labels = LabeledTrajectories([take.names[i] for i in named], take.positions[:, named],
+                                     np.zeros((FRAMES, len(named)), bool), take.rate, unlabeled=unlabeled)
+        out = tmp_path / f"run{run}.c3d"
+        write_labeled(out, labels, take.source)
+        assert ezc3d.c3d(str(out))["data"]["points"].shape[1] == 6 + 2, run
+        np.testing.assert_allclose(np.sort(read_labeled(out).positions[:, 6:], axis=1), np.sort(unlabeled, axis=1),
+                                   atol=1e-3)
+        source = out

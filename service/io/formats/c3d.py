@@ -170,21 +170,31 @@ def _not_kept(placed: np.ndarray, c3d: ezc3d.c3d, names: list[str]) -> np.ndarra
 
 
 def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
-    """Append one point per channel of ``unlabeled`` ``(3, U, frames)`` (the file's unit, NaN
-    where empty), in place, named ``*N`` from one past the highest such name the file has."""
+    """One point per channel of ``unlabeled`` ``(3, U, frames)`` (the file's unit, NaN where
+    empty), in place: first in the file's own ``*N`` points left empty (a relabel emptied them,
+    and each run on markerflow's own output added as many again), the rest appended, named
+    ``*N`` from one past the highest such name the file has."""
     points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
     labels = _labels(c3d, points.shape[1], path)
+    empty = [i for i, label in enumerate(labels) if is_unlabeled(label) and (meta["residuals"][0, i] < 0).all()]
+    reused = empty[: unlabeled.shape[1]]
+    present = np.isfinite(unlabeled).all(axis=0)  # (channels, frames)
+    values, residual = np.where(present, unlabeled, 0.0), np.where(present, 0.0, -1.0)
+    points[:3, reused], meta["residuals"][0, reused] = values[:, : len(reused)], residual[: len(reused)]
+    if reused and "camera_masks" in meta and meta["camera_masks"].size:
+        meta["camera_masks"][:, reused] = False
+    extra = unlabeled.shape[1] - len(reused)
+    if not extra:
+        return
     first = 1 + max((int(label[1:]) for label in labels if is_unlabeled(label)), default=-1)
-    present = np.isfinite(unlabeled).all(axis=0).T  # (frames, channels)
-    added = np.ones((4, present.shape[1], points.shape[2]))
-    added[:3] = np.where(present.T, unlabeled, 0.0)
-    residual = np.where(present.T, 0.0, -1.0)[None]
+    added = np.ones((4, extra, points.shape[2]))
+    added[:3] = values[:, len(reused) :]
     c3d["data"]["points"] = np.concatenate([points, added], axis=1)
-    meta["residuals"] = np.concatenate([meta["residuals"], residual], axis=1)
+    meta["residuals"] = np.concatenate([meta["residuals"], residual[None, len(reused) :]], axis=1)
     if "camera_masks" in meta and meta["camera_masks"].size:
-        masks = np.zeros((meta["camera_masks"].shape[0], present.shape[1], points.shape[2]), bool)
+        masks = np.zeros((meta["camera_masks"].shape[0], extra, points.shape[2]), bool)
         meta["camera_masks"] = np.concatenate([meta["camera_masks"], masks], axis=1)
-    names = [f"{UNLABELED_PREFIX}{first + k}" for k in range(present.shape[1])]
+    names = [f"{UNLABELED_PREFIX}{first + k}" for k in range(extra)]
     append_entries(c3d, "LABELS", names)
     append_entries(c3d, "DESCRIPTIONS", [""] * len(names))  # ezc3d blanks every description if one is lacking
 
