@@ -69,7 +69,10 @@ def test_ctrl_c_or_sigterm_mid_take_says_so_and_keeps_the_earlier_output(tmp_pat
     out = tmp_path / "out.csv"
     out.write_text("the earlier, good file")
     command = [sys.executable, "-m", "service.cli", "track", str(CMU_135), "--out", str(out)]
-    with subprocess.Popen(command, cwd=REPO, stderr=subprocess.PIPE, text=True) as run:
+    # a shell's background job inherits SIGINT ignored (as `make test &` does): the command
+    # gets the default a terminal gives it
+    with subprocess.Popen(command, cwd=REPO, stderr=subprocess.PIPE, text=True,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL)) as run:
         assert run.stderr is not None
         first = run.stderr.readline()  # the first progress line: labeling is under way
         assert first.startswith("labeling 135_02.c3d: "), first
