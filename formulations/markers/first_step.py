@@ -32,8 +32,6 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
-from formulations.markers.noise import masked_medoid
-
 MISS_FACTOR = 3.0  # a miss costs three typical accelerations
 NEIGHBOURS = 3  # markers whose steps a marker's step must agree with
 COHERENCE = 0.5  # largest disagreement, as a fraction of the step
@@ -83,7 +81,7 @@ def coherent_steps(position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
     if k <= NEIGHBOURS:
         return np.zeros_like(velocity)
     _, nearest = cKDTree(position).query(position, NEIGHBOURS + 1)
-    shared = masked_medoid(velocity[nearest[:, 1:]].transpose(1, 0, 2))  # column 0 is the marker itself
+    shared = np.median(velocity[nearest[:, 1:]], axis=1)  # column 0 is the marker itself
     disagreement = np.linalg.norm(velocity - shared, axis=1)
     scale = np.maximum(np.linalg.norm(velocity, axis=1), np.linalg.norm(shared, axis=1))
     return np.where((disagreement <= COHERENCE * scale)[:, None], velocity, 0.0)

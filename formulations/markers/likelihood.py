@@ -81,17 +81,5 @@ def _clutter(guide: GuideTrack, frames: list[np.ndarray]) -> tuple[float, float]
     spare = counts[: len(taken)] - taken
     per_frame = max(float(spare.mean()) if len(spare) else 0.0, MIN_CLUTTER)
     points = np.concatenate([f for f in frames if len(f)]) if any(len(f) for f in frames) else np.zeros((1, 3))
-    return per_frame, float(np.prod(_extent(points) + 2 * CLUTTER_MARGIN_MM))
-
-
-def _extent(points: np.ndarray) -> np.ndarray:
-    """``(3,)`` the points' extent along their principal axes: the box a rotation of the lab's
-    axes does not change (an axis-aligned box grows when the take is turned in them)."""
-    centred = points - points.mean(axis=0)
-    if len(points) < 2:
-        return np.zeros(3)
-    axes = np.linalg.svd(centred, full_matrices=False)[2]
-    projected = centred @ axes.T
-    extent = np.zeros(3)
-    extent[: projected.shape[1]] = projected.max(axis=0) - projected.min(axis=0)
-    return extent
+    extent = points.max(axis=0) - points.min(axis=0) + 2 * CLUTTER_MARGIN_MM
+    return per_frame, float(np.prod(extent))

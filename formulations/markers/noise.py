@@ -29,7 +29,6 @@ from math import comb
 
 import numpy as np
 
-NORM_MEDIAN_TO_SIGMA = 1.5382  # median length of a 3D N(0, sigma^2 I) vector, in sigma
 MAD_TO_SIGMA = 1.4826  # 1 / Phi^-1(3/4): the MAD of a Gaussian is 0.6745 sigma
 
 
@@ -90,15 +89,3 @@ def robust_scale(residual: np.ndarray) -> np.ndarray:
     flat = residual.reshape(-1, 3)
     scale: np.ndarray = MAD_TO_SIGMA * np.nanmedian(np.abs(flat), axis=0)
     return scale
-
-
-def masked_medoid(steps: np.ndarray) -> np.ndarray:
-    """``(...,  3)`` over axis 0 of ``steps`` ``(W, ..., 3)``: the finite step nearest in sum to
-    the others (NaN where none). Unlike a median per axis it turns with the take."""
-    finite = np.isfinite(steps).all(axis=-1)  # (W, ...)
-    apart = np.linalg.norm(steps[:, None] - steps[None], axis=-1)  # (W, W, ...)
-    total = np.where(finite[None], np.nan_to_num(apart), 0.0).sum(axis=1)
-    total = np.where(finite, total, np.inf)
-    best = np.argmin(total, axis=0)
-    chosen: np.ndarray = np.take_along_axis(steps, best[None, ..., None], axis=0)[0]
-    return np.where(finite.any(axis=0)[..., None], chosen, np.nan)

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from formulations.markers.guide import GuideTrack
-from formulations.markers.noise import NORM_MEDIAN_TO_SIGMA, masked_medoid
+from formulations.markers.noise import MAD_TO_SIGMA
 
 HALF_WIDTH = 2  # h: frames each side; one wrong pick in 2h + 1 = 5 steps leaves the median
 MIN_MARKER_SAMPLES = 6  # second differences (frames x axes) a marker needs in the window to be judged
@@ -47,7 +47,7 @@ def expected_steps(guide: GuideTrack, half_width: int = HALF_WIDTH) -> np.ndarra
         return velocity
     steps = np.where(seen[..., None], velocity, np.nan)
     padded = np.pad(steps, ((half_width, half_width), (0, 0), (0, 0)), constant_values=np.nan)
-    median = masked_medoid(np.stack([padded[k : k + frames] for k in range(2 * half_width + 1)]))
+    median = masked_median(np.stack([padded[k : k + frames] for k in range(2 * half_width + 1)]))
     smoothed = seen[..., None] & np.isfinite(median) & noise_dominated(guide, seen)[None, :, None]
     expected: np.ndarray = np.where(smoothed, median, velocity)
     return expected
@@ -61,15 +61,14 @@ def noise_dominated(guide: GuideTrack, seen: np.ndarray) -> np.ndarray:
     position[:-1] = guide.predicted[1:] - guide.velocity[1:]
     position[~picked] = np.nan
     markers = seen.shape[1]
-    # lengths, not per-axis values: a sd read the same whichever way the lab's axes point
-    second = np.linalg.norm(np.diff(position, n=2, axis=0), axis=2) / NORM_MEDIAN_TO_SIGMA
-    third = np.linalg.norm(np.diff(position, n=3, axis=0), axis=2) / NORM_MEDIAN_TO_SIGMA
+    second = np.abs(np.diff(position, n=2, axis=0)).transpose(0, 2, 1).reshape(-1, markers)
+    third = np.abs(np.diff(position, n=3, axis=0))
     third = third[np.isfinite(third)]
     if third.size < MIN_NOISE_SAMPLES:
         return np.zeros(markers, dtype=bool)
-    noise_var = np.median(third) ** 2 / 20.0
-    enough = np.isfinite(second).sum(axis=0) >= MIN_MARKER_SAMPLES // 3
-    change_var = masked_median(second) ** 2
+    noise_var = (MAD_TO_SIGMA * np.median(third)) ** 2 / 20.0
+    enough = np.isfinite(second).sum(axis=0) >= MIN_MARKER_SAMPLES
+    change_var = (MAD_TO_SIGMA * masked_median(second)) ** 2
     dominated: np.ndarray = enough & (change_var < 2 * 6 * noise_var)
     return dominated
 
