@@ -102,9 +102,11 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    written = with_absent(result, absent)
     if carried is not None:  # the summary counts the leftover points the output holds
-        result, written = carried.without_their_samples(result), carried.written(written, is_copy(output, source))
+        result = carried.without_their_samples(result)
+    written = with_absent(result, absent)
+    if carried is not None and not is_copy(output, source):
+        written = carried.appended_to(written)
     if recording is not None and model is None:  # a relabel's columns as the input's (a model's: the model's)
         written = in_order(written, recording.names)
     write_labeled(output, written, source, start or 0)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from service.io.formats.conventions import without_samples
 from service.io.recording import LabeledTrajectories, Recording, is_unlabeled
 from service.labeling.absent_markers import with_absent
 
@@ -46,17 +47,9 @@ class CarriedMarkers:
     def without_their_samples(self, result: LabeledTrajectories) -> LabeledTrajectories:
         """``result`` whose leftover channels no longer hold these markers' samples (a channel
         left empty is dropped)."""
-        leftover = result.unlabeled
-        if not self.names or not leftover.size:
-            return result
-        gap = np.linalg.norm(leftover[:, :, None] - self.positions[:, None], axis=3)  # (frames, U, K)
-        again = (np.nan_to_num(gap, nan=np.inf) < SAME_SAMPLE_MM).any(axis=2)
-        leftover = np.where(again[..., None], np.nan, leftover)
-        return replace(result, unlabeled=leftover[:, np.isfinite(leftover).all(axis=2).any(axis=0)])
+        return replace(result, unlabeled=without_samples(result.unlabeled, self.positions, SAME_SAMPLE_MM))
 
-    def written(self, result: LabeledTrajectories, copy: bool) -> LabeledTrajectories:
-        """What output of ``result`` holds: without these markers' samples among the leftover
-        channels, and, unless the output is a ``copy`` of the input C3D (which keeps them
-        itself), with these markers as further columns, occluded where missing."""
-        result = self.without_their_samples(result)
-        return result if copy else with_absent(result, self.names, self.positions)
+    def appended_to(self, result: LabeledTrajectories) -> LabeledTrajectories:
+        """``result`` with these markers as further columns, occluded where missing: for an
+        output that is not a copy of the input C3D (which keeps them itself)."""
+        return with_absent(result, self.names, self.positions)

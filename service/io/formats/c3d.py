@@ -25,6 +25,7 @@ from service.io.formats.conventions import (
     require_file,
     require_samples,
     to_millimetres,
+    without_samples,
     zero_gaps_to_nan,
 )
 from service.io.formats.replace_file import replacing
@@ -154,19 +155,14 @@ def _placed(unlabeled: np.ndarray, unit: str, start: int, frames: int) -> np.nda
 
 
 def _not_kept(placed: np.ndarray, c3d: ezc3d.c3d, names: list[str]) -> np.ndarray:
-    """``placed`` ``(3, U, frames)`` without the samples a kept input point holds in that frame,
-    and without channels left empty: a copy keeps the points ``names`` does not label (a marker
-    a subject model lacks), whose samples, free in the capture, came out again as ``*N``."""
+    """``placed`` ``(3, U, frames)`` without the samples a kept input point holds in that frame
+    (``without_samples``): a copy keeps the points ``names`` does not label (a marker a subject
+    model lacks), whose samples, free in the capture, came out again as ``*N``."""
     labels = point_labels(c3d)
     kept = [i for i, label in enumerate(labels) if label not in names and not is_unlabeled(label)]
-    if not kept or not placed.shape[1]:
-        return placed
-    points = c3d["data"]["points"][:3, kept]  # (3, K, frames), the file's unit
     valid = c3d["data"]["meta_points"]["residuals"][0, kept] >= 0  # (K, frames)
-    gap = np.linalg.norm(placed[:, :, None] - points[:, None], axis=0)  # (U, K, frames)
-    again: np.ndarray = np.asarray((np.where(valid[None], gap, np.inf) < SAME_SAMPLE).any(axis=1))  # (U, frames)
-    placed = np.where(again[None], np.nan, placed)
-    return placed[:, np.isfinite(placed).all(axis=0).any(axis=1)]
+    samples = np.where(valid[None], c3d["data"]["points"][:3, kept], np.nan)  # (3, K, frames), the file's unit
+    return without_samples(placed.T, samples.T, SAME_SAMPLE).T
 
 
 def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:

@@ -142,3 +142,15 @@ def sample_cells(xyz: np.ndarray, hidden: np.ndarray) -> list[str]:
     for sample, gone in zip(xyz, hidden, strict=True):
         cells += [""] * 3 if gone else [repr(float(v)) for v in sample]
     return cells
+
+
+def without_samples(unlabeled: np.ndarray, samples: np.ndarray, tolerance: float) -> np.ndarray:
+    """``unlabeled`` ``(frames, U, 3)`` without each sample within ``tolerance`` of one of
+    ``samples`` ``(frames, K, 3)`` (NaN where absent) in its frame, and without the channels
+    that leaves empty: a sample an output holds under a name is not written again as ``*N``."""
+    if not unlabeled.size or not samples.shape[1]:
+        return unlabeled
+    gap = np.linalg.norm(unlabeled[:, :, None] - samples[:, None], axis=3)  # (frames, U, K)
+    again = (np.nan_to_num(gap, nan=np.inf) < tolerance).any(axis=2)
+    unlabeled = np.where(again[..., None], np.nan, unlabeled)
+    return unlabeled[:, np.isfinite(unlabeled).all(axis=2).any(axis=0)]
