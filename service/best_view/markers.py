@@ -3,7 +3,8 @@
 Each marker is an object of Jiang's best-view DP (``formulations.best_view``). Its view
 quality in camera b (``marker_quality``) is the projected size f_b / z_b, times its
 visibility in camera b, times the viewing-angle factor (1 + cos theta_b) / 2; positions
-are the labeled ones, or the fill where a marker was occluded.
+are the labeled ones, or the fill where a marker was occluded; where it has neither, no
+camera is chosen (-1).
 
 Visibility: 1 where camera b detected the marker (the detection it took there,
 ``CaptureLabeling.views``), else the occlusion-aware P_D of eq. 8 of Ringer & Lasenby
@@ -77,6 +78,7 @@ class MarkerViewChoice:
         visibility = np.where(seeing[:, None, :], visibility, 0.0)
         quality = marker_quality(positions, visibility, self.cameras)
         chosen = select_views(relative_costs(quality), self.switch_cost, self.window)
+        chosen[~np.isfinite(positions).all(axis=2)] = -1  # no position: no view of it to choose
         return replace(labels, best_view=chosen, view_names=[camera.name for camera in self.cameras])
 
     def _visibility(self, measured: np.ndarray, positions: np.ndarray, detected: np.ndarray) -> np.ndarray:

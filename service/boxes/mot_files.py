@@ -39,33 +39,64 @@ class SequenceInfo:
     frame_rate: float | None
     image_dir: str | None
     image_ext: str
+    source: Path
 
 
-def read_rows(path: Path, empty_ok: bool = False) -> np.ndarray:
-    """``(K, columns)`` floats of a MOTChallenge file; one-line ``InputError`` when it is not one.
+@dataclass(frozen=True)
+class MotTable:
+    """A MOTChallenge file's boxes and, per row, its line in the file (blank lines count)."""
 
-    ``empty_ok``: an empty file is ``(0, MAX_COLUMNS)`` (a tracker that reported no one),
-    not an error."""
+    path: Path
+    rows: np.ndarray
+    lines: np.ndarray
+
+    def at(self, row: int) -> str:
+        """``"PATH: line N"`` of row ``row``, for an error that names it."""
+        return f"{self.path}: line {int(self.lines[row])}"
+
+
+def read_table(path: Path, empty_ok: bool = False) -> MotTable:
+    """A MOTChallenge file as a ``MotTable``; one-line ``InputError`` when it is not one.
+
+    ``empty_ok``: an empty file is ``(0, MAX_COLUMNS)`` rows (a tracker that reported no
+    one), not an error."""
     try:
         text = path.read_text()
     except OSError as error:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a text file") from None
-    lines = [line for line in text.splitlines() if line.strip()]
-    if not lines and empty_ok:
-        return np.empty((0, MAX_COLUMNS))
-    if not lines:
+    numbered = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip()]
+    if not numbered and empty_ok:
+        return MotTable(path, np.empty((0, MAX_COLUMNS)), np.empty(0, int))
+    if not numbered:
         raise InputError(f"{path}: no boxes in the file")
-    widths = {len(line.split(",")) for line in lines}
-    if len(widths) > 1 or not MIN_COLUMNS <= min(widths) <= MAX_COLUMNS:
-        bad = next(i for i, line in enumerate(lines, 1) if not MIN_COLUMNS <= len(line.split(",")) <= MAX_COLUMNS
-                   or len(line.split(",")) != len(lines[0].split(",")))
-        raise InputError(f"{path}: line {bad} has {len(lines[bad - 1].split(','))} columns; a MOTChallenge file has "
+    _check_columns(path, numbered)
+    table = MotTable(path, np.array([_numbers(path, n, line) for n, line in numbered]),
+                     np.array([n for n, _ in numbered]))
+    _check(table)
+    return table
+
+
+def read_rows(path: Path, empty_ok: bool = False) -> np.ndarray:
+    """``(K, columns)`` floats of a MOTChallenge file (``read_table`` without line numbers)."""
+    return read_table(path, empty_ok).rows
+
+
+def _check_columns(path: Path, numbered: list[tuple[int, str]]) -> None:
+    first = len(numbered[0][1].split(","))
+    for number, line in numbered:
+        width = len(line.split(","))
+        if MIN_COLUMNS <= width <= MAX_COLUMNS and width == first:
+            continue
+        if width == 1 and len(line.split()) >= MIN_COLUMNS:
+            raise InputError(f"{path}: line {number} is separated by spaces or tabs; a MOTChallenge file has "
+                             "comma-separated values (frame, id, left, top, width, height, conf, ...)")
+        if MIN_COLUMNS <= width <= MAX_COLUMNS:
+            raise InputError(f"{path}: line {number} has {width} columns and line {numbered[0][0]} {first}; "
+                             "every line of a MOTChallenge file has the same number")
+        raise InputError(f"{path}: line {number} has {width} columns; a MOTChallenge file has "
                          f"{MIN_COLUMNS} to {MAX_COLUMNS} (frame, id, left, top, width, height, conf, ...) on every line")
-    rows = np.array([_numbers(path, number, line) for number, line in enumerate(lines, 1)])
-    _check(path, rows)
-    return rows
 
 
 def _numbers(path: Path, number: int, line: str) -> list[float]:
@@ -75,18 +106,19 @@ def _numbers(path: Path, number: int, line: str) -> list[float]:
         raise InputError(f"{path}: line {number}: not a number ({error})") from None
 
 
-def _check(path: Path, rows: np.ndarray) -> None:
+def _check(table: MotTable) -> None:
+    rows = table.rows
     bad = ~np.isfinite(rows[:, :7]).all(axis=1) | (np.abs(rows[:, 2:6]) > MAX_PIXELS).any(axis=1)
     if bad.any():
-        raise InputError(f"{path}: line {int(np.argmax(bad)) + 1}: frame, id, box and confidence must be finite "
+        raise InputError(f"{table.at(int(np.argmax(bad)))}: frame, id, box and confidence must be finite "
                          f"numbers, the box within {MAX_PIXELS:g} pixels")
     frames = rows[:, 0]
     bad = (frames < 1) | (frames > MAX_FRAMES) | (frames != np.round(frames))
     if bad.any():
-        line = int(np.argmax(bad))
-        raise InputError(f"{path}: line {line + 1}: frame {frames[line]:g}; frames are whole numbers from 1 to {MAX_FRAMES}")
+        row = int(np.argmax(bad))
+        raise InputError(f"{table.at(row)}: frame {frames[row]:g}; frames are whole numbers from 1 to {MAX_FRAMES}")
     if (rows[:, 4:6] <= 0).any():
-        raise InputError(f"{path}: line {int(np.argmax((rows[:, 4:6] <= 0).any(axis=1))) + 1}: width and height must be > 0")
+        raise InputError(f"{table.at(int(np.argmax((rows[:, 4:6] <= 0).any(axis=1))))}: width and height must be > 0")
 
 
 def read_detections(path: Path, info: SequenceInfo | None = None) -> BoxDetections:
@@ -94,35 +126,37 @@ def read_detections(path: Path, info: SequenceInfo | None = None) -> BoxDetectio
     rows = read_rows(path)
     last = int(rows[:, 0].max())
     if info is not None and last > info.length:
-        raise InputError(f"{path}: frame {last} is past the sequence's {info.length} frames (seqinfo.ini)")
+        raise InputError(f"{path}: frame {last} is past the sequence's {info.length} frames ({info.source})")
     return BoxDetections(
         frame=rows[:, 0].astype(int), box=rows[:, 2:6].copy(), confidence=rows[:, 6].copy(),
         n_frames=info.length if info is not None else last, image_size=info.image_size if info is not None else None,
     )
 
 
-def dense_ids(path: Path, rows: np.ndarray) -> np.ndarray:
-    """``rows`` with ids renumbered 1, 2, ... in the order of the file's ids, so that any whole
-    id works (TrackEval sizes arrays by the largest id). Scores do not depend on the numbers.
+def dense_ids(table: MotTable) -> np.ndarray:
+    """The table's rows with ids renumbered 1, 2, ... in the order of the file's ids, so that
+    any whole id works (TrackEval sizes arrays by the largest id). Scores do not depend on
+    the numbers.
 
     Raises:
         InputError: An id that is not a whole number within float precision, naming its line.
     """
-    ids = rows[:, 1]
+    ids = table.rows[:, 1]
     bad = (ids != np.round(ids)) | (np.abs(ids) > 2.0**53)  # past 2^53, floats merge distinct ids
     if bad.any():
-        line = int(np.argmax(bad))
-        raise InputError(f"{path}: line {line + 1}: id {ids[line]:g} is not a whole number (of at most 2^53)")
-    dense = rows.copy()
+        row = int(np.argmax(bad))
+        raise InputError(f"{table.at(row)}: id {ids[row]:g} is not a whole number (of at most 2^53)")
+    dense = table.rows.copy()
     dense[:, 1] = np.unique(ids, return_inverse=True)[1] + 1
     return dense
 
 
 def write_tracks(path: Path, tracks: BoxTracks) -> None:
-    """Write a MOTChallenge result file, sorted by frame then id."""
+    """Write a MOTChallenge result file, sorted by frame then id; 10 significant digits keep
+    an input box as it was (pixels or normalised coordinates alike)."""
     order = np.lexsort((tracks.track_id, tracks.frame))
     lines = [
-        f"{f},{i},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{c:.4g},-1,-1,-1"
+        f"{f},{i},{b[0]:.10g},{b[1]:.10g},{b[2]:.10g},{b[3]:.10g},{c:.10g},-1,-1,-1"
         for f, i, b, c in zip(tracks.frame[order], tracks.track_id[order], tracks.box[order], tracks.confidence[order])
     ]
     try:
@@ -140,7 +174,10 @@ def read_seqinfo(path: Path) -> SequenceInfo:
         section = parser["Sequence"]
         length = int(section["seqLength"])
         size = None
-        if "imWidth" in section and "imHeight" in section:
+        if ("imWidth" in section) != ("imHeight" in section):
+            given, lacking = ("imWidth", "imHeight") if "imWidth" in section else ("imHeight", "imWidth")
+            raise InputError(f"{path}: {given} without {lacking}; give both (the image size, pixels) or neither")
+        if "imWidth" in section:
             size = (_positive(section, "imWidth", path), _positive(section, "imHeight", path))
         rate = _positive(section, "frameRate", path) if "frameRate" in section else None
     except (KeyError, ValueError, configparser.Error) as error:
@@ -150,7 +187,7 @@ def read_seqinfo(path: Path) -> SequenceInfo:
     if not 1 <= length <= MAX_FRAMES:
         raise InputError(f"{path}: seqLength {length} is invalid: a sequence has 1 to {MAX_FRAMES} frames")
     return SequenceInfo(section.get("name", path.parent.name), length, size, rate,
-                        section.get("imDir"), section.get("imExt", ".jpg"))
+                        section.get("imDir"), section.get("imExt", ".jpg"), path)
 
 
 def _positive(section: configparser.SectionProxy, key: str, path: Path) -> float:

@@ -8,7 +8,9 @@ numpy 2 as is (no ``np.float``/``np.int`` left in it).
 
 A ground truth with classes (MOT16/17/20: a class column of 1..13) is scored as MOT17,
 which drops the non-pedestrian ground truth and the results matched to distractors; one
-without (MOT15, e.g. TUD-Campus, class -1) as MOT15, without that step.
+without (MOT15, e.g. TUD-Campus, class -1) as MOT15, without that step
+(``mot_checks.benchmark``). A result's columns past the confidence (world x, y, z) are not
+passed on: TrackEval would read the 8th as a class.
 """
 
 from __future__ import annotations
@@ -19,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from service.boxes.mot_files import dense_ids, read_rows, read_seqinfo
+from service.boxes.mot_checks import benchmark, check_unique_ids, matched_share
+from service.boxes.mot_files import MotTable, dense_ids, read_seqinfo, read_table
 from service.errors import InputError
 
 SEQUENCE, TRACKER = "sequence", "tracker"
@@ -37,6 +40,8 @@ class MotScores:
         id_switches: CLEAR identity switches.
         gt_ids, result_ids: Distinct identities scored on each side.
         frames: Frames scored.
+        matched: Share of the result's boxes on a ground-truth box of their frame (IoU >= 0.5),
+            whatever the ids: near 0 when the two are not of one sequence.
     """
 
     hota: float
@@ -48,6 +53,7 @@ class MotScores:
     gt_ids: int
     result_ids: int
     frames: int
+    matched: float
 
     def as_dict(self) -> dict[str, float | int]:
         return asdict(self)
@@ -59,21 +65,24 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
     from trackeval.metrics import CLEAR, HOTA, Identity
     from trackeval.utils import TrackEvalException
 
-    truth, rows = read_rows(gt), read_rows(result, empty_ok=True)
+    truth_table, result_table = read_table(gt), read_table(result, empty_ok=True)
+    for table in (truth_table, result_table):
+        check_unique_ids(table)
+    truth, rows = truth_table.rows, result_table.rows
     length = _length(gt, seqinfo, truth, rows)
-    classes = truth.shape[1] >= 8 and bool(np.isin(truth[:, 7], np.arange(1, 14)).all())
+    chosen = benchmark(truth_table)
     with tempfile.TemporaryDirectory(prefix="markerflow-mot-") as folder:
         root = Path(folder)
         (root / "gt" / SEQUENCE / "gt").mkdir(parents=True)
         (root / "trackers" / TRACKER / "data").mkdir(parents=True)
         # %.17g writes every float64 back exactly.
-        np.savetxt(root / "gt" / SEQUENCE / "gt" / "gt.txt", dense_ids(gt, truth), fmt="%.17g", delimiter=",")
-        np.savetxt(root / "trackers" / TRACKER / "data" / f"{SEQUENCE}.txt", dense_ids(result, rows), fmt="%.17g",
+        np.savetxt(root / "gt" / SEQUENCE / "gt" / "gt.txt", _as_gt(truth_table), fmt="%.17g", delimiter=",")
+        np.savetxt(root / "trackers" / TRACKER / "data" / f"{SEQUENCE}.txt", dense_ids(result_table)[:, :7], fmt="%.17g",
                    delimiter=",")
         config = {
             "GT_FOLDER": str(root / "gt"), "TRACKERS_FOLDER": str(root / "trackers"), "SKIP_SPLIT_FOL": True,
             # Frames after the last box add nothing to any score: TrackEval need not step through them.
-            "SEQ_INFO": {SEQUENCE: _last_frame(truth, rows)}, "BENCHMARK": "MOT17" if classes else "MOT15",
+            "SEQ_INFO": {SEQUENCE: _last_frame(truth, rows)}, "BENCHMARK": chosen,
             "TRACKERS_TO_EVAL": [TRACKER], "PRINT_CONFIG": False,
         }
         try:
@@ -92,7 +101,17 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
         hota=float(np.mean(hota["HOTA"])), deta=float(np.mean(hota["DetA"])), assa=float(np.mean(hota["AssA"])),
         mota=float(clear["MOTA"]), idf1=float(identity["IDF1"]), id_switches=int(clear["IDSW"]),
         gt_ids=int(data["num_gt_ids"]), result_ids=int(data["num_tracker_ids"]), frames=length,
+        matched=matched_share(rows, truth),
     )
+
+
+def _as_gt(truth: MotTable) -> np.ndarray:
+    """The ground truth as TrackEval reads it: a 7-column one (no class) gets a class column
+    of 1 (pedestrian), which MOT15 scoring does not read but TrackEval requires."""
+    dense = dense_ids(truth)
+    if dense.shape[1] > 7:
+        return dense
+    return np.column_stack([dense, np.ones(len(dense))])
 
 
 def _length(gt: Path, seqinfo: Path | None, truth: np.ndarray, rows: np.ndarray) -> int:
@@ -103,7 +122,8 @@ def _length(gt: Path, seqinfo: Path | None, truth: np.ndarray, rows: np.ndarray)
     length = read_seqinfo(source).length
     last = _last_frame(truth, rows)
     if last > length:
-        raise InputError(f"frame {last} is past the sequence's {length} frames ({source})")
+        side = "the ground truth" if truth[:, 0].max() >= last else "the result"
+        raise InputError(f"frame {last} of {side} is past the sequence's {length} frames ({source})")
     return length
 
 

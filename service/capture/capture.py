@@ -115,6 +115,9 @@ class Capture:
         self.unnamed_markers = checked_count(self.unnamed_markers, "unnamed_markers")
         if self.points is not None:
             self.points = checked_frames(self.points, 3, "points")
+        elif self.unnamed_markers:
+            raise InputError(f"unnamed_markers={self.unnamed_markers}: unnamed tracks are followed in 3D points only; "
+                             "in camera mode every marker the detections show must be named in the first frame")
         else:
             self._check_cameras()
 

@@ -197,7 +197,8 @@ class CaptureDocument(BaseModel):
             [np.asarray(per_camera[c][f], dtype=float).reshape(-1, 2) for c in range(len(cameras))]
             for f in range(self.n_frames)
         ]
-        return Capture(list(self.markers or []), first_frame, self.rate, cameras=cameras, detections=detections)
+        return Capture(list(self.markers or []), first_frame, self.rate, cameras=cameras, detections=detections,
+                       unnamed_markers=self.unnamed_markers)
 
     @classmethod
     def of(cls, capture: Capture, options: LabelingOptions = LabelingOptions()) -> CaptureDocument:

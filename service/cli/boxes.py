@@ -6,7 +6,8 @@ import json
 from pathlib import Path
 
 from formulations.boxes.lifecycle import Lifecycle
-from service.boxes.frames import box_histograms
+from service.boxes.frames import box_histograms, frame_size
+from service.boxes.image_checks import normalised_warning, outside_image_warning
 from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks
 from service.boxes.track import track_boxes
 from service.capture.formulation_spec import formulation_from_spec
@@ -71,5 +72,10 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
         print(json.dumps(summary))
     else:
         out.print(" ".join(f"{key}={value}" for key, value in summary.items()), highlight=False)
+    warn(normalised_warning(boxes))
+    if boxes.image_size is not None and info is not None:
+        warn(outside_image_warning(boxes, boxes.image_size, str(info.source)))
+    elif images is not None:
+        warn(outside_image_warning(boxes, frame_size(boxes, images, None), f"the frames in {images}"))
     warn(long_window_warning(window, len(boxes.frame), len(run.tracks.frame)))
     warn(no_track_warning(len(boxes.frame), len(run.tracks.frame)))

@@ -7,20 +7,25 @@ from pathlib import Path
 
 from rich.table import Table
 
+from service.boxes.mot_checks import few_matched_warning
 from service.boxes.scores import mot_scores
-from service.cli.report import out
+from service.cli.report import out, warn
 
 LABELS = {"hota": "HOTA", "deta": "DetA", "assa": "AssA", "mota": "MOTA", "idf1": "IDF1",
-          "id_switches": "ID switches", "gt_ids": "ground-truth ids", "result_ids": "result ids", "frames": "frames"}
+          "id_switches": "ID switches", "gt_ids": "ground-truth ids", "result_ids": "result ids", "frames": "frames",
+          "matched": "result boxes on a ground-truth box"}
 
 
 def run_mot_eval(result: Path, gt: Path, seqinfo: Path | None, as_json: bool) -> None:
     """Score ``result`` against ``gt`` and print the figures (one JSON line with ``as_json``)."""
-    scores = mot_scores(result, gt, seqinfo).as_dict()
+    found = mot_scores(result, gt, seqinfo)
+    scores, warning = found.as_dict(), few_matched_warning(found.matched, result, gt)
     if as_json:
         print(json.dumps(scores))
+        warn(warning)
         return
     table = Table(title=f"{result.name} against {gt}", show_header=False)
     for key, value in scores.items():
         table.add_row(LABELS[key], f"{value:.3f}" if isinstance(value, float) else str(value))
     out.print(table)
+    warn(warning)

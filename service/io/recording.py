@@ -158,8 +158,8 @@ class LabeledTrajectories:
         filled: ``(frames, markers, 3)`` where a marker is occluded, its predicted position
             (from the rigid motion of its neighbours), NaN elsewhere. Empty when unknown.
         best_view: Camera mode: ``(frames, markers)`` index into ``view_names`` of the
-            camera that shows each marker best (``service.best_view.markers``). Empty
-            without cameras.
+            camera that shows each marker best (``service.best_view.markers``), -1 where
+            the marker has no position (neither measured nor filled). Empty without cameras.
         view_names: The cameras ``best_view`` indexes; empty without cameras.
         confidence: ``(frames, markers)`` probability that each label is right (1 in the
             given first frame, NaN where no window labeled the frame). Empty when unknown.
@@ -178,6 +178,14 @@ class LabeledTrajectories:
     view_names: list[str] = field(default_factory=list)
     confidence: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     unlabeled: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+
+    def best_view_names(self) -> list[list[str | None]] | None:
+        """``best_view`` as camera names, None where no camera was chosen; None without cameras."""
+        if not self.view_names:
+            return None
+        cameras = np.array([*self.view_names, None], dtype=object)  # index -1: none chosen
+        names: list[list[str | None]] = cameras[self.best_view].tolist()
+        return names
 
     @property
     def n_frames(self) -> int:

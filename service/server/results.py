@@ -68,14 +68,15 @@ def nullable(values: np.ndarray) -> list[Any]:
 def trajectories_json(traj: LabeledTrajectories) -> dict:
     """``positions`` ``[frame][marker] = [x, y, z]`` mm or null where occluded; ``filled`` the
     predicted position where occluded, null elsewhere; ``best_view`` ``[frame][marker]`` the
-    name of the camera that shows the marker best (camera mode), null for 3D points;
+    name of the camera that shows the marker best (camera mode; null where the marker has no
+    position), null for 3D points;
     ``confidence`` ``[frame][marker]`` the probability that the label is right
     (``service.labeling.confidence``, calibrated: ``formulations.confidence.calibration``),
     null where no window said."""
     return {
         "markers": list(traj.names), "rate": traj.rate, "positions": nullable(traj.positions),
         "occluded": traj.occluded.tolist(), "filled": nullable(traj.filled) if traj.filled.size else None,
-        "best_view": np.array(traj.view_names, dtype=object)[traj.best_view].tolist() if traj.view_names else None,
+        "best_view": traj.best_view_names(),
         "confidence": nullable(traj.confidence) if traj.confidence.size else None,
     }
 

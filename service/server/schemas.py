@@ -99,8 +99,9 @@ class LabeledResult(BaseModel):
     positions: list[list[Position]] = Field(description="[frame][marker] = [x, y, z] mm; null where occluded.")
     occluded: list[list[bool]]
     filled: list[list[Position]] | None = Field(description="Predicted position where occluded, null elsewhere.")
-    best_view: list[list[str]] | None = Field(
-        default=None, description="[frame][marker] = the camera that shows the marker best (camera mode); null for 3D points.",
+    best_view: list[list[str | None]] | None = Field(
+        default=None, description=("[frame][marker] = the camera that shows the marker best (camera mode), null where the "
+                                   "marker has no position; null for 3D points."),
     )
     confidence: list[list[float | None]] | None = Field(
         default=None, description=("[frame][marker] = probability that the label is right (calibrated against how often "

@@ -92,10 +92,7 @@ def labels_of(traj: LabeledTrajectories) -> Labels:
         doubtful, source = reported_doubtful(traj.confidence, occluded), f"confidence below {REPORTED_DOUBTFUL_BELOW:.3g}"
     else:
         doubtful, source = np.zeros_like(occluded), "this result carries no per-label confidence"
-    best_view = None
-    if traj.view_names and traj.best_view.size:
-        cameras = np.array([*traj.view_names, None], dtype=object)  # index -1: no camera chosen
-        best_view = cameras[traj.best_view].tolist()
+    best_view = traj.best_view_names() if traj.best_view.size else None
     return Labels(list(traj.names), float(traj.rate), traj.positions, occluded, filled, doubtful, source, best_view)
 
 

@@ -28,7 +28,8 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     """Write ``frame,time,<name>_x,<name>_y,<name>_z,...`` in mm; occluded cells empty.
 
     Camera mode adds ``<name>_best_view,...`` after the coordinates: the name of the
-    camera that shows each marker best in that frame (``LabeledTrajectories.best_view``).
+    camera that shows each marker best in that frame (``LabeledTrajectories.best_view``),
+    empty where the marker has no position.
     Labels with confidences end with ``<name>_confidence,...``: the probability that the
     marker's label is right, in every frame (occluded ones too: that it is occluded
     there), empty where no window said.
@@ -46,7 +47,7 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     numbering = source.numbering(start, traj.n_frames, traj.rate)
     hidden = hidden_samples(traj)
     header = ["frame", "time"] + [f"{name}_{axis}" for name in traj.names for axis in _AXES]
-    views = np.array(traj.view_names, dtype=object)[traj.best_view] if traj.view_names else None
+    views = traj.best_view_names()
     header += [f"{name}_best_view" for name in traj.names] if views is not None else []
     confidence = traj.confidence.size > 0
     header += [f"{name}{_CONFIDENCE}" for name in traj.names] if confidence else []
@@ -55,7 +56,7 @@ def write_csv(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
         writer.writerow(header)
         writer.writerows(
             list(numbering[f]) + sample_cells(traj.positions[f], hidden[f])
-            + (list(views[f]) if views is not None else [])
+            + ([v or "" for v in views[f]] if views is not None else [])
             + (_confidence_cells(traj.confidence[f]) if confidence else [])
             for f in range(traj.n_frames)
         )
@@ -108,8 +109,8 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
         labels.confidence = _named_confidence(confidence, names, path)
     if not with_views:
         return labels, source
-    view_names = list(dict.fromkeys(name for row in views for name in row))
-    best_view = np.array([[view_names.index(name) for name in row] for row in views], dtype=int)
+    view_names = list(dict.fromkeys(name for row in views for name in row if name))
+    best_view = np.array([[view_names.index(name) if name else -1 for name in row] for row in views], dtype=int)
     return LabeledTrajectories(names, positions, occluded, labels.rate, best_view=best_view, view_names=view_names,
                                confidence=labels.confidence), source
 
@@ -151,7 +152,7 @@ def _names(header: list[str], path: Path) -> tuple[list[str], bool]:
 
 
 def _view_cells(row: list[str], width: int, n_markers: int, path: Path, line: int) -> list[str]:
-    if len(row) != width + n_markers or not all(row[width:]):
+    if len(row) != width + n_markers:
         raise InputError(f"{path}:{line}: {len(row)} cells, header has {width + n_markers} (a best view in each)")
     return row[width:]
 

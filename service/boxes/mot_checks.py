@@ -1,0 +1,78 @@
+"""Checks of a result and a ground truth before TrackEval scores them.
+
+TrackEval's own errors name a placeholder sequence and the renumbered ids, and some
+inputs it scores without a word although the figures mean nothing; these say what is
+wrong, in which file and on which line:
+
+- which benchmark's rules apply: a ground truth of 9 columns (MOT16/17/20: consider,
+  class, visibility) is scored as MOT17, and then every class must be one of MOTChallenge's
+  1..13 (a stray class used to switch the whole file to MOT15's rules, which count boxes
+  on distractors as false positives);
+- an id given twice in one frame;
+- a result that hardly overlaps the ground truth (another sequence's file, or boxes in
+  other units), which TrackEval scores near 0 as if the tracker were bad.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from formulations.boxes.geometry import corners, iou
+from service.boxes.mot_files import MotTable
+from service.errors import InputError
+
+MOT17_COLUMNS = 9
+CLASSES = np.arange(1, 14)  # pedestrian .. reflection, MOTChallenge's class numbers
+MATCH_IOU = 0.5
+FEW_MATCHED = 0.1  # share of result boxes on a ground-truth box below which the pair is suspect
+
+
+def benchmark(truth: MotTable) -> str:
+    """"MOT17" (classes: distractors are dropped before scoring) or "MOT15" (no classes).
+
+    Raises:
+        InputError: A 9-column ground truth with a class outside 1..13, naming its line.
+    """
+    rows = truth.rows
+    if rows.shape[1] < 8:
+        return "MOT15"
+    valid = np.isin(rows[:, 7], CLASSES)
+    if rows.shape[1] == MOT17_COLUMNS and not valid.all():
+        row = int(np.argmin(valid))
+        raise InputError(f"{truth.at(row)}: class {rows[row, 7]:g}; a 9-column ground truth (MOT16/17/20) has a "
+                         "MOTChallenge class from 1 (pedestrian) to 13 in column 8 on every line")
+    return "MOT17" if valid.all() else "MOT15"
+
+
+def check_unique_ids(table: MotTable) -> None:
+    """Refuse an id that appears twice in one frame, naming both lines."""
+    keys = table.rows[:, :2]
+    order = np.lexsort((keys[:, 1], keys[:, 0]))
+    same = (np.diff(keys[order], axis=0) == 0).all(axis=1)
+    if same.any():
+        first, second = sorted(order[np.argmax(same) + np.array([0, 1])])
+        frame, ident = keys[first]
+        raise InputError(f"{table.at(second)}: id {ident:g} appears twice in frame {frame:g} "
+                         f"(also line {int(table.lines[first])}); an id names one box per frame")
+
+
+def matched_share(result: np.ndarray, truth: np.ndarray) -> float:
+    """Share of the result's boxes that overlap a ground-truth box of their frame by IoU >= 0.5."""
+    if not len(result):
+        return 1.0
+    matched = 0
+    for frame in np.unique(result[:, 0]):
+        mine, theirs = result[result[:, 0] == frame, 2:6], truth[truth[:, 0] == frame, 2:6]
+        if len(theirs):
+            matched += int((iou(corners(mine), corners(theirs)) >= MATCH_IOU).any(axis=1).sum())
+    return matched / len(result)
+
+
+def few_matched_warning(share: float, result: Path, truth: Path) -> str | None:
+    """A line when hardly any result box lies on a ground-truth box."""
+    if share >= FEW_MATCHED:
+        return None
+    return (f"warning: only {share:.0%} of the boxes of {result} overlap a box of {truth} in their frame "
+            f"(IoU >= {MATCH_IOU}); are they the same sequence, in the same pixels?")

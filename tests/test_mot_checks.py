@@ -1,0 +1,87 @@
+"""mot-eval: the benchmark's rules, repeated ids, extra columns and a result of another
+sequence are said in one line naming the file and line, not scored silently or passed on as
+TrackEval's words (a placeholder sequence and renumbered ids)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import motmetrics
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from service.boxes.scores import mot_scores
+from service.cli.app import app
+from service.errors import InputError
+
+runner = CliRunner()
+TUD = Path(motmetrics.__file__).parent / "data" / "TUD-Campus"
+
+
+def _lines(path: Path) -> list[str]:
+    return path.read_text().splitlines()
+
+
+def _write(path: Path, lines: list[str]) -> Path:
+    path.write_text("".join(line + "\n" for line in lines))
+    return path
+
+
+def _as_mot17(tmp_path: Path, first_class: str = "1") -> Path:
+    """TUD-Campus's gt in MOT17's 9 columns (consider, class, visibility), the first line's class given."""
+    rows = [line.split(",")[:7] + ["1", "1"] for line in _lines(TUD / "gt.txt")]
+    rows[0][7] = first_class
+    return _write(tmp_path / "gt17.txt", [",".join(row) for row in rows])
+
+
+def test_a_stray_class_in_a_mot17_ground_truth_is_named_not_scored_by_mot15_rules(tmp_path: Path) -> None:
+    result = TUD / "test.txt"
+    assert mot_scores(result, _as_mot17(tmp_path)).hota > 0.3  # MOT17 rules apply to a clean file
+    with pytest.raises(InputError, match=r"gt17.txt: line 1: class 0; a 9-column ground truth"):
+        mot_scores(result, _as_mot17(tmp_path, "0"))
+
+
+def test_an_id_twice_in_one_frame_names_both_lines(tmp_path: Path) -> None:
+    lines = _lines(TUD / "test.txt")
+    frame, ident = lines[0].split(",")[:2]
+    twin = ",".join([frame, ident] + lines[1].split(",")[2:])
+    result = _write(tmp_path / "r.txt", [lines[0], "", twin] + lines[2:])
+    with pytest.raises(InputError, match=rf"r.txt: line 3: id {ident} appears twice in frame {frame} \(also line 1\)"):
+        mot_scores(result, TUD / "gt.txt")
+
+
+def test_a_seven_column_ground_truth_is_scored(tmp_path: Path) -> None:
+    gt = _write(tmp_path / "gt7.txt", [",".join(line.split(",")[:7]) for line in _lines(TUD / "gt.txt")])
+    assert mot_scores(TUD / "test.txt", gt).as_dict() == mot_scores(TUD / "test.txt", TUD / "gt.txt").as_dict()
+
+
+def test_a_results_world_coordinates_are_not_read_as_a_class(tmp_path: Path) -> None:
+    """MOT15 results may carry world x, y, z; TrackEval read x as a class (> 1: 'non pedestrian')."""
+    rows = [line.split(",")[:7] + ["3.5", "2.0", "0"] for line in _lines(TUD / "test.txt")]
+    result = _write(tmp_path / "r.txt", [",".join(row) for row in rows])
+    assert mot_scores(result, TUD / "gt.txt").as_dict() == mot_scores(TUD / "test.txt", TUD / "gt.txt").as_dict()
+
+
+def test_a_result_of_another_place_is_scored_with_a_warning(tmp_path: Path) -> None:
+    rows = np.loadtxt(TUD / "test.txt", delimiter=",")
+    rows[:, 2] += 2000.0  # every box elsewhere in the image
+    moved = tmp_path / "moved.txt"
+    np.savetxt(moved, rows, fmt="%.6g", delimiter=",")
+    assert mot_scores(moved, TUD / "gt.txt").matched == 0.0
+    assert mot_scores(TUD / "test.txt", TUD / "gt.txt").matched > 0.8
+    run = runner.invoke(app, ["mot-eval", str(moved), str(TUD / "gt.txt"), "--json"])
+    assert run.exit_code == 0 and "warning: only 0% of the boxes" in run.stderr
+
+
+def test_blank_lines_count_in_the_line_named(tmp_path: Path) -> None:
+    lines = _lines(TUD / "test.txt")
+    result = _write(tmp_path / "r.txt", lines[:2] + ["", "", lines[2].replace(",", ",x", 1)] + lines[3:])
+    with pytest.raises(InputError, match=r"r.txt: line 5: not a number"):
+        mot_scores(result, TUD / "gt.txt")
+
+
+def test_a_space_separated_file_is_told_so(tmp_path: Path) -> None:
+    result = _write(tmp_path / "r.txt", [line.replace(",", " ") for line in _lines(TUD / "test.txt")])
+    with pytest.raises(InputError, match="separated by spaces or tabs"):
+        mot_scores(result, TUD / "gt.txt")
