@@ -165,3 +165,23 @@ def test_the_leftover_count_is_of_what_the_c3d_copy_holds(tmp_path: Path) -> Non
     stars = [i for i, label in enumerate(labels) if label.startswith("*")]
     held = int((written["data"]["meta_points"]["residuals"][0, stars, FIT:] >= 0).sum())
     assert summary["unlabeled_points"] == held
+
+
+def test_a_model_marker_never_takes_a_carried_markers_point(tmp_path: Path) -> None:
+    """EXTRA rides 6 mm from S1M1 while S1M1 is unseen for 40 frames: EXTRA keeps the input's
+    name, so a model marker on its point wrote one point under two names."""
+    names, positions, _ = chain(7, frames=FRAMES)
+    subject, source, out = tmp_path / "subject.json", tmp_path / "take.c3d", tmp_path / "out.csv"
+    subject.write_text(fit_subject(names, positions[:FIT]).model.to_json())
+    near = names.index("S1M1")
+    extra = positions[:, near : near + 1] + np.array([0.0, 6.0, 0.0])
+    taken = np.concatenate([positions, extra], axis=1)
+    taken[FIT + 5 : FIT + 45, near] = np.nan
+    _input_c3d(source, [*names, "EXTRA"], taken / 1000)
+    result = CliRunner().invoke(app, ["-q", "track", str(source), "--model", str(subject), "--start", str(FIT),
+                                      "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    written = read_labeled(out)
+    model_markers = written.positions[:, : len(names)]
+    on_extra = np.linalg.norm(model_markers - taken[FIT:, None, -1], axis=2) < 1e-3
+    assert not on_extra.any(), f"model markers on EXTRA's point in {int(on_extra.sum())} marker-frames"

@@ -90,6 +90,7 @@ def run_track(
         source, not_kept = _kept(source, capture.names, output)
         if recording is not None:
             carried = CarriedMarkers.of(recording, capture.names, start or 0, capture.n_frames)
+            capture = carried.out_of(capture)
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:

@@ -5,10 +5,12 @@ other points untouched (``write_c3d``); a TRC or CSV table, or a new C3D (the in
 model marker), would drop them: they are appended here as their own columns, the input's
 samples under the input's names, so the output still holds everything the input did.
 
-Their samples were points of the capture like any other: the ones no model marker took
-also came out as leftover ``*N`` trajectories. ``without_their_samples`` takes those out, for
-every output (the C3D copy included), so a sample is written once and the summary's count
-of leftover points is of points that are nowhere else in the output.
+Their samples are taken out of the capture before labeling (``out_of``): they keep the
+input's names, so a model marker that took one wrote one point under two names (BTS from
+frame 337 with a model of its first 337 frames: SCR2 on "r bar 2"'s point in 170 frames).
+Whatever of them still comes out as a leftover ``*N`` trajectory, ``without_their_samples``
+takes out, for every output (the C3D copy included), so a sample is written once and the
+summary's count of leftover points is of points that are nowhere else in the output.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from service.capture.capture import Capture
 from service.io.formats.conventions import without_samples
 from service.io.recording import LabeledTrajectories, Recording, is_unlabeled
 from service.labeling.absent_markers import with_absent
@@ -44,6 +47,13 @@ class CarriedMarkers:
         columns = [i for i, name in enumerate(recording.names) if name not in named and not is_unlabeled(name)]
         return cls([recording.names[i] for i in columns], recording.positions[start : start + frames, columns])
 
+    def out_of(self, capture: Capture) -> Capture:
+        """``capture`` (3D points, frames of this span) without these markers' samples, one
+        point per sample: an exact copy of a sample under another name stays."""
+        if capture.points is None or not self.names:
+            return capture
+        return replace(capture, points=[_without(frame, self.positions[f]) for f, frame in enumerate(capture.points)])
+
     def without_their_samples(self, result: LabeledTrajectories) -> LabeledTrajectories:
         """``result`` whose leftover channels no longer hold these markers' samples (a channel
         left empty is dropped)."""
@@ -53,3 +63,17 @@ class CarriedMarkers:
         """``result`` with these markers as further columns, occluded where missing: for an
         output that is not a copy of the input C3D (which keeps them itself)."""
         return with_absent(result, self.names, self.positions)
+
+
+def _without(points: np.ndarray, samples: np.ndarray) -> np.ndarray:
+    """``points`` less the one nearest each finite sample, where it is that sample."""
+    samples = samples[np.isfinite(samples).all(axis=1)]
+    if not len(samples) or not len(points):
+        return points
+    apart = np.linalg.norm(points[:, None] - samples[None], axis=2)
+    gone = set()
+    for s in range(len(samples)):
+        order = [p for p in np.argsort(apart[:, s]) if p not in gone]
+        if order and apart[order[0], s] <= SAME_SAMPLE_MM:
+            gone.add(int(order[0]))
+    return np.delete(points, sorted(gone), axis=0)
