@@ -49,6 +49,16 @@ def test_a_good_model_loads(tmp_path):
     (lambda d: d["joints"][0].__setitem__("rms", float("nan")), "joint 'AB': rms must be"),
     (lambda d: d["segments"][0].pop("spread"), r"a segment lacks 'spread' \(it holds name, markers, coordinates"),
     (lambda d: d["segments"][1]["markers"].__setitem__(0, "A0"), "marker 'A0' is on two segments"),
+    # these were accepted, then an IndexError in the labeler, minutes per frame, or a skeleton no body has:
+    (lambda d: d["segments"][0]["coordinates"][1].__setitem__(0, 1e300), "segment 'A': coordinates must be within"),
+    (lambda d: d["segments"][0]["spread"].__setitem__(0, 1000.0), "segment 'A': spread must be within 100 mm"),
+    (lambda d: d["joints"][0].__setitem__("segments", ["A", "A"]), "joint 'AB' joins segment 'A' to itself"),
+    (lambda d: d["joints"].append({**d["joints"][0], "name": "BA"}), "joint 'BA' closes a loop"),
+    (lambda d: d["limbs"][0].__setitem__("joints", ["AB", "nosuch"]), "joint 'nosuch' is not in the model"),
+    (lambda d: d["limbs"][0].__setitem__("length", -5.0), "limb of segment 'A': length must be >= 0"),
+    (lambda d: d["joints"][0].__setitem__("rest", [[2.0, 0, 0], [0, 1, 0], [0, 0, 1]]), "rest is not a rotation"),
+    (lambda d: d.__setitem__("marker_radius", "7"), "marker_radius must be a number"),
+    (lambda d: d.__setitem__("colour", "red"), "unknown field 'colour'"),
 ])
 def test_bad_numbers_are_named(tmp_path, edit, match):
     data = _model()

@@ -148,3 +148,13 @@ def test_a_subject_model_without_keypoint_names_is_one_line_for_keypoint_input(t
     (tmp_path / "subject.json").write_text("{}")
     result = run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", "--model", tmp_path / "subject.json")
     one_line_error(result, "subject.json", "version")
+
+
+@pytest.mark.parametrize(("option", "value", "said"), [
+    ("--seed", "-1", "--seed must be >= 0"),  # was numpy's ValueError as a traceback
+    ("--particles", "100000000", "2 to 100,000 particles"),  # was a MemoryError of 24.6 GiB
+    ("--rate", "inf", "--rate must be a finite number > 0"),  # was a TRC with DataRate inf, every time 0
+])
+def test_out_of_range_options_are_one_line(tmp_path, option: str, value: str, said: str) -> None:
+    take = write_take(tmp_path / "take")
+    one_line_error(run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", option, value), said)

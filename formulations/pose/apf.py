@@ -27,6 +27,10 @@ import numpy as np
 from formulations.errors import FormulationError
 from formulations.pose.rotation import Array
 
+# Deutscher et al. ran a few hundred particles; each holds a configuration and its projections in
+# every camera, so 10^8 asked for 25 GiB before the first frame (a MemoryError, not a message).
+MAX_PARTICLES = 100_000
+MAX_LAYERS = 1_000  # time grows with them: a thousand layers per frame is already hours per take
 Energy = Callable[[Array], Array]  # (N, D) configurations -> (N,) energies E >= 0, w = exp(-E)
 Clip = Callable[[Array], Array]  # (N, D) -> (N, D) onto the joint limits
 
@@ -41,8 +45,9 @@ class AnnealingSchedule:
     final_spread: float = 0.1
 
     def __post_init__(self) -> None:
-        if self.particles < 2 or self.layers < 1:
-            raise FormulationError(f"apf: needs at least 2 particles and 1 layer, got {self.particles} and {self.layers}")
+        if not (2 <= self.particles <= MAX_PARTICLES and 1 <= self.layers <= MAX_LAYERS):
+            raise FormulationError(f"apf: needs 2 to {MAX_PARTICLES:,} particles and 1 to {MAX_LAYERS} layers, "
+                                   f"got {self.particles} and {self.layers}")
         if not 0.0 < self.survival < 1.0 or not 0.0 < self.final_spread <= 1.0:
             raise FormulationError("apf: survival rate must be in (0, 1) and final_spread in (0, 1]")
 

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from formulations.errors import FormulationError
+from formulations.subject.model_checks import check_model
 
 VERSION = 1
 MARKER_RADIUS_MM = 7.0  # a 14 mm marker, the common size on the body
@@ -82,6 +83,12 @@ class SubjectModel:
         if not isinstance(data, dict) or data.get("version") != VERSION:
             found = data.get("version") if isinstance(data, dict) else None
             raise FormulationError(f"subject model version {found!r} is not supported (expected {VERSION})")
+        unknown = sorted(set(data) - {"version", "marker_radius", *MODEL_KEYS})
+        if unknown:
+            raise FormulationError(f"subject model has an unknown field {unknown[0]!r} "
+                                   f"(a model holds version, {', '.join(MODEL_KEYS)}, marker_radius)")
+        if not isinstance(data.get("marker_radius", 0.0), int | float) or isinstance(data.get("marker_radius"), bool):
+            raise FormulationError(f"subject model's marker_radius must be a number (mm), got {data['marker_radius']!r}")
         missing = [key for key in MODEL_KEYS if key not in data]
         if missing:
             raise FormulationError(f"subject model is malformed: it has no {', '.join(repr(k) for k in missing)} "
@@ -134,6 +141,7 @@ def _decode(data: dict[str, Any]) -> SubjectModel:
                              if unknown else "segments, distances and sd differ in length"))
         _finite(single.distances, f"single marker {single.marker!r}: distances")
         _non_negative(single.sd, f"single marker {single.marker!r}: sd")
+    check_model(model)
     return model
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -40,8 +41,10 @@ def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | No
     if output.suffix.lower() != ".trc":
         raise InputError(f"{output}: the pose is written as .trc")
     check_writable_output(output, input)
-    if not rate > 0:
-        raise InputError(f"--rate must be positive, got {rate}")
+    if not (math.isfinite(rate) and rate > 0):
+        raise InputError(f"--rate must be a finite number > 0 (frames per second), got {rate}")
+    if seed < 0:
+        raise InputError(f"--seed must be >= 0, got {seed}")
     try:
         schedule = AnnealingSchedule(particles, layers)
     except FormulationError as error:
