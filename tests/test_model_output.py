@@ -185,3 +185,18 @@ def test_a_model_marker_never_takes_a_carried_markers_point(tmp_path: Path) -> N
     model_markers = written.positions[:, : len(names)]
     on_extra = np.linalg.norm(model_markers - taken[FIT:, None, -1], axis=2) < 1e-3
     assert not on_extra.any(), f"model markers on EXTRA's point in {int(on_extra.sum())} marker-frames"
+
+
+def test_a_model_of_another_subject_is_named_as_a_cause_of_doubt(tmp_path: Path) -> None:
+    """Same marker names, other placements: the labels are mostly doubtful, and the line says
+    the model may be someone else's; the subject's own model gives no such line."""
+    printed = {}
+    for fitted in (8, 9):
+        names, positions, _ = chain(fitted, frames=FRAMES)
+        take_names, take, _ = chain(8, frames=FRAMES)
+        assert names == take_names
+        source = tmp_path / "take.c3d"
+        _input_c3d(source, names, take / 1000)
+        printed[fitted] = _track(tmp_path, source, fit_subject(names, positions[:FIT]).model.to_json(), 0)[1]
+    assert "that the model is of this subject" not in printed[8]
+    assert "that the model is of this subject and marker set" in printed[9]

@@ -22,6 +22,10 @@ from service.labeling.shape_doubt import shape_break_warning
 from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
 from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning, spacing_frame
 
+# Named from a model alone, a take is mostly doubtful when the model is of someone else: CMU
+# 85_02's subject's model on 135_02 gave 40 % doubtful labels, 77 % of them wrong (its own: 0 %).
+MODEL_ADVICE = "check them, and that the model is of this subject and marker set"
+
 
 def early_scale_warning(capture: Capture, unit: str) -> str | None:
     """The marker spacing's line, before labeling: of the labeled first frame, or of frame 0's
@@ -45,8 +49,9 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
     ``spacing_judged``: the marker spacing was judged before labeling (``early_scale_warning``),
     so only the speed is."""
     fraction = doubtful_fraction(result.confidence, result.occluded) if result.confidence.size else None
+    identified = capture.model is not None and not np.isfinite(np.asarray(capture.first_frame, dtype=float)).any()
     lines = [
-        doubtful_warning(fraction),
+        doubtful_warning(fraction, MODEL_ADVICE if identified else "check them"),
         shape_break_warning(breaks, result.names, start),
         fast_motion_warning(fast_markers(result.names, result.positions)),
         scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit,
