@@ -145,7 +145,8 @@ def refuse_sub_millimetre(frame: np.ndarray) -> None:
     apart = marker_spacing_mm(frame)
     if apart is not None and apart < SPACING_MM[0]:
         raise InputError(f"markers {apart:.3g} mm from their nearest neighbour in the first frame: optical markers are "
-                         "millimetres wide, so the take's length unit is wrong (a file in metres read as mm?)")
+                         "millimetres wide, so the take's length unit is wrong (a file in metres read as mm? "
+                         'A capture JSON gives its unit in "units")')
 
 
 def take_scale_warning(take: Recording) -> str | None:
