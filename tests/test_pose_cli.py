@@ -158,3 +158,20 @@ def test_a_subject_model_without_keypoint_names_is_one_line_for_keypoint_input(t
 def test_out_of_range_options_are_one_line(tmp_path, option: str, value: str, said: str) -> None:
     take = write_take(tmp_path / "take")
     one_line_error(run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", option, value), said)
+
+
+def test_a_subject_model_naming_few_keypoints_is_warned_of(tmp_path) -> None:
+    """A model naming one keypoint was fitted to it alone and reported a small error."""
+    from test_pose_markers import leg
+
+    take = write_take(tmp_path / "take")
+    data = json.loads(leg().to_json())
+    old = data["joints"][0]["name"]
+    data["joints"][0]["name"] = "RKnee"
+    for limb in data["limbs"]:
+        limb["joints"] = ["RKnee" if name == old else name for name in limb["joints"]]
+    (tmp_path / "subject.json").write_text(json.dumps(data))
+    result = run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", "--model", tmp_path / "subject.json",
+                        "--particles", "20", "--layers", "2")
+    assert result.returncode == 0, result.stderr
+    assert "warning: the model names 1 of the 21 keypoints detected (RKnee)" in result.stderr
