@@ -199,3 +199,20 @@ def test_cli_static_take_is_one_line_error(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert "static.trc: too static to separate segments" in result.output
     assert not (tmp_path / "s.json").exists()
+
+
+def test_cli_learns_from_the_frames_between_start_and_end(tmp_path: Path) -> None:
+    """``model --start/--end`` is the model of that stretch written as a take of its own."""
+    names, positions, _ = chain(3)
+    whole, stretch = tmp_path / "whole.trc", tmp_path / "stretch.trc"
+    write_labeled(whole, LabeledTrajectories(names, positions, np.zeros(positions.shape[:2], bool), 100.0))
+    write_labeled(stretch, LabeledTrajectories(names, positions[60:260], np.zeros((200, len(names)), bool), 100.0))
+    spans = {"span": ["--start", "60", "--end", "260"], "all": [], "cropped": []}
+    for key, span in spans.items():
+        source = stretch if key == "cropped" else whole
+        result = CliRunner().invoke(app, ["-q", "model", str(source), "--out", str(tmp_path / f"{key}.json"), *span])
+        assert result.exit_code == 0, result.output
+    read = {key: json.loads((tmp_path / f"{key}.json").read_text()) for key in spans}
+    assert read["span"] == read["cropped"] != read["all"]
+    refused = CliRunner().invoke(app, ["model", str(whole), "--out", str(tmp_path / "x.json"), "--start", "400"])
+    assert refused.exit_code == 2 and "whole.trc: --start 400" in refused.output

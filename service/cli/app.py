@@ -119,11 +119,13 @@ def model(
         help="Marker-set template: a name in configs/markersets (cmu-41, plug-in-gait, gait2354, rajagopal) or a .toml; "
         "then a static take is enough.",
     )] = None,
+    start: Annotated[int, typer.Option(help="First frame of each take to learn from, counted from 0.")] = 0,
+    end: Annotated[int | None, typer.Option(help="Learn from frames before this one (default: to the end).")] = None,
 ) -> None:
     """Learn a subject: which markers share a rigid segment, the joints, the limb lengths."""
     from service.cli.model import run_model
 
-    _guard(lambda: run_model(inputs, out, centres, markerset))
+    _guard(lambda: run_model(inputs, out, centres, markerset, start, end))
 
 
 @app.command()

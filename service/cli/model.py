@@ -13,6 +13,7 @@ from formulations.subject.grouping import Grouping
 from formulations.subject.template import fit_template
 from service.capture.markerset import load_template
 from service.capture.model_input import MIN_SHARED
+from service.capture.span import frame_span
 from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out, warn
 from service.errors import InputError
@@ -21,11 +22,13 @@ from service.io.recording import LabeledTrajectories, Recording
 from service.labeling.take_warnings import take_scale_warning
 
 
-def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset: str | None = None) -> None:
+def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset: str | None = None,
+              start: int = 0, end: int | None = None) -> None:
     """Fit a subject model to ``inputs``, print it, write it as JSON and optionally the joint centres as TRC.
 
     With ``markerset`` (a template name or file) the segments and joint centres come from the
-    template and the takes (a static trial is enough) give the marker coordinates.
+    template and the takes (a static trial is enough) give the marker coordinates. Only frames
+    ``start .. end - 1`` of each take are read (counted from 0, as ``track --start/--end``).
     """
     if output.suffix.lower() != ".json":  # a model is JSON: another suffix would mislead every reader
         raise InputError(f"{output}: a subject model is written as JSON; name it .json")
@@ -34,7 +37,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         check_writable_output(centres, *inputs)
     if markerset is not None and centres is not None:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
-    takes = [read_labeled(path).without_unlabeled() for path in inputs]  # *N: no marker
+    takes = [_span(read_labeled(path).without_unlabeled(), path, start, end) for path in inputs]  # *N: no marker
     _check_one_marker_set(takes, inputs)
     for path, take in zip(inputs, takes):  # a wrong unit reads as "too static" or "cannot group" below
         line = take_scale_warning(take)
@@ -57,6 +60,17 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
 
         write_labeled(centres, _centre_trajectories(fit, rate))
     out.print(f"-> {output}" + (f", joint centres -> {centres}" if centres else ""), highlight=False)
+
+
+def _span(take: Recording, path: Path, start: int, end: int | None) -> Recording:
+    """Frames ``start .. end - 1`` of ``take`` (``frame_span``'s checks, naming the file)."""
+    if start == 0 and end is None:
+        return take
+    try:
+        stop = frame_span(start, end, take.n_frames)
+    except InputError as error:
+        raise InputError(f"{path.name}: {error}") from None
+    return Recording(take.names, take.positions[start:stop], take.rate)
 
 
 def _check_one_marker_set(takes: list[Recording], paths: list[Path]) -> None:
