@@ -16,7 +16,7 @@ from formulations.subject.fit import fit_subject
 from formulations.subject.model import SubjectModel
 from service.cli.app import app
 from service.io.formats import read_labeled, write_labeled
-from service.io.recording import LabeledTrajectories
+from service.io.recording import LabeledTrajectories, SourceFile
 
 CMU_85_02 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 LIMB = 400.0  # mm between the joints of a synthetic segment
@@ -216,3 +216,16 @@ def test_cli_learns_from_the_frames_between_start_and_end(tmp_path: Path) -> Non
     assert read["span"] == read["cropped"] != read["all"]
     refused = CliRunner().invoke(app, ["model", str(whole), "--out", str(tmp_path / "x.json"), "--start", "400"])
     assert refused.exit_code == 2 and "whole.trc: --start 400" in refused.output
+
+
+def test_cli_writes_joint_centres_in_the_takes_unit(tmp_path: Path) -> None:
+    """A take in metres gets its centres in metres, as ``track`` keeps a take's unit (they were mm)."""
+    names, positions, centres = chain(3)
+    take, out = tmp_path / "take.trc", tmp_path / "centres.trc"
+    write_labeled(take, LabeledTrajectories(names, positions, np.zeros(positions.shape[:2], bool), 100.0),
+                  SourceFile(unit="m"))
+    result = CliRunner().invoke(app, ["-q", "model", str(take), "--out", str(tmp_path / "m.json"), "--centres", str(out)])
+    assert result.exit_code == 0, result.output
+    assert out.read_text().splitlines()[2].split("\t")[4] == "m"
+    written = read_labeled(out)  # read back in mm
+    assert np.nanmedian(np.abs(written.positions)) > 100.0  # mm, not metres read as mm

@@ -18,7 +18,7 @@ from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out, warn
 from service.errors import InputError
 from service.io.formats import read_labeled
-from service.io.recording import LabeledTrajectories, Recording
+from service.io.recording import LabeledTrajectories, Recording, SourceFile
 from service.labeling.take_warnings import take_scale_warning
 
 
@@ -37,7 +37,9 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         check_writable_output(centres, *inputs)
     if markerset is not None and centres is not None:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
-    takes = [_span(read_labeled(path).without_unlabeled(), path, start, end) for path in inputs]  # *N: no marker
+    read = [read_labeled(path) for path in inputs]
+    unit = read[0].source.unit if read[0].source else "mm"  # the centres are written in the first take's unit
+    takes = [_span(take.without_unlabeled(), path, start, end) for take, path in zip(read, inputs)]  # *N: no marker
     _check_one_marker_set(takes, inputs)
     for path, take in zip(inputs, takes):  # a wrong unit reads as "too static" or "cannot group" below
         line = take_scale_warning(take)
@@ -58,7 +60,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     if centres is not None:
         from service.io.formats import write_labeled
 
-        write_labeled(centres, _centre_trajectories(fit, rate))
+        write_labeled(centres, _centre_trajectories(fit, rate), SourceFile(unit=unit))
     out.print(f"-> {output}" + (f", joint centres -> {centres}" if centres else ""), highlight=False)
 
 
