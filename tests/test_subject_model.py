@@ -229,3 +229,15 @@ def test_cli_writes_joint_centres_in_the_takes_unit(tmp_path: Path) -> None:
     assert out.read_text().splitlines()[2].split("\t")[4] == "m"
     written = read_labeled(out)  # read back in mm
     assert np.nanmedian(np.abs(written.positions)) > 100.0  # mm, not metres read as mm
+
+
+def test_cli_names_the_markers_it_never_saw(tmp_path: Path) -> None:
+    names, positions, _ = chain(3)
+    positions = positions.copy()
+    positions[:, 2] = np.nan  # taken off before the take
+    take = tmp_path / "take.trc"
+    write_labeled(take, LabeledTrajectories(names, positions, np.isnan(positions).any(axis=2), 100.0))
+    result = CliRunner().invoke(app, ["-q", "model", str(take), "--out", str(tmp_path / "m.json")])
+    assert result.exit_code == 0, result.output
+    assert f"1 marker never seen in the frames learned from, not in the model: {names[2]}" in result.output
+    assert names[2] not in (tmp_path / "m.json").read_text()

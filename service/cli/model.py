@@ -53,6 +53,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     except FormulationError as error:
         raise InputError(f"{', '.join(p.name for p in inputs)}: {error}") from None
     _print(fit, len(positions))
+    warn(unseen_warning(names, positions))
     try:
         output.write_text(fit.model.to_json())
     except OSError as error:
@@ -89,6 +90,16 @@ def _check_one_marker_set(takes: list[Recording], paths: list[Path]) -> None:
         if shared < MIN_SHARED * min(len(first), take.n_markers):
             raise InputError(f"{path.name}: shares {shared} of its {take.n_markers} marker names with "
                              f"{paths[0].name}; a model is fitted to takes of one marker set")
+
+
+def unseen_warning(names: list[str], positions: np.ndarray) -> str | None:
+    """A line naming the markers the takes never show: the model cannot place them, so a take
+    labeled from it leaves them unlabeled (they are carried as the input has them)."""
+    unseen = [name for name, seen in zip(names, np.isfinite(positions).all(axis=2).any(axis=0)) if not seen]
+    if not unseen:
+        return None
+    return (f"warning: {len(unseen)} marker{'s' * (len(unseen) > 1)} never seen in the frames learned from, not in "
+            f"the model: {', '.join(unseen[:12])}{' ...' if len(unseen) > 12 else ''}")
 
 
 def _pool(takes: list[Recording]) -> tuple[list[str], np.ndarray, float]:
