@@ -16,9 +16,10 @@ from service.capture.document import read_capture_document
 from service.capture.model_input import check_shared_names, model_names, with_model
 from service.cli.app import app
 from service.errors import InputError
+from service.evaluation.model_start import evaluate_from_model
 from service.evaluation.scenario import Scenario
 from service.io.formats import write_labeled
-from service.io.recording import LabeledTrajectories
+from service.io.recording import LabeledTrajectories, Recording
 from service.labeling.capture_labeling import CaptureLabeling
 
 FIT = 250
@@ -90,6 +91,9 @@ def test_bad_spans_other_marker_sets_and_scenario_keys_are_one_line() -> None:
         check_shared_names(["X", "Y", "Z"], model, "take.trc")
     with pytest.raises(InputError, match="scenario key 'first_frame' must be one of labeled, model"):
         Scenario.from_dict({"first_frame": "guess"})
+    truth = Recording(names, positions[:30], 100.0)
+    with pytest.raises(InputError, match="unnamed_markers = 2 with a subject model"):  # was a ValueError past labeling
+        evaluate_from_model(truth, Scenario.from_dict({"unnamed_markers": 2}), model)
 
 
 def test_cli_tracks_a_labeled_file_from_the_model(tmp_path: Path) -> None:

@@ -13,10 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from formulations.errors import FormulationError
 from formulations.methods.formulation import Formulation
 from formulations.window.solution import WindowSolution
 from service.errors import InputError
 from service.io.window_files import load_window
+from service.labeling.loop import Progress
 
 RECORD = "recorded.json"
 
@@ -35,30 +37,54 @@ class CorpusFigures:
 
 
 def load_corpus(folder: Path) -> dict[str, list[dict]]:
-    """``recorded.json`` of a corpus folder: corpus name -> window records."""
+    """``recorded.json`` of a corpus folder: corpus name -> window records.
+
+    Raises:
+        InputError: No such file, not JSON, or a window record without ``file`` and ``ilp_optimum``.
+    """
     record = folder / RECORD
     if not record.is_file():
         raise InputError(f"{folder}: no integrality corpus here ({RECORD} missing)")
-    return json.loads(record.read_text())
+    try:
+        corpora = json.loads(record.read_text())
+    except (ValueError, UnicodeDecodeError) as error:
+        raise InputError(f"{record}: not JSON ({error})") from None
+    if not isinstance(corpora, dict) or not all(isinstance(v, list) for v in corpora.values()):
+        raise InputError(f"{record}: expected an object of corpus name -> list of window records")
+    for name, records in corpora.items():
+        for k, entry in enumerate(records):
+            if not isinstance(entry, dict) or not {"file", "ilp_optimum"} <= set(entry):
+                raise InputError(f"{record}: {name}[{k}] needs 'file' and 'ilp_optimum'")
+    return corpora
 
 
-def solve_corpus(folder: Path, name: str, formulation: Formulation) -> tuple[list[dict], list[WindowSolution], list[float]]:
+def solve_corpus(folder: Path, name: str, formulation: Formulation,
+                 progress: Progress | None = None) -> tuple[list[dict], list[WindowSolution], list[float]]:
     """Solve every window of one corpus: its records, the solutions, the seconds each took."""
     records = load_corpus(folder)[name]
     solutions, seconds = [], []
-    for record in records:
+    for k, record in enumerate(records):
         problem = load_window(folder / record["file"])
         start = time.perf_counter()
-        solutions.append(formulation.solve(problem))
+        try:
+            solutions.append(formulation.solve(problem))
+        except FormulationError as error:  # e.g. dp-extended's state space past max_states
+            raise InputError(f"{record['file']}: {error}") from None
         seconds.append(time.perf_counter() - start)
+        if progress is not None:
+            progress(k + 1, len(records))
     return records, solutions, seconds
 
 
-def corpus_figures(folder: Path, formulation: Formulation) -> list[CorpusFigures]:
-    """The figures of every corpus in ``folder``."""
+def corpus_figures(folder: Path, formulation: Formulation, progress: Progress | None = None) -> list[CorpusFigures]:
+    """The figures of every corpus in ``folder``; ``progress`` is called per window solved."""
     figures = []
-    for name in sorted(load_corpus(folder)):
-        records, solutions, seconds = solve_corpus(folder, name, formulation)
+    corpora = load_corpus(folder)
+    total, done = sum(len(records) for records in corpora.values()), 0
+    for name in sorted(corpora):
+        step = None if progress is None else (lambda k, _, base=done: progress(base + k, total))
+        records, solutions, seconds = solve_corpus(folder, name, formulation, step)
+        done += len(records)
         gaps = np.array([s.gap for s in solutions])
         optimal = [abs(s.cost - r["ilp_optimum"]) <= 1e-6 * max(1.0, abs(r["ilp_optimum"])) for s, r in zip(solutions, records)]
         figures.append(CorpusFigures(

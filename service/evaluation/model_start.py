@@ -17,6 +17,7 @@ from formulations.methods.formulation import Formulation
 from formulations.subject.model import SubjectModel
 from service.capture.capture import Capture
 from service.capture.model_input import check_shared_names, model_names
+from service.errors import InputError
 from service.evaluation.cloud import Evaluation
 from service.evaluation.scenario import Scenario
 from service.evaluation.scores import label_scores
@@ -30,7 +31,15 @@ def evaluate_from_model(
     truth: Recording, scenario: Scenario, model: SubjectModel, formulation: str | dict | Formulation | None = None,
     progress: Progress | None = None, source: str = "trajectories",
 ) -> Evaluation:
-    """Simulate ``scenario`` on the model's markers of ``truth``, label from ``model``, score."""
+    """Simulate ``scenario`` on the model's markers of ``truth``, label from ``model``, score.
+
+    Raises:
+        InputError: Another marker set, or ``unnamed_markers`` (nothing is labeled to leave
+            markers unnamed from: the model names all it knows).
+    """
+    if scenario.unnamed_markers:
+        raise InputError(f"unnamed_markers = {scenario.unnamed_markers} with a subject model: no frame is labeled, "
+                         "the model names every marker it knows; leave unnamed_markers out")
     check_shared_names(truth.names, model, source)
     names = model_names(model)
     shared = [n for n in truth.names if n in names]
