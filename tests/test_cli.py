@@ -94,6 +94,20 @@ def test_demo_prints_scores_and_writes_c3d_and_plot(tmp_path: Path) -> None:
     assert json.loads(relabeled.stdout)["noise_mm"] == pytest.approx(1.0, rel=0.1)
 
 
+@pytest.mark.parametrize(("option", "value", "said"), [
+    ("--seed", "-1", "--seed must be >= 0"),  # was numpy's ValueError as a traceback
+    ("--frames", "1", "--frames must be at least 2"),  # was a message about scenario keys and eval
+])
+def test_demo_refuses_bad_options_in_one_line(tmp_path: Path, option: str, value: str, said: str) -> None:
+    from typer.testing import CliRunner
+
+    from service.cli.app import app
+
+    result = CliRunner().invoke(app, ["demo", "--out", str(tmp_path / "d"), option, value])
+    assert result.exit_code == 2 and f"error: {said}" in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "d" / "demo_labeled.c3d").exists()
+
+
 def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
     result = run_cli("eval", CMU, "--scenario", write_scenario(tmp_path / "s.toml", 240), "--json")
     assert result.returncode == 0, result.stderr

@@ -24,8 +24,12 @@ DEMO_SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghos
 
 def run_demo(folder: Path, frames: int, seed: int) -> None:
     """Generate a walking figure, simulate a noisy capture, label it, report."""
-    truth = generate_scene(n_frames=frames, seed=seed)
+    if frames < 2:  # a template and one frame to label
+        raise InputError(f"--frames must be at least 2, got {frames}")
+    if seed < 0:
+        raise InputError(f"--seed must be >= 0, got {seed}")
     _make_folder(folder)
+    truth = generate_scene(n_frames=frames, seed=seed)
     scenario = Scenario(**{**DEMO_SCENARIO.__dict__, "seed": seed})
     out.print(
         f"Generated scene: {truth.n_markers} markers, {truth.n_frames} frames at {truth.rate:g} Hz; "
