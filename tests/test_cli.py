@@ -18,7 +18,8 @@ DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 SUMMARY_KEYS = {
-    "label_accuracy", "swaps", "ghost_precision", "ghost_recall", "integral_window_fraction",
+    "label_accuracy", "marker_frames", "correct", "missed", "swaps", "ghost_precision", "ghost_recall",
+    "integral_window_fraction",
     "gap_median", "gap_max", "seconds_per_frame", "frames", "markers", "formulation", "doubtful_fraction",
     "doubtful_share", "doubtful_recall", "filled_rmse_mm",
 }  # fmt: skip
@@ -108,6 +109,16 @@ def test_demo_refuses_bad_options_in_one_line(tmp_path: Path, option: str, value
     assert not (tmp_path / "d" / "demo_labeled.c3d").exists()
 
 
+def test_eval_of_nothing_scored_has_no_accuracy(tmp_path: Path) -> None:
+    """Every sample deleted: the accuracy was 1.0, as a perfect run's."""
+    scenario = write_scenario(tmp_path / "s.toml", 5, "window = 5\ndrop_rate = 0.9999\ndrop_burst_frames = 10000\n"
+                              "ghosts_per_frame = 0\n")
+    result = run_cli("-q", "eval", CMU, "--scenario", scenario, "--json")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads(result.stdout)
+    assert summary["marker_frames"] == 0 and summary["label_accuracy"] is None
+
+
 def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
     result = run_cli("eval", CMU, "--scenario", write_scenario(tmp_path / "s.toml", 240), "--json")
     assert result.returncode == 0, result.stderr
@@ -117,6 +128,7 @@ def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
     assert set(summary) == SUMMARY_KEYS
     assert (summary["frames"], summary["markers"], summary["formulation"]) == (240, 41, "lp-l1")
     assert summary["label_accuracy"] > 0.99
+    assert summary["correct"] / summary["marker_frames"] == summary["label_accuracy"]
     # Deleted samples come back filled from rigid donors, within the 15 mm goal of issue 12.
     assert 0 < summary["filled_rmse_mm"] <= 15.0
     assert_figures_agree(summary, 240)

@@ -26,6 +26,9 @@ NO_CERTIFICATE = "none: this formulation proves no bound on any window"  # nn-hu
 
 LABELS = {
     "label_accuracy": ("label accuracy", "{:.4%}"),
+    "marker_frames": ("marker-frames scored", "{}"),
+    "correct": ("labeled right", "{}"),
+    "missed": ("left unlabeled", "{}"),
     "swaps": ("label swaps", "{}"),
     "ghost_precision": ("ghost precision", "{:.3f}"),
     "ghost_recall": ("ghost recall", "{:.3f}"),

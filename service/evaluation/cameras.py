@@ -39,7 +39,8 @@ class CameraEvaluation:
     def summary(self) -> dict[str, float | int | str | None]:
         """The ``markerflow eval --json`` figures; ghosts are cloud-mode only (None)."""
         return {
-            "label_accuracy": self.scores.label_accuracy, "swaps": self.scores.swaps,
+            "label_accuracy": self.scores.label_accuracy if self.scores.marker_frames else None,
+            "marker_frames": self.scores.marker_frames, "swaps": self.scores.swaps,
             "ghost_precision": None, "ghost_recall": None,
             **certificate_figures(self.windows),
             "seconds_per_frame": self.seconds / max(self.frames - 1, 1), "frames": self.frames,

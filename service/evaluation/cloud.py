@@ -33,12 +33,15 @@ class Evaluation:
     def summary(self) -> dict[str, float | int | str | None]:
         """The stable figures ``markerflow eval --json`` prints.
 
-        Gaps are None where a formulation proves no bound (heuristics): JSON has no inf.
+        Gaps are None where a formulation proves no bound (heuristics): JSON has no inf;
+        ``label_accuracy`` is None where no marker-frame was scored (every sample deleted).
         ``doubtful_share`` and ``doubtful_recall`` are those of ``doubt_scores``.
         """
         frames = self.capture.cloud.n_frames
+        scored = self.scores.marker_frames
         return {
-            "label_accuracy": self.scores.label_accuracy,
+            "label_accuracy": self.scores.label_accuracy if scored else None,  # nothing scored is no 100 %
+            "marker_frames": scored, "correct": self.scores.correct, "missed": self.scores.missed,
             "swaps": self.scores.swaps,
             "ghost_precision": self.scores.ghost_precision,
             "ghost_recall": self.scores.ghost_recall,
