@@ -227,3 +227,16 @@ def test_unnamed_markers_need_the_cloud_and_fewer_than_the_take(rec) -> None:
         Scenario(mode="cameras", calibration="x.toml", unnamed_markers=2)
     with pytest.raises(InputError, match="unnamed_markers"):
         simulate_cloud(rec, Scenario(frames=5, unnamed_markers=rec.n_markers))
+
+
+@pytest.mark.parametrize(("keys", "said"), [
+    ({"pixel_noise": 9000.0}, "'pixel_noise' applies to mode = \"cameras\"; this scenario's mode is \"cloud\""),
+    ({"mode": "cameras", "calibration": "c.toml", "noise_mm": 500.0}, "'noise_mm' applies to mode = \"cloud\""),
+    ({"formulation_parameters": {"time_limit": 1e-4}}, "unknown scenario key 'formulation_parameters'"),
+])
+def test_a_key_the_mode_ignores_is_refused(keys: dict, said: str) -> None:
+    """They were accepted and changed nothing (or, undocumented, changed the formulation)."""
+    with pytest.raises(InputError, match=said):
+        Scenario.from_dict(keys)
+    assert Scenario.from_dict({"formulation": {"name": "lp-l1", "time_limit": 5.0}}).formulation_parameters == {
+        "time_limit": 5.0}

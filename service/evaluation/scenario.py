@@ -13,6 +13,13 @@ from service.io.toml_file import read_toml
 MODES = ("cloud", "cameras")
 FIRST_FRAMES = ("labeled", "model")
 ASSOCIATIONS = ("joint-3d", "per-camera")
+# Keys one mode reads and the other ignores.
+_MODE_KEYS = {
+    "cloud": ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "drop_rate", "drop_burst_frames", "unnamed_markers"),
+    "cameras": ("calibration", "pixel_noise", "merge_radius_px", "clutter_per_camera", "occlusion_rate",
+                "occlusion_burst_frames", "up_axis", "association"),
+}
+_OTHER_MODE = {"cloud": "cameras", "cameras": "cloud"}
 _EXPECTED: dict[object, str] = {
     float: "a number", int: "an integer", str: "a string", dict: "a table", bool: "true or false",
 }
@@ -109,17 +116,20 @@ class Scenario:
             InputError: On an unknown key, or a value of the wrong type or out of range.
         """
         d = dict(d)
+        known = [f.name for f in fields(cls) if f.name != "formulation_parameters"]
+        for key in d:  # formulation_parameters is the [formulation] table's, not a key of its own
+            if key not in known:
+                raise InputError(f"unknown scenario key '{key}' (known keys: {', '.join(known)})")
         if isinstance(d.get("formulation"), dict):
             table = dict(d["formulation"])
             d["formulation"] = table.pop("name", "")
             d["formulation_parameters"] = table
-        known = [f.name for f in fields(cls) if f.name != "formulation_parameters"]
-        for key in d:
-            if key == "formulation_parameters":
-                continue
-            if key not in known:
-                raise InputError(f"unknown scenario key '{key}' (known keys: {', '.join(known)})")
-        return cls(**d)
+        scenario = cls(**d)
+        other = [key for key in d if key in _MODE_KEYS[_OTHER_MODE[scenario.mode]]]
+        if other:  # a value that would change nothing: say so rather than ignore it
+            raise InputError(f"scenario key '{other[0]}' applies to mode = \"{_OTHER_MODE[scenario.mode]}\"; "
+                             f"this scenario's mode is \"{scenario.mode}\"")
+        return scenario
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Scenario":
