@@ -119,6 +119,18 @@ def test_eval_of_nothing_scored_has_no_accuracy(tmp_path: Path) -> None:
     assert summary["marker_frames"] == 0 and summary["label_accuracy"] is None
 
 
+def test_windows_stopped_by_the_time_limit_are_warned_of(tmp_path: Path) -> None:
+    """A time limit too short for the LP left labels 60 % right without a word."""
+    scenario = write_scenario(tmp_path / "s.toml", 40)
+    tight = tmp_path / "tight.toml"
+    tight.write_text('[formulation]\nname = "lp-l1"\ntime_limit = 0.000001\n')
+    stopped = run_cli("-q", "eval", CMU, "--scenario", scenario, "-f", tight, "--json")
+    plain = run_cli("-q", "eval", CMU, "--scenario", scenario, "--json")
+    assert stopped.returncode == plain.returncode == 0
+    assert "windows stopped at the solver's time limit" in stopped.stderr
+    assert "time limit" not in plain.stderr
+
+
 def test_eval_json_is_one_line_of_the_stable_figures(tmp_path: Path) -> None:
     result = run_cli("eval", CMU, "--scenario", write_scenario(tmp_path / "s.toml", 240), "--json")
     assert result.returncode == 0, result.stderr

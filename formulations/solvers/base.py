@@ -30,6 +30,16 @@ class LinearModel:
     integer: np.ndarray | None = None
 
 
+# A solve stopped by its time limit: HiGHS's model status text, Clarabel's solver status. Its
+# answer is the best found in time, not proven; the labeler says how many windows stopped so.
+TIME_LIMIT_STATUSES = ("Time limit reached", "MaxTime")
+
+
+def stopped_by_time(status: str) -> bool:
+    """The status (a formulation may append what it did then) says the time limit stopped the solve."""
+    return status.startswith(TIME_LIMIT_STATUSES)
+
+
 @dataclass
 class SolveResult:
     """What a solve returns.

@@ -15,6 +15,7 @@ from service.evaluation.cloud import Evaluation, evaluate
 from service.evaluation.model_start import evaluate_from_model
 from service.evaluation.scenario import Scenario
 from service.io.formats import read_labeled
+from service.labeling.result_warnings import time_limit_warning
 from service.labeling.stats import doubtful_fraction
 from service.labeling.take_warnings import take_scale_warning
 
@@ -61,3 +62,4 @@ def run_eval(
     else:
         print_summary(summary, f"{trajectories.name} · {scenario_path.name}")
     warn_doubtful(doubtful)
+    warn(time_limit_warning([w.status for w in result.windows]))

@@ -29,7 +29,7 @@ from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
-from service.labeling.result_warnings import early_scale_warning, result_warnings
+from service.labeling.result_warnings import early_scale_warning, result_warnings, time_limit_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.shape_doubt import shape_break_summary
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
@@ -131,6 +131,7 @@ def run_track(
         )
     for line in result_warnings(capture, result, labeling.shape_breaks, unit, start or 0, spacing_judged=True):
         warn(line)
+    warn(time_limit_warning([w.status for w in windows]))
     warn(not_kept)
     warn(absent_warning(absent, start or 0))
     warn(_unknown_warning(unknown, start or 0))
