@@ -61,5 +61,7 @@ def run_eval(
         print(json.dumps(summary, allow_nan=False))
     else:
         print_summary(summary, f"{trajectories.name} · {scenario_path.name}")
-    warn_doubtful(doubtful)
+    # the share the table's "scored frames" row shows (frame 0, the user's, not counted)
+    share = summary.get("doubtful_share")
+    warn_doubtful(share if isinstance(share, float) else doubtful)
     warn(time_limit_warning([w.status for w in result.windows]))
