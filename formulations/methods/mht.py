@@ -68,8 +68,11 @@ class Mht(Formulation):
     Attributes:
         hypotheses: I, hypotheses kept after each frame (the cheapest, merged), 1 to 100 (code: 10^4).
         associations: J, best associations (Murty's k-best) expanding each hypothesis, 1 to 100 (code: 10^4).
-        noise: sigma of the constant-velocity state re-estimated per hypothesis, in
-            location units; None holds the state fixed (the arc costs alone rank).
+        noise: sigma of the constant-velocity prediction's error per hypothesis (sensor
+            noise and the marker's acceleration together), in location units; None holds
+            the state fixed (the arc costs alone rank). Not the sensor's noise: at 1 mm
+            every acceleration of a walk costs more than a miss, and markers are dropped
+            (85_02, 1 mm scenario: 73.3 % right against 99.87 % with None); 5 mm and up do well.
     """
 
     name: ClassVar[str] = "mht"
