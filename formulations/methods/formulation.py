@@ -71,7 +71,7 @@ def check_parameters(
         if value is None and name in optional_positive:
             continue
         if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
-            raise bad(name, value, "a number")
+            raise bad(name, value, "an integer" if name in integers else "a number")
         if name in integers and not isinstance(value, numbers.Integral):
             raise bad(name, value, "an integer")
         if name in non_negative and value < 0:

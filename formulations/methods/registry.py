@@ -74,7 +74,8 @@ def get_formulation(spec: str | Formulation, **parameters: Any) -> Formulation:
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(parameters) - known)
     if unknown:
-        raise FormulationError(f"formulation '{spec}' has no parameter '{unknown[0]}'; known: {', '.join(sorted(known))}")
+        have = f"known: {', '.join(sorted(known))}" if known else "it takes none"
+        raise FormulationError(f"formulation '{spec}' has no parameter '{unknown[0]}'; {have}")
     return cls(**parameters)
 
 

@@ -49,7 +49,7 @@ def resolve_formulation(spec: str | dict[str, Any] | Formulation, where: str = "
 
 def formulation_from_spec(spec: str) -> Formulation:
     """``spec`` is a formulation name, or the path of a TOML file with a ``[formulation]`` table."""
-    if not spec.endswith(".toml"):
+    if not spec.lower().endswith(".toml"):
         return resolve_formulation(spec, "--formulation")
     return formulation_from_table(formulation_table(Path(spec)), spec)
 

@@ -280,4 +280,4 @@ def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[So
 
 def _formulation_table(spec: str) -> str | dict:
     """A name stays a name; a TOML preset becomes its ``[formulation]`` table."""
-    return formulation_table(Path(spec)) if spec.endswith(".toml") else spec
+    return formulation_table(Path(spec)) if spec.lower().endswith(".toml") else spec
