@@ -73,3 +73,10 @@ def test_the_readme_table_lists_exactly_the_registered_formulations():
     section = README.read_text().split("## Formulations", 1)[1].split("\n## ", 1)[0]
     documented = re.findall(r"^\| `([\w-]+)`", section, flags=re.MULTILINE)
     assert sorted(documented) == names()
+
+
+def test_parameter_messages_say_what_is_wanted() -> None:
+    with pytest.raises(FormulationError, match="has no parameter 'foo'; it takes none"):
+        get_formulation("nn-hungarian", foo=1)
+    with pytest.raises(FormulationError, match="'hypotheses' must be an integer, got True"):
+        get_formulation("mht", hypotheses=True)
