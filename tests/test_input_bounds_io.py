@@ -231,6 +231,28 @@ def test_implausible_speed_is_warned_with_the_rate():
     assert line.endswith("check the file's length unit and frame rate")
 
 
+BODY = ["LASI", "RASI", "LKNE", "RKNE", "LANK", "RANK", "LHEE", "RHEE", "C7", "CLAV"]
+
+
+def _body(scale: float) -> np.ndarray:
+    """``(2, 10, 3)`` mm: a standing body's landmarks (pelvis, knees, ankles, heels, neck), times ``scale``."""
+    heights = np.array([950.0, 950, 500, 500, 90, 90, 40, 40, 1450, 1400])
+    sides = np.array([-120.0, 120, -100, 100, -100, 100, -100, 100, 0, 0])
+    frame = np.column_stack([sides, np.zeros(10), heights])
+    return scale * np.stack([frame, frame + [5.0, 0, 0]])
+
+
+def test_a_body_in_cm_read_as_mm_is_warned_of_by_its_landmarks():
+    """Ten times small, a body keeps its markers far enough apart for the spacing rule (CMU
+    85_02 in cm read as mm: 11 mm); its landmark names say it cannot fit in 150 mm."""
+    small = _body(0.1)
+    line = scale_warning(small[0], small, 100.0, "mm", names=BODY)
+    assert line is not None and "10 markers, LASI, RASI, LKNE, RKNE among them, within 141 mm" in line
+    assert scale_warning(_body(1.0)[0], _body(1.0), 100.0, "mm", names=BODY) is None
+    hand = [f"F{k}" for k in range(10)]  # a hand or face set in mm is as small: no landmark names
+    assert scale_warning(small[0], small, 100.0, "mm", names=hand) is None
+
+
 def test_one_marker_and_unlabeled_frames_have_no_scale_to_judge():
     positions = np.full((5, 1, 3), np.nan)
     positions[0] = 1.0

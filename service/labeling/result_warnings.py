@@ -43,7 +43,9 @@ def early_scale_warning(capture: Capture, unit: str) -> str | None:
     """The marker spacing's line, before labeling: of the labeled first frame, or of frame 0's
     points when a subject model is to name them."""
     first = spacing_frame(capture.first_frame, capture.points)
-    return scale_warning(first, first[None], capture.rate, unit)
+    labeled = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
+    named = np.isfinite(labeled).all(axis=1).sum() >= 2  # else ``first`` is frame 0's points, unnamed
+    return scale_warning(first, first[None], capture.rate, unit, names=list(capture.names) if named else None)
 
 
 def doubtful_warning(fraction: float | None, advice: str = "check them") -> str | None:

@@ -17,6 +17,7 @@ another (a copied column, ``coincident``) is not its neighbour.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,11 +88,16 @@ def fast_motion_warning(fast: list[FastMarker]) -> str | None:
 # every take we hold (CMU, HDM05, OpenSim, BTS, Vicon, Qualisys, Pose2Sim) and a body moves
 # at most a few m/s. A file in the wrong unit is off by 10x-1000x and lands far outside.
 SPACING_MM = (1.0, 5000.0)  # median nearest-neighbour distance in the labeled frame
+# A body in cm read as mm is 10x small (CMU 85_02's 41 markers within 160 mm, 11 mm apart),
+# and so are hand and face sets in mm: only the names tell them apart. Five markers named for
+# body landmarks (knee, ankle, heel, ASIS, C7, ...) within 400 mm are a body in another unit.
+BODY_LANDMARKS = re.compile(r"ASI|PSI|KNE|ANK|HEE|TOE|C7|CLAV|STRN|SHO|ELB|WR[AB]|THI|TIB|HIP|SACR|ACR", re.IGNORECASE)
+SMALL_BODY = (5, 400.0)  # landmark markers at least, extent under (mm)
 MAX_SPEED_MM_S = 50_000.0  # median marker speed: a thrown ball's, not a limb's
 
 
 def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, unit: str,
-                  spacing: bool = True) -> str | None:
+                  spacing: bool = True, names: list[str] | None = None) -> str | None:
     """One line when the take does not look human-sized in ``unit``: the median spacing of
     the labeled ``first_frame`` ``(N, 3)`` (with ``spacing``) or the median speed of the
     labeled ``positions`` ``(F, N, 3)`` (mm, NaN unlabeled) outside
@@ -101,12 +107,16 @@ def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, u
 
     A warning, not an error: a surveyed site or a mm-sized model is possible, but a wrong
     unit otherwise labels without complaint (gates sized for mm miss points 1000x apart).
+    ``names`` (of ``first_frame``'s rows) also judge a body too small (``SMALL_BODY``).
     """
     found: list[str] = []
     apart = marker_spacing_mm(first_frame) if spacing else None
     if apart is not None and not SPACING_MM[0] <= apart <= SPACING_MM[1]:
         found.append(f"markers {apart:.3g} mm from their nearest neighbour in the labeled frame "
                      f"(expected {SPACING_MM[0]:g} mm to {SPACING_MM[1] / 1000:g} m)")
+    small = _small_body(first_frame, names) if spacing and names is not None else None
+    if small:
+        found.append(small)
     steps = np.linalg.norm(np.diff(positions, axis=0), axis=2) if len(positions) > 1 else np.zeros(0)
     steps = steps[np.isfinite(steps)]
     speed = float(np.median(steps)) * rate if len(steps) else 0.0
@@ -117,6 +127,20 @@ def scale_warning(first_frame: np.ndarray, positions: np.ndarray, rate: float, u
     rate_too = " and frame rate" if speed > MAX_SPEED_MM_S else ""
     return (f"warning: read in {unit}, the take does not look human-sized: {'; '.join(found)}; "
             f"check the file's length unit{rate_too}")
+
+
+def _small_body(frame: np.ndarray, names: list[str]) -> str | None:
+    """``SMALL_BODY``'s finding: markers named for body landmarks within a small volume."""
+    landmarks = [n for n, row in zip(names, frame) if BODY_LANDMARKS.search(n) and np.isfinite(row).all()]
+    least, extent_under = SMALL_BODY
+    seen = frame[np.isfinite(frame).all(axis=1)]
+    if len(landmarks) < least:
+        return None
+    extent = float((seen.max(axis=0) - seen.min(axis=0)).max())
+    if extent >= extent_under:
+        return None
+    return (f"{len(seen)} markers, {', '.join(landmarks[:4])} among them, within {extent:.0f} mm "
+            "(a body in cm read as mm?)")
 
 
 def marker_spacing_mm(frame: np.ndarray) -> float | None:
@@ -154,7 +178,7 @@ def take_scale_warning(take: Recording) -> str | None:
     of its fullest frame, the speed of its own labels (``eval`` and ``model`` read these)."""
     frame, _ = take.fullest_frame()
     unit = take.source.unit if take.source is not None else "mm"
-    return scale_warning(take.positions[frame], take.positions, take.rate, unit)
+    return scale_warning(take.positions[frame], take.positions, take.rate, unit, names=list(take.names))
 
 
 def _median_or_nan(values: np.ndarray) -> np.ndarray:
