@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from service_fixtures import document_json, generated_capture, serving
 
+from service.capture.capture import LabelingOptions
 from service.evaluation.scene import generate_scene
 from service.io.formats import write_labeled
 from service.io.recording import LabeledTrajectories
@@ -92,3 +93,14 @@ def test_a_labeled_c3d_uploads_through_the_page_as_through_the_api(client, tmp_p
     assert job["source"] == "take.c3d" and job["windows_total"] == len(window_spans(12, 6))
     page = browser.get(answer.headers["location"])
     assert "ilp · window 6" in page.text and "39 markers · 12 frames" in page.text
+
+
+def test_the_forms_parameters_alone_keep_the_documents_formulation(client):
+    """Parameters with the formulation left at the document's ran lp-l1 on a document asking for ilp."""
+    document = document_json(generated_capture(frames=8, seed=1), LabelingOptions(formulation="ilp", window=4))
+    browser = _signed_in(client)
+    answer = browser.post("/jobs", files={"file": ("take.json", document)}, data={"parameters": '{"time_limit": 5}'})
+    assert answer.status_code == 303
+    page = browser.get(answer.headers["location"]).text
+    options = page.split("<dt>Options</dt>")[1].split("</dd>")[0]
+    assert "ilp" in options and "time_limit" in options and "lp-l1" not in options

@@ -65,7 +65,7 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     if not isinstance(document, dict):
         raise InputError(f"file: {name} is not a capture document (a JSON object)")
     if chosen or parameters:
-        document["formulation"] = json.loads(formulation) if formulation.startswith("{") else formulation
+        document["formulation"] = _documents_formulation(document.get("formulation"), chosen, parameters)
     if window:
         document["window"] = _whole(window)
     association = _text(form, "association")
@@ -89,6 +89,16 @@ def _formulation(name: str, parameters: str) -> str:
     if not parameters:
         return name
     return json.dumps({**json_object_field(parameters, "parameters"), "name": name})
+
+
+def _documents_formulation(own: object, chosen: str, parameters: str) -> str | dict:
+    """The formulation of a capture document the form changes: the form's name, else the
+    document's (its own table's parameters kept when the name stays), with the form's
+    parameters over them. Parameters alone once ran lp-l1 on a document that asked for ilp."""
+    table = {"name": own} if isinstance(own, str) else dict(own) if isinstance(own, dict) else {"name": "lp-l1"}
+    if chosen and chosen != table.get("name"):
+        table = {"name": chosen}
+    return {**table, **json_object_field(parameters, "parameters")} if parameters else table
 
 
 def _whole(window: str) -> int:
