@@ -11,12 +11,15 @@ import os
 import signal
 import socket
 import sqlite3
+import subprocess
+import sys
 import time
 
 import httpx
 import numpy as np
 import psutil
 from service_fixtures import (
+    REPO,
     ServerProcess,
     document_json,
     generated_capture,
@@ -122,6 +125,8 @@ def test_sigterm_exits_within_the_grace_period_and_the_job_resumes(tmp_path):
         first.stop()
     print(f"SIGTERM exit: {exit_seconds:.2f} s (grace {grace} s)")
     assert exit_seconds < grace + 2.0
+    # a stop asked for is a clean exit (143 and "no output written" marked every systemd stop failed)
+    assert first.process.returncode == 0 and "interrupted" not in (tmp_path / "first.log").read_text()
     with sqlite3.connect(db_path) as db:
         state, done, total = db.execute("SELECT state, windows_done, windows_total FROM jobs").fetchone()
     assert state == "running" and done < total, "the job is left resumable, mid-way"
@@ -130,6 +135,16 @@ def test_sigterm_exits_within_the_grace_period_and_the_job_resumes(tmp_path):
     expected, _ = CaptureLabeling(capture, MEDIUM).label()
     assert np.array_equal(nan_array(result["positions"]), expected.positions, equal_nan=True)
     assert np.array_equal(np.array(result["occluded"]), expected.occluded)
+
+
+def test_a_port_in_use_is_one_line_before_any_job_is_resumed(tmp_path):
+    """uvicorn starts the app, which resumes the store's jobs, before it binds."""
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = taken.getsockname()[1]
+        run = subprocess.run([sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--db",
+                              str(tmp_path / "jobs.db")], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and run.stderr.startswith(f"error: --port {port}: cannot listen on 127.0.0.1:{port}")
+    assert "resumed" not in run.stderr + run.stdout
 
 
 def _answer_of(port: int, request: bytes, timeout: float) -> tuple[bytes, float]:

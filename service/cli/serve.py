@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+import socket
 from pathlib import Path
 
 from service.errors import InputError
@@ -17,8 +19,34 @@ def run_serve(host: str | None, port: int | None, db: str | None, dask: str | No
     check_store(settings.db)
     if settings.dask:
         check_dask(settings.dask)
+    check_address(settings.host, settings.port)
     # Read timeouts, and a bounded shutdown: neither a stalled client nor a long window holds a restart.
-    service_server(create_app(settings), settings, settings.host, settings.port, "info").run()
+    server = service_server(create_app(settings), settings, settings.host, settings.port, "info")
+    # uvicorn drains on SIGTERM / Ctrl-C, then raises the signal again once it has stopped: by
+    # then the service has stopped as asked, so it ends with 0, not as an interrupted command
+    # that wrote no output (143 marked every systemd stop failed).
+    stopped = {sig: signal.signal(sig, lambda *_: None) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        server.run()
+    finally:
+        for sig, handler in stopped.items():
+            signal.signal(sig, handler)
+
+
+def check_address(host: str, port: int) -> None:
+    """Bind the address once before serving: uvicorn starts the app (which resumes the store's
+    unfinished jobs) before it binds, so a port in use ran job work in a server that never started.
+
+    Raises:
+        InputError: ``--port P: cannot listen on HOST:P (<reason>)``.
+    """
+    if port == 0:  # any free port
+        return
+    try:
+        with socket.create_server((host, port), family=socket.AF_INET6 if ":" in host else socket.AF_INET):
+            pass
+    except OSError as error:
+        raise InputError(f"--port {port}: cannot listen on {host}:{port} ({error.strerror or error})") from None
 
 
 def check_store(url: str) -> None:
