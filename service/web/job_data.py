@@ -52,6 +52,11 @@ class Labels:
     doubt_source: str
     best_view: list[list[str | None]] | None  # [frame][marker] camera, where the result names one
 
+    def doubtful_share(self) -> float | None:
+        """Doubtful labels / labels of these labels (what a done job's warning line counts); None with no label."""
+        seen = int((~self.occluded).sum())
+        return int(self.doubtful.sum()) / seen if seen else None
+
 
 def options_of(document: bytes) -> JobOptions:
     """The options of a stored capture document (JSON, as ``CaptureDocument`` wrote it)."""

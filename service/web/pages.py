@@ -57,7 +57,8 @@ async def job_page(request: Request, job_id: str, markers: Annotated[list[str] |
     labels = await run_in_threadpool(job_labels, db, job)
     context = {"job": job, "active": job.state in ACTIVE, "options": job_options(db, job.id), "windows": windows,
                "summary": certificate_summary(windows) if windows else None, "labels": labels,
-               "doubtful": doubtful_share(windows),
+               # the labels drawn, once there are: the stored windows' counts predate the second pass
+               "doubtful": labels.doubtful_share() if labels is not None else doubtful_share(windows),
                "warnings": await run_in_threadpool(job_warnings, request, job)}
     if labels is not None:
         chosen = chosen_markers(labels, markers or [])
