@@ -122,3 +122,20 @@ def test_a_done_jobs_page_counts_doubt_on_the_labels_it_draws(client):
     assert wait_for(api, f"{job_id}")["state"] == "done"
     page = browser.get(answer.headers["location"]).text
     assert f"{100 * expected:.1f} % of labels doubtful" in page
+
+
+def test_the_list_pages_through_older_jobs(tmp_path, monkeypatch):
+    """The list stopped at its newest 100 jobs, with no way to the older ones."""
+    from service.web import listing
+
+    monkeypatch.setattr(listing, "LISTED_JOBS", 2)
+    document = document_json(generated_capture(frames=6, seed=1), LabelingOptions(window=3))
+    with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")) as local:
+        ids = [local.post("/v1/jobs", content=document, headers={"content-type": "application/json"}).json()["id"]
+               for _ in range(5)]
+        newest, oldest = local.get("/").text, local.get("/?older=4").text
+        assert local.get("/?older=-1").status_code == 422
+    assert newest.count("<tr data-job=") == 2 and ids[-1] in newest and 'href="/?older=2"' in newest
+    assert "Jobs 1-2 of 5" in newest and "Newer jobs" not in newest
+    assert oldest.count("<tr data-job=") == 1 and ids[0] in oldest and 'href="/?older=2"' in oldest
+    assert "Older jobs" not in oldest

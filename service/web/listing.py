@@ -18,13 +18,18 @@ LISTED_JOBS = 100
 
 async def jobs_list(
     request: Request, owner: str, error: str | None = None, status: int = 200, chosen: dict[str, str] | None = None,
+    older: int = 0,
 ) -> Response:
     """The page; ``error`` is an upload's refusal, shown above the form, whose fields keep
-    what the user ``chosen`` (formulation, parameters, window, association)."""
+    what the user ``chosen`` (formulation, parameters, window, association). ``older`` skips
+    that many of the newest jobs: the list shows ``LISTED_JOBS`` at a time, with links on."""
     store, db = request.app.state.store, request.app.state.settings.db
-    jobs, total = await run_in_threadpool(store.page, owner, LISTED_JOBS, 0)
+    jobs, total = await run_in_threadpool(store.page, owner, LISTED_JOBS, older)
     rows = [await run_in_threadpool(_row, store, db, job) for job in jobs]
-    return page(request, "jobs.html", status, rows=rows, total=total, formulations=[d.name for d in describe()],
+    pages = {"first": older + 1, "last": older + len(rows), "newer": max(older - LISTED_JOBS, 0) if older else None,
+             "older": older + LISTED_JOBS if older + LISTED_JOBS < total else None}
+    return page(request, "jobs.html", status, rows=rows, total=total, pages=pages,
+                formulations=[d.name for d in describe()],
                 associations=ASSOCIATIONS, model_option=MODEL_OPTION, error=error,
                 chosen={key: "" for key in CHOSEN} | (chosen or {}))
 

@@ -36,11 +36,11 @@ def mount_web(app: FastAPI) -> None:
 
 
 @router.get("/")
-async def jobs_page(request: Request) -> Response:
+async def jobs_page(request: Request, older: Annotated[int, Query(ge=0)] = 0) -> Response:
     owner = signed_in(request)
     if owner is None:
         return page(request, "sign_in.html", 401)
-    return await jobs_list(request, owner)
+    return await jobs_list(request, owner, older=older)
 
 
 @router.get("/jobs/{job_id}")
