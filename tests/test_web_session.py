@@ -139,3 +139,27 @@ def test_the_list_pages_through_older_jobs(tmp_path, monkeypatch):
     assert "Jobs 1-2 of 5" in newest and "Newer jobs" not in newest
     assert oldest.count("<tr data-job=") == 1 and ids[0] in oldest and 'href="/?older=2"' in oldest
     assert "Older jobs" not in oldest
+
+
+def test_a_finished_job_is_removed_with_all_it_stored(tmp_path):
+    """The store only grew: DELETE answered 409 for a finished job and nothing else removed one."""
+    import sqlite3
+
+    db = tmp_path / "jobs.db"
+    document = document_json(generated_capture(frames=6, seed=1), LabelingOptions(window=3))
+    with serving(Settings(db=f"sqlite:///{db}")) as local:
+        kept, gone, by_page = (local.post("/v1/jobs", content=document, headers={"content-type": "application/json"})
+                               .json()["id"] for _ in range(3))
+        for job_id in (kept, gone, by_page):
+            assert wait_for(local, job_id)["state"] == "done"
+        assert local.delete(f"/v1/jobs/{gone}", params={"remove": "true"}).status_code == 204
+        assert local.get(f"/v1/jobs/{gone}").status_code == 404
+        assert local.delete(f"/v1/jobs/{gone}", params={"remove": "true"}).status_code == 404
+        assert "Delete job" in local.get(f"/jobs/{by_page}").text
+        answer = local.post(f"/jobs/{by_page}/delete", headers={"Origin": str(local.base_url).rstrip("/")})
+        assert answer.status_code == 303 and answer.headers["location"] == "/"
+        assert local.get(f"/v1/jobs/{kept}").json()["state"] == "done"
+    with sqlite3.connect(db) as store:
+        for table in ("jobs", "windows"):
+            ids = {row[0] for row in store.execute(f"SELECT {'id' if table == 'jobs' else 'job_id'} FROM {table}")}
+            assert ids == {kept}, table

@@ -119,11 +119,19 @@ async def get_job(request: Request, job_id: str, owner: str = Depends(caller)) -
     return await _status(request, await _job(request, job_id, owner))
 
 
-@router.delete("/{job_id}", response_model=JobStatus, responses={**ERRORS, 409: {"model": ErrorBody}})
-async def cancel_job(request: Request, job_id: str, owner: str = Depends(caller)) -> JobStatus:
+@router.delete("/{job_id}", response_model=JobStatus,
+               responses={**ERRORS, 409: {"model": ErrorBody}, 204: {"description": "Removed (`remove=true`)."}})
+async def cancel_job(request: Request, job_id: str, owner: str = Depends(caller),
+                     remove: Annotated[bool, Query(description="Delete a finished job and all it stored.")] = False,
+                     ) -> JobStatus | Response:
     """Cancel a queued or running job; on the in-process pool its running window stops at once,
-    on Dask after it ends. The windows stored so far stay (``result?partial=true``)."""
+    on Dask after it ends. The windows stored so far stay (``result?partial=true``). With
+    ``remove=true``, delete a done, failed or cancelled job and everything stored with it (204)."""
     job = await _job(request, job_id, owner)
+    if remove:
+        if not await run_in_threadpool(_store(request).remove, job.id):
+            raise HTTPException(409, f"job {job_id} is {job.state}: cancel it first, then remove it")
+        return Response(status_code=204)
     if job.state in ACTIVE:
         await run_in_threadpool(_store(request).cancel, job.id)
         await run_in_threadpool(request.app.state.executor.cancel, job.id)

@@ -247,6 +247,18 @@ class JobStore:
     def cancel(self, job_id: str) -> bool:
         return self._move(job_id, ACTIVE, state="cancelled")
 
+    def remove(self, job_id: str) -> bool:
+        """Delete a finished job with its input, upload, windows, warnings and result: the
+        store otherwise only grows (135_02 keeps about 27 MB, 8 times its C3D). False when the
+        job is queued or running (cancel it first) or gone."""
+        with self.session.begin() as session:
+            gone = session.execute(delete(JobRow).where(JobRow.id == job_id, JobRow.state.not_in(ACTIVE)))
+            if cast(CursorResult[Any], gone).rowcount != 1:
+                return False
+            for table in (WindowRow, UploadRow, WarningsRow):
+                session.execute(delete(table).where(table.job_id == job_id))
+            return True
+
     def _move(self, job_id: str, allowed: tuple[JobState, ...], **values: Any) -> bool:
         """Change the job only if its state is in ``allowed``: a cancel is never overwritten."""
         with self.session.begin() as session:

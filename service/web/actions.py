@@ -1,4 +1,4 @@
-"""What a page changes: sign in and out, submit a capture, cancel a job.
+"""What a page changes: sign in and out, submit a capture, cancel or delete a job.
 
 Each answers a redirect (303) to the page to show next, so the forms work without script;
 an upload the API would refuse shows the jobs page again with the API's one-line message.
@@ -70,3 +70,12 @@ async def cancel(request: Request, job_id: str, owner: str = Depends(page_owner)
         await run_in_threadpool(request.app.state.store.cancel, job.id)
         await run_in_threadpool(request.app.state.executor.cancel, job.id)
     return RedirectResponse(f"/jobs/{job.id}", status_code=303)
+
+
+@router.post("/jobs/{job_id}/delete")
+async def delete(request: Request, job_id: str, owner: str = Depends(page_owner)) -> Response:
+    """Delete a finished job and all it stored, then show the list (a running one: its page)."""
+    job = await owned_job(request, job_id, owner)
+    if not await run_in_threadpool(request.app.state.store.remove, job.id):
+        return RedirectResponse(f"/jobs/{job.id}", status_code=303)
+    return RedirectResponse("/", status_code=303)
