@@ -163,3 +163,18 @@ def test_a_finished_job_is_removed_with_all_it_stored(tmp_path):
         for table in ("jobs", "windows"):
             ids = {row[0] for row in store.execute(f"SELECT {'id' if table == 'jobs' else 'job_id'} FROM {table}")}
             assert ids == {kept}, table
+
+
+def test_a_span_jobs_page_counts_frames_as_the_take_does(tmp_path):
+    """Warnings name take frames (2181-2640) while the plots counted from the span's start."""
+    truth = generate_scene(n_frames=40, seed=2)
+    write_labeled(tmp_path / "take.c3d", LabeledTrajectories(truth.names, truth.positions,
+                                                             np.zeros(truth.positions.shape[:2], dtype=bool), truth.rate))
+    with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")) as local:
+        job_id = local.post("/v1/jobs", files={"file": ("take.c3d", (tmp_path / "take.c3d").read_bytes())},
+                            data={"start": "12", "end": "30", "window": "6"}).json()["id"]
+        assert wait_for(local, job_id)["state"] == "done"
+        page = local.get(f"/jobs/{job_id}").text
+        timeline = local.get(f"/jobs/{job_id}/plots/timeline.svg")
+    assert "18 frames (frames 12–29 of the take" in page
+    assert timeline.status_code == 200 and b"frame of the take" in timeline.content

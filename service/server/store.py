@@ -161,6 +161,11 @@ class JobStore:
                                   .where(UploadRow.job_id == job_id)).first()
         return None if row is None else Upload(row[0], row[1], row[2], tuple(json.loads(row[3])))
 
+    def upload_start(self, job_id: str) -> int | None:
+        """The take's frame an uploaded job's frame 0 is (``--start``); None for a capture document."""
+        with self.session() as session:
+            return session.execute(select(UploadRow.start).where(UploadRow.job_id == job_id)).scalar()
+
     def uploaded(self, job_id: str) -> bool:
         """Whether the job came as a file (without reading the file)."""
         with self.session() as session:

@@ -8,7 +8,7 @@ job (``functools.lru_cache``), and a list of fifty jobs does not parse fifty inp
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -51,6 +51,7 @@ class Labels:
     doubtful: np.ndarray  # (F, M) bool, seen labels only
     doubt_source: str
     best_view: list[list[str | None]] | None  # [frame][marker] camera, where the result names one
+    first_frame: int = 0  # the take's frame number of frame 0: an upload's start, as warnings count frames
 
     def doubtful_share(self) -> float | None:
         """Doubtful labels / labels of these labels (what a done job's warning line counts); None with no label."""
@@ -110,12 +111,14 @@ def finished_labels(db: str, job_id: str) -> Labels:
 def job_labels(db: str, job: Job) -> Labels | None:
     """The labels so far: a done job's result; a failed or cancelled job's stored windows;
     None while it runs (assembling needs the whole cross-camera cloud in camera mode)."""
-    if job.state == "done":
-        return finished_labels(db, job.id)
-    if job.state in ("queued", "running") or job.windows_done == 0:
-        return None
     store = store_for(db)
-    return labels_of(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)))
+    if job.state == "done":
+        labels = finished_labels(db, job.id)
+    elif job.state in ("queued", "running") or job.windows_done == 0:
+        return None
+    else:
+        labels = labels_of(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)))
+    return replace(labels, first_frame=store.upload_start(job.id) or 0)
 
 
 def doubtful_share(windows: list[StoredWindow]) -> float | None:

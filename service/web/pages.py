@@ -59,7 +59,8 @@ async def job_page(request: Request, job_id: str, markers: Annotated[list[str] |
                "summary": certificate_summary(windows) if windows else None, "labels": labels,
                # the labels drawn, once there are: the stored windows' counts predate the second pass
                "doubtful": labels.doubtful_share() if labels is not None else doubtful_share(windows),
-               "warnings": await run_in_threadpool(job_warnings, request, job)}
+               "warnings": await run_in_threadpool(job_warnings, request, job),
+               "first_frame": await run_in_threadpool(store.upload_start, job.id)}
     if labels is not None:
         chosen = chosen_markers(labels, markers or [])
         counts = [(name, *(int(mask[:, m].sum()) for _, mask in state_masks(labels)))

@@ -45,12 +45,12 @@ def timeline_svg(labels: Labels) -> bytes:
         for m in range(n_markers):
             spans = runs(mask[:, m])
             if spans:
-                axes.broken_barh([(start - 0.5, length) for start, length in spans], (m - 0.42, 0.84),
+                axes.broken_barh([(labels.first_frame + start - 0.5, length) for start, length in spans], (m - 0.42, 0.84),
                                  facecolor=state.colour, edgecolor="0.25", linewidth=0.3, hatch=state.hatch)
     axes.set_yticks(range(n_markers), labels.names, fontsize=7)
     axes.set_ylim(n_markers - 0.5, -0.5)
-    axes.set_xlim(-0.5, n_frames - 0.5)
-    axes.set_xlabel(f"frame ({labels.rate:g} Hz)")
+    axes.set_xlim(labels.first_frame - 0.5, labels.first_frame + n_frames - 0.5)
+    axes.set_xlabel(f"frame of the take ({labels.rate:g} Hz)")
     keys = [Patch(facecolor=state.colour, edgecolor="0.25", hatch=state.hatch, label=state.name) for state, _ in
             state_masks(labels)]
     figure.legend(handles=keys, loc="outside upper center", ncols=4, fontsize=8)

@@ -25,7 +25,7 @@ def chosen_markers(labels: Labels, asked: list[str]) -> list[str]:
 def trajectories_svg(labels: Labels, markers: list[str]) -> bytes:
     """Each marker's x, y, z in mm over seconds; samples it did not see are gaps in the lines
     (the filled prediction is not drawn as data), and doubtful samples carry a ``|`` tick."""
-    seconds = np.arange(labels.occluded.shape[0]) / labels.rate
+    seconds = (labels.first_frame + np.arange(labels.occluded.shape[0])) / labels.rate  # the take's time
     figure = new_figure(9.0, 0.6 + 1.7 * len(markers))
     panels = np.atleast_1d(figure.subplots(len(markers), 1, sharex=True))
     for axes, name in zip(panels, markers):
