@@ -178,3 +178,17 @@ def test_a_span_jobs_page_counts_frames_as_the_take_does(tmp_path):
         timeline = local.get(f"/jobs/{job_id}/plots/timeline.svg")
     assert "18 frames (frames 12–29 of the take" in page
     assert timeline.status_code == 200 and b"frame of the take" in timeline.content
+
+
+def test_a_download_is_named_after_the_take(tmp_path):
+    """Every download was markerflow-<id>.<format>, whatever the take."""
+    truth = generate_scene(n_frames=12, seed=2)
+    write_labeled(tmp_path / "take.c3d", LabeledTrajectories(truth.names, truth.positions,
+                                                             np.zeros(truth.positions.shape[:2], dtype=bool), truth.rate))
+    with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")) as local:
+        job_id = local.post("/v1/jobs", files={"file": ("gång 1.c3d", (tmp_path / "take.c3d").read_bytes())},
+                            data={"window": "6"}).json()["id"]
+        assert wait_for(local, job_id)["state"] == "done"
+        disposition = local.get(f"/jobs/{job_id}/result.csv").headers["content-disposition"]
+    assert disposition == (f'attachment; filename="g_ng_1_labeled-{job_id[:8]}.csv"; '
+                           f"filename*=UTF-8''g%C3%A5ng%201_labeled-{job_id[:8]}.csv")

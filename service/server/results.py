@@ -12,6 +12,7 @@ import json
 import tempfile
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from service.io.recording import LabeledTrajectories, Recording
 from service.labeling.absent_markers import in_order, with_absent
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
-from service.server.store import JobStore
+from service.server.store import Job, JobStore
 from service.server.tables import Upload
 
 MEDIA_TYPES = {"json": "application/json", "csv": "text/csv; charset=utf-8", "c3d": "application/octet-stream"}
@@ -116,3 +117,13 @@ def job_file(store: JobStore, job_id: str, format: str, done: bool) -> bytes:
     traj = (trajectories_from_bytes(store.result(job_id)) if done
             else stored_windows_trajectories(store.input(job_id), store.outcomes(job_id)))
     return render(traj, format, store.upload(job_id))
+
+
+def attachment(job: Job, format: str) -> str:
+    """``Content-Disposition`` of a result download: named after the uploaded take
+    (``walk_labeled-1a2b3c4d.c3d``), as every download was ``markerflow-<id>``; an ASCII
+    name and the UTF-8 one (RFC 6266) for names beyond ASCII."""
+    stem = Path(job.source).stem if job.source != "json" else "markerflow"
+    name = f"{stem}_labeled-{job.id[:8]}.{format}"
+    ascii_name = "".join(c if c.isascii() and (c.isalnum() or c in "._-") else "_" for c in name)
+    return f"attachment; filename=\"{ascii_name}\"; filename*=UTF-8''{quote(name)}"

@@ -11,7 +11,7 @@ from starlette.concurrency import run_in_threadpool
 from service.errors import InputError
 from service.server.auth import caller
 from service.server.bodies import read_submission, request_body
-from service.server.results import MEDIA_TYPES, job_file
+from service.server.results import MEDIA_TYPES, attachment, job_file
 from service.server.schemas import ErrorBody, JobAccepted, JobPage, JobStatus, JobSummary, LabeledResult, WindowSummary
 from service.server.store import ACTIVE, Job, JobStore
 from service.server.tables import JobState
@@ -174,6 +174,5 @@ async def job_result(
     if job.state != "done" and not partial:
         raise HTTPException(409, f"job {job_id} is {job.state}, not done (partial=true gives its stored windows)")
     content = await run_in_threadpool(job_file, _store(request), job.id, format, job.state == "done")
-    disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
-    return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
+    return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": attachment(job, format)})
 

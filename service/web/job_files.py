@@ -9,7 +9,7 @@ from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from starlette.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from service.server.results import MEDIA_TYPES, job_file
+from service.server.results import MEDIA_TYPES, attachment, job_file
 from service.web.access import owned_job
 from service.web.job_data import Labels, capture_document, job_labels, window_stats
 from service.web.plots.cameras import cameras_svg, detections_used
@@ -39,8 +39,7 @@ async def result(request: Request, job_id: str, format: Literal["json", "csv", "
     if job.state not in ("done", "failed", "cancelled"):
         raise HTTPException(409, f"job {job_id} is {job.state}; its result comes when it ends")
     content = await run_in_threadpool(job_file, request.app.state.store, job.id, format, job.state == "done")
-    disposition = f'attachment; filename="markerflow-{job.id}.{format}"'
-    return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": disposition})
+    return Response(content, media_type=MEDIA_TYPES[format], headers={"Content-Disposition": attachment(job, format)})
 
 
 @router.get("/plots/certificate.svg")
