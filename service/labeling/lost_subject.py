@@ -61,4 +61,5 @@ def unnamed_warning(span: UnnamedSpan | None, rate: float, first_frame: int) -> 
     return (f"warning: no marker is labeled in frames {first}-{first + span.frames - 1} "
             f"({span.frames / rate:.1f} s) though {span.points:.0f} points a frame (median) are there: every marker "
             f"was lost and none was named again there; a subject model names them from nothing "
-            f"(markerflow model on a labeled take of the subject, then track --model MODEL --start {first})")
+            f"(markerflow model on a labeled take of the subject, then label from frame {first} with it: "
+            f"track --model MODEL --start {first}, or an upload's model and start={first})")

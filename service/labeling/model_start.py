@@ -70,7 +70,7 @@ def model_first_frame(
     try:
         state = model_start_state(geometry, found, points, REACQUISITION.lost_after)
     except ValueError as error:
-        hint = "; start where the subject is in view (track --start)" if len(points) < 3 else ""
+        hint = "; start where the subject is in view (track --start, or an upload's start=)" if len(points) < 3 else ""
         raise InputError(f"the start frame ({len(points)} points): {error}{hint}") from None
     first = np.full((len(geometry.names), 3), np.nan)
     first[found.named] = points[found.point[found.named]]
