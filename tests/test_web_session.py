@@ -61,6 +61,7 @@ def test_the_api_never_reads_the_cookie(client):
 
 def test_pages_without_a_cookie_ask_for_the_token(client):
     assert client.get("/").status_code == 401 and "Sign in" in client.get("/").text
+    assert "Sign out" not in client.get("/").text  # nothing to sign out of yet
     assert client.get("/jobs/" + "0" * 32).status_code == 401
     assert client.get("/jobs/" + "0" * 32 + "/plots/certificate.svg").status_code == 401
 

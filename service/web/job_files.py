@@ -76,7 +76,8 @@ async def _labels(request: Request, job_id: str, owner: str) -> Labels:
     job = await owned_job(request, job_id, owner)
     labels = await run_in_threadpool(job_labels, request.app.state.settings.db, job)
     if labels is None:
-        raise HTTPException(409, f"job {job_id} is {job.state}; its labels are drawn when it ends")
+        when = "no window was stored before it ended" if job.state in ("failed", "cancelled") else "drawn when it ends"
+        raise HTTPException(409, f"job {job_id} is {job.state}; it has no labels to draw ({when})")
     return labels
 
 

@@ -39,7 +39,7 @@ def mount_web(app: FastAPI) -> None:
 async def jobs_page(request: Request, older: Annotated[int, Query(ge=0)] = 0) -> Response:
     owner = signed_in(request)
     if owner is None:
-        return page(request, "sign_in.html", 401)
+        return page(request, "sign_in.html", 401, signed_in=False)
     return await jobs_list(request, owner, older=older)
 
 
@@ -47,7 +47,7 @@ async def jobs_page(request: Request, older: Annotated[int, Query(ge=0)] = 0) ->
 async def job_page(request: Request, job_id: str, markers: Annotated[list[str] | None, Query()] = None) -> Response:
     owner = signed_in(request)
     if owner is None:
-        return page(request, "sign_in.html", 401)
+        return page(request, "sign_in.html", 401, signed_in=False)
     try:
         job = await owned_job(request, job_id, owner)
     except HTTPException as missing:
