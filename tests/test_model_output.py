@@ -105,10 +105,11 @@ def test_input_lacking_a_model_marker_keeps_numbering_and_unit_and_says_what_is_
     assert list(written["parameters"]["POINT"]["UNITS"]["value"]) == ["m"]
     assert "LAB" not in written["parameters"]
     assert "warning: the input has no point for model markers S0M0, so out.c3d is a new C3D of the labels" in printed
-    assert [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]] == names
+    # the input's columns where they were, the model's marker it lacks after them
+    assert [str(label).strip() for label in written["parameters"]["POINT"]["LABELS"]["value"]] == [*names[1:], names[0]]
     given = ezc3d.c3d(str(source))["data"]["points"][:3, :, FIT:]
-    labeled = written["data"]["meta_points"]["residuals"][0, 1:] >= 0
-    assert np.linalg.norm(written["data"]["points"][:3, 1:] - given, axis=0)[labeled].max() < 1e-6
+    labeled = written["data"]["meta_points"]["residuals"][0, :-1] >= 0
+    assert np.linalg.norm(written["data"]["points"][:3, :-1] - given, axis=0)[labeled].max() < 1e-6
 
 
 @pytest.mark.skipif(not CMU_85_02.exists(), reason="needs ../shared/data")
@@ -200,3 +201,15 @@ def test_a_model_of_another_subject_is_named_as_a_cause_of_doubt(tmp_path: Path)
         printed[fitted] = _track(tmp_path, source, fit_subject(names, positions[:FIT]).model.to_json(), 0)[1]
     assert "that the model is of this subject" not in printed[8]
     assert "that the model is of this subject and marker set" in printed[9]
+
+
+def test_a_table_from_a_model_keeps_the_inputs_column_order(tmp_path: Path) -> None:
+    """track --model wrote the model's order, the service the input's: two files for one take."""
+    names, positions, _ = chain(7, frames=FRAMES)
+    subject, source, out = tmp_path / "subject.json", tmp_path / "take.c3d", tmp_path / "out.csv"
+    subject.write_text(fit_subject(names, positions[:FIT]).model.to_json())
+    _input_c3d(source, names[::-1], positions[:, ::-1] / 1000)
+    result = CliRunner().invoke(app, ["-q", "track", str(source), "--model", str(subject), "--start", str(FIT),
+                                      "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert read_labeled(out).names == names[::-1]

@@ -108,7 +108,7 @@ def run_track(
     written = with_absent(result, absent)
     if carried is not None and not is_copy(output, source):
         written = carried.appended_to(written)
-    if recording is not None and model is None:  # a relabel's columns as the input's (a model's: the model's)
+    if recording is not None:  # the input's column order, with or without a model (as the service writes it)
         written = in_order(written, recording.names)
     write_labeled(output, written, source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
