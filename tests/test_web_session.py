@@ -4,6 +4,8 @@ and checked before an upload's body is read; a C3D uploads through the page as t
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import httpx
 import numpy as np
 import pytest
@@ -166,15 +168,21 @@ def test_a_finished_job_is_removed_with_all_it_stored(tmp_path):
             assert ids == {kept}, table
 
 
+def _uploaded_take(local: httpx.Client, folder: Path, frames: int, name: str, **fields: str) -> str:
+    """A generated take of ``frames`` frames uploaded as a C3D named ``name``, labeled: its job id."""
+    truth = generate_scene(n_frames=frames, seed=2)
+    write_labeled(folder / "take.c3d", LabeledTrajectories(truth.names, truth.positions,
+                                                           np.zeros(truth.positions.shape[:2], dtype=bool), truth.rate))
+    job_id = local.post("/v1/jobs", files={"file": (name, (folder / "take.c3d").read_bytes())},
+                        data={"window": "6", **fields}).json()["id"]
+    assert wait_for(local, job_id)["state"] == "done"
+    return str(job_id)
+
+
 def test_a_span_jobs_page_counts_frames_as_the_take_does(tmp_path):
     """Warnings name take frames (2181-2640) while the plots counted from the span's start."""
-    truth = generate_scene(n_frames=40, seed=2)
-    write_labeled(tmp_path / "take.c3d", LabeledTrajectories(truth.names, truth.positions,
-                                                             np.zeros(truth.positions.shape[:2], dtype=bool), truth.rate))
     with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")) as local:
-        job_id = local.post("/v1/jobs", files={"file": ("take.c3d", (tmp_path / "take.c3d").read_bytes())},
-                            data={"start": "12", "end": "30", "window": "6"}).json()["id"]
-        assert wait_for(local, job_id)["state"] == "done"
+        job_id = _uploaded_take(local, tmp_path, 40, "take.c3d", start="12", end="30")
         page = local.get(f"/jobs/{job_id}").text
         timeline = local.get(f"/jobs/{job_id}/plots/timeline.svg")
     assert "18 frames (frames 12–29 of the take" in page
@@ -183,13 +191,8 @@ def test_a_span_jobs_page_counts_frames_as_the_take_does(tmp_path):
 
 def test_a_download_is_named_after_the_take(tmp_path):
     """Every download was markerflow-<id>.<format>, whatever the take."""
-    truth = generate_scene(n_frames=12, seed=2)
-    write_labeled(tmp_path / "take.c3d", LabeledTrajectories(truth.names, truth.positions,
-                                                             np.zeros(truth.positions.shape[:2], dtype=bool), truth.rate))
     with serving(Settings(db=f"sqlite:///{tmp_path / 'jobs.db'}")) as local:
-        job_id = local.post("/v1/jobs", files={"file": ("gång 1.c3d", (tmp_path / "take.c3d").read_bytes())},
-                            data={"window": "6"}).json()["id"]
-        assert wait_for(local, job_id)["state"] == "done"
+        job_id = _uploaded_take(local, tmp_path, 12, "gång 1.c3d")
         disposition = local.get(f"/jobs/{job_id}/result.csv").headers["content-disposition"]
     assert disposition == (f'attachment; filename="g_ng_1_labeled-{job_id[:8]}.csv"; '
                            f"filename*=UTF-8''g%C3%A5ng%201_labeled-{job_id[:8]}.csv")
