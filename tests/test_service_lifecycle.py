@@ -81,6 +81,26 @@ def test_a_window_that_raises_fails_the_job_and_keeps_the_windows_before_it(tmp_
     assert occluded[labeled:].all() and np.isnan(positions[labeled:]).all() and not occluded[:labeled].all()
 
 
+def test_a_failed_jobs_labels_are_assembled_once_for_every_view(tmp_path, monkeypatch):
+    """Each view of a failed or cancelled job's page and plots assembled its windows again
+    (30-40 s per request on a 38,250-frame take)."""
+    from service.web import job_data
+
+    capture, options = generated_capture(frames=60, seed=5), LabelingOptions(formulation="ilp", window=10)
+    db = f"sqlite:///{tmp_path / 'jobs.db'}"
+    job, _ = store_for(db).add("local", "json", document_json(capture, options).encode(),
+                               CaptureLabeling(capture, options).n_windows)
+    monkeypatch.setattr(runner, "CaptureLabeling", _FailsAtWindow2)
+    assert run_job(db, job.id) == "failed"
+    assembled = []
+    real = job_data.stored_windows_trajectories
+    monkeypatch.setattr(job_data, "stored_windows_trajectories", lambda *a: assembled.append(1) or real(*a))
+    with serving(Settings(db=db)) as client:
+        for path in ("", "/plots/timeline.svg", "/plots/trajectories.svg", ""):
+            assert client.get(f"/jobs/{job.id}{path}").status_code == 200
+    assert len(assembled) == 1
+
+
 def _job_workers() -> list[psutil.Process]:
     """The job worker processes this test process started (children of its forkserver)."""
     return [p for p in psutil.Process().children(recursive=True)

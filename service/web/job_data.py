@@ -21,6 +21,7 @@ from service.server.store import Job, JobStore, StoredWindow, store_for
 from service.server.submission import labeling_warnings
 
 CACHED_JOBS = 256
+CACHED_ENDED = 16  # failed or cancelled jobs' labels: assembled from windows, often long takes cut short
 
 
 @dataclass(frozen=True)
@@ -108,6 +109,14 @@ def finished_labels(db: str, job_id: str) -> Labels:
     return labels_of(trajectories_from_bytes(store_for(db).result(job_id)))
 
 
+@lru_cache(maxsize=CACHED_ENDED)
+def ended_labels(db: str, job_id: str, windows_done: int) -> Labels:
+    """A failed or cancelled job's labels from its stored windows, which no runner adds to
+    again: assembled once, not on every view (38,250 frames took 30-40 s per page and plot)."""
+    store = store_for(db)
+    return labels_of(stored_windows_trajectories(store.input(job_id), store.outcomes(job_id)))
+
+
 def job_labels(db: str, job: Job) -> Labels | None:
     """The labels so far: a done job's result; a failed or cancelled job's stored windows;
     None while it runs (assembling needs the whole cross-camera cloud in camera mode)."""
@@ -117,7 +126,7 @@ def job_labels(db: str, job: Job) -> Labels | None:
     elif job.state in ("queued", "running") or job.windows_done == 0:
         return None
     else:
-        labels = labels_of(stored_windows_trajectories(store.input(job.id), store.outcomes(job.id)))
+        labels = ended_labels(db, job.id, job.windows_done)
     return replace(labels, first_frame=store.upload_start(job.id) or 0)
 
 
