@@ -101,6 +101,23 @@ def test_a_failed_jobs_labels_are_assembled_once_for_every_view(tmp_path, monkey
     assert len(assembled) == 1
 
 
+def test_a_jobs_second_pass_is_said_while_it_runs_and_gone_once_done(tmp_path, monkeypatch):
+    """The progress stood at N/N, with nothing said, for as long as the first pass took."""
+    from service.server.store import JobStore
+
+    capture, options = generated_capture(frames=60, seed=5), LabelingOptions(window=10)
+    db = f"sqlite:///{tmp_path / 'jobs.db'}"
+    store = store_for(db)
+    job, _ = store.add("local", "json", document_json(capture, options).encode(), CaptureLabeling(capture, options).n_windows)
+    said: list[list[str]] = []
+    noted = JobStore.note
+    monkeypatch.setattr(JobStore, "note", lambda self, job_id, line: (noted(self, job_id, line),
+                                                                     said.append(self.warnings(job_id)))[0])
+    assert run_job(db, job.id) == "done"
+    assert said and said[-1][0].startswith(f"second pass: {len(said)} of {len(said)} windows")
+    assert not any(line.startswith("second pass") for line in store.warnings(job.id))
+
+
 def _job_workers() -> list[psutil.Process]:
     """The job worker processes this test process started (children of its forkserver)."""
     return [p for p in psutil.Process().children(recursive=True)

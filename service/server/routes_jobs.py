@@ -48,7 +48,7 @@ async def _status(request: Request, job: Job) -> JobStatus:
 def job_warnings(request: Request, job: Job) -> list[str]:
     """What the job's status says beside its figures: once done, what the labeling warns of; while
     queued, why it may not start soon (``Executor.waiting``). Blocking: the store and the cluster."""
-    if job.state == "done":
+    if job.state in ("done", "running"):  # a running job's: its second pass's progress (``JobStore.note``)
         return _store(request).warnings(job.id)
     idle = request.app.state.executor.waiting() if job.state == "queued" else None
     return [idle] if idle else []

@@ -66,7 +66,8 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
             # Between windows: a cancel (from any process) or a shutdown stops the job here.
             if stop() or store.known(job_id).state != "running":
                 return store.known(job_id).state
-        kept = labeling.refine(outcomes, stop=lambda: stop() or store.known(job_id).state != "running")
+        kept = labeling.refine(outcomes, _second_pass_note(store, job_id),
+                               stop=lambda: stop() or store.known(job_id).state != "running")
         if kept is None:
             return store.known(job_id).state
         # The kept windows replace the stored ones with the result, in one transaction: a
@@ -101,3 +102,11 @@ def _resumable_outcomes(store: JobStore, job_id: str) -> list[WindowOutcome]:
         log.warning("job %s: %s; relabeling from the first window", job_id, stale)
         store.forget_windows(job_id)
         return []
+
+
+def _second_pass_note(store: JobStore, job_id: str) -> Callable[[int, int], None]:
+    """The second pass's progress as the job's running note (``JobStore.note``)."""
+    def note(done: int, total: int) -> None:
+        store.note(job_id, f"second pass: {done} of {total} windows (the first pass is done; the pass whose rigid "
+                           "pairs fit the first frame better is kept)")
+    return note

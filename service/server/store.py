@@ -15,7 +15,7 @@ from datetime import UTC, datetime
 from functools import cache
 from typing import Any, cast, get_args
 
-from sqlalchemy import case, delete, func, select, update
+from sqlalchemy import delete, func, select, update
 from sqlalchemy.engine import CursorResult
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
@@ -235,12 +235,19 @@ class JobStore:
             if windows is not None:
                 session.execute(delete(WindowRow).where(WindowRow.job_id == job_id))
                 session.add_all([_window_row(job_id, outcome, windows[1]) for outcome in windows[0]])
+            session.execute(delete(WarningsRow).where(WarningsRow.job_id == job_id))  # a running note (``note``)
             if warnings:
                 session.add(WarningsRow(job_id=job_id, lines=json.dumps(warnings)))
             return True
 
+    def note(self, job_id: str, line: str) -> None:
+        """What a running job is doing past its windows (its second pass), shown as its warning
+        until it is done: the progress stood at N/N for as long as the first pass took."""
+        with self.session.begin() as session:
+            session.merge(WarningsRow(job_id=job_id, lines=json.dumps([line])))
+
     def warnings(self, job_id: str) -> list[str]:
-        """What the finished labeling warns of (none before it is done)."""
+        """What the finished labeling warns of; while it runs, its ``note`` if any."""
         with self.session() as session:
             lines = session.execute(select(WarningsRow.lines).where(WarningsRow.job_id == job_id)).scalar()
         return [] if lines is None else [str(line) for line in json.loads(lines)]
@@ -272,20 +279,6 @@ class JobStore:
             )
             # Session.execute is typed as returning a Result; an UPDATE's result is a CursorResult.
             return cast(CursorResult[Any], moved).rowcount == 1
-
-    def count_by_state(self) -> dict[str, int]:
-        with self.session() as session:
-            counts = dict(session.execute(select(JobRow.state, func.count()).group_by(JobRow.state)).all())
-        return {state: int(counts.get(state, 0)) for state in STATES}
-
-    def solve_time_histogram(self, bounds: tuple[float, ...]) -> tuple[list[int], int, float]:
-        """Windows with solve time <= each bound, all windows, and the seconds summed (one query)."""
-        columns = [func.coalesce(func.sum(case((WindowRow.solve_seconds <= b, 1), else_=0)), 0) for b in bounds]
-        with self.session() as session:
-            *below, count, total = session.execute(
-                select(*columns, func.count(), func.coalesce(func.sum(WindowRow.solve_seconds), 0.0))
-            ).one()
-        return [int(n) for n in below], int(count), float(total)
 
 
 class _NotRunning(Exception):
