@@ -196,3 +196,18 @@ def test_a_download_is_named_after_the_take(tmp_path):
         disposition = local.get(f"/jobs/{job_id}/result.csv").headers["content-disposition"]
     assert disposition == (f'attachment; filename="g_ng_1_labeled-{job_id[:8]}.csv"; '
                            f"filename*=UTF-8''g%C3%A5ng%201_labeled-{job_id[:8]}.csv")
+
+
+def test_an_upload_chooses_one_pass(tmp_path):
+    """A capture document could turn the second pass off; an upload could not (an unknown field)."""
+    import json
+
+    from service.server.store import store_for
+
+    db = f"sqlite:///{tmp_path / 'jobs.db'}"
+    with serving(Settings(db=db)) as local:
+        job_id = _uploaded_take(local, tmp_path, 12, "take.c3d", second_pass="false")
+        refused = local.post("/v1/jobs", files={"file": ("take.c3d", (tmp_path / "take.c3d").read_bytes())},
+                             data={"second_pass": "no"})
+    assert json.loads(store_for(db).input(job_id))["second_pass"] is False
+    assert refused.status_code == 422 and "second_pass: expected true or false" in refused.text

@@ -35,7 +35,7 @@ from service.server.prescan import check_depth
 from service.server.settings import Limits
 from service.server.tables import Upload
 
-UPLOAD_FIELDS = ("file", "formulation", "window", "model", "start", "end")
+UPLOAD_FIELDS = ("file", "formulation", "window", "model", "start", "end", "second_pass")
 UPLOAD_SUFFIXES = (".c3d", ".trc", ".csv")  # .csv: a table markerflow wrote
 
 
@@ -83,11 +83,13 @@ def labeled_upload(form: FormData, fields: tuple[str, ...], suffixes: tuple[str,
 
 def upload_submission(form: FormData, limits: Limits) -> Submission:
     """A ``.c3d``/``.trc`` upload with optional ``formulation`` (name or JSON object), ``window``,
+    ``second_pass`` (true or false),
     ``start`` and ``end`` (relabel frames start .. end - 1 from the file's labels at ``start``,
     the markers absent there left out, as ``markerflow track --start`` does) or ``model`` (a
     subject model JSON: frame 0 may then be partly labeled, ``model_submission``)."""
     upload, filename = labeled_upload(form, UPLOAD_FIELDS, UPLOAD_SUFFIXES, "file")
-    options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")))
+    options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")),
+                              second_pass=_flag_field(form.get("second_pass"), "second_pass"))
     model = model_field(form.get("model"))
     start, end = _frame_field(form.get("start"), "start"), _frame_field(form.get("end"), "end")
     recording = read_upload(upload, filename, limits)
@@ -179,6 +181,15 @@ def json_object_field(value: str, field: str) -> dict:
     if not isinstance(table, dict):
         raise InputError(f'{field}: not a JSON object, e.g. {{"time_limit": 10}}')
     return table
+
+
+def _flag_field(value: str | UploadFile | None, field: str) -> bool:
+    """``true`` or ``false`` (as a capture document's JSON says them); absent: true."""
+    if value is None:
+        return True
+    if not isinstance(value, str) or value.strip().lower() not in ("true", "false"):
+        raise InputError(f"{field}: expected true or false, got {value!r}")
+    return value.strip().lower() == "true"
 
 
 def _window_field(value: str | UploadFile | None) -> int:

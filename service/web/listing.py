@@ -34,7 +34,7 @@ async def jobs_list(
                 chosen={key: "" for key in CHOSEN} | (chosen or {}))
 
 
-CHOSEN = ("formulation", "parameters", "window", "association", "start", "end")  # the form's option fields
+CHOSEN = ("formulation", "parameters", "window", "association", "start", "end", "second_pass")  # the form's option fields
 
 
 def _row(store: JobStore, db: str, job: Job) -> dict:

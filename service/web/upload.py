@@ -27,7 +27,7 @@ from service.server.submission import (
     upload_submission,
 )
 
-FIELDS = ("file", "formulation", "parameters", "window", "association", "model", "start", "end")
+FIELDS = ("file", "formulation", "parameters", "window", "association", "model", "start", "end", "second_pass")
 MODEL_OPTION = "model" in CaptureDocument.model_fields  # a subject model in place of the labeled first frame
 
 
@@ -51,7 +51,7 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     model = model if MODEL_OPTION and isinstance(model, UploadFile) and model.filename else None
     if Path(name).suffix.lower() in UPLOAD_SUFFIXES:
         extra: list[tuple[str, str | UploadFile]] = [("model", model)] if model is not None else []
-        extra += [(key, value) for key in ("start", "end") if (value := _text(form, key))]
+        extra += [(key, value) for key in ("start", "end", "second_pass") if (value := _text(form, key))]
         fields = FormData([("file", upload), ("formulation", formulation), ("window", window or "20"), *extra])
         return upload_submission(fields, limits)
     if Path(name).suffix.lower() != ".json":
@@ -68,6 +68,8 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
         document["formulation"] = _documents_formulation(document.get("formulation"), chosen, parameters)
     if window:
         document["window"] = _whole(window)
+    if passes := _text(form, "second_pass"):
+        document["second_pass"] = passes == "true"
     association = _text(form, "association")
     if association:
         document["association"] = association
