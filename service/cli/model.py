@@ -8,6 +8,7 @@ import numpy as np
 from rich.table import Table
 
 from formulations.errors import FormulationError
+from formulations.subject.far_joints import LIMB_REACH_MM, FarJoint, far_joints
 from formulations.subject.fit import SubjectFit, fit_subject
 from formulations.subject.grouping import Grouping
 from formulations.subject.template import fit_template
@@ -54,6 +55,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
         raise InputError(f"{', '.join(p.name for p in inputs)}: {error}") from None
     _print(fit, len(positions))
     warn(unseen_warning(names, positions))
+    warn(far_joint_warning(far_joints(fit.model)))
     try:
         output.write_text(fit.model.to_json())
     except OSError as error:
@@ -100,6 +102,16 @@ def unseen_warning(names: list[str], positions: np.ndarray) -> str | None:
         return None
     return (f"warning: {len(unseen)} marker{'s' * (len(unseen) > 1)} never seen in the frames learned from, not in "
             f"the model: {', '.join(unseen[:12])}{' ...' if len(unseen) > 12 else ''}")
+
+
+def far_joint_warning(far: list[FarJoint]) -> str | None:
+    """A line naming the joints no body has (``far_joints``)."""
+    if not far:
+        return None
+    shown = ", ".join(f"{f.joint} ({f.apart_mm:.0f} mm from {f.segment})" for f in far[:3])
+    return (f"warning: {len(far)} joint{'s' * (len(far) > 1)} with a centre beyond {LIMB_REACH_MM:.0f} mm of every "
+            f"marker of a segment it joins, which no body joint is: {shown}; the take may not move those segments "
+            "enough apart (learn from a stretch with more motion, --start/--end)")
 
 
 def _pool(takes: list[Recording]) -> tuple[list[str], np.ndarray, float]:
