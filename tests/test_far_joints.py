@@ -6,6 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
+from conftest import DATA
 from test_subject_model import chain
 from typer.testing import CliRunner
 
@@ -16,6 +18,7 @@ from service.cli.app import app
 from service.io.formats import write_labeled
 from service.io.recording import LabeledTrajectories
 
+CMU_135_02 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
 SQUARE = [[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 100.0, 0.0]]
 
 
@@ -39,13 +42,8 @@ def test_a_fitted_chain_has_none_and_the_command_says_nothing(tmp_path: Path) ->
     assert result.exit_code == 0 and "no body joint is" not in result.output
 
 
+@pytest.mark.skipif(not CMU_135_02.exists(), reason="needs ../shared/data")
 def test_cmu_135_02s_first_600_frames_join_the_pelvis_to_an_arm_and_are_told_so(tmp_path: Path) -> None:
-    import pytest
-    from conftest import DATA
-
-    take = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
-    if not take.exists():
-        pytest.skip("needs ../shared/data")
-    result = CliRunner().invoke(app, ["-q", "model", str(take), "--end", "600", "--out", str(tmp_path / "m.json")])
+    result = CliRunner().invoke(app, ["-q", "model", str(CMU_135_02), "--end", "600", "--out", str(tmp_path / "m.json")])
     assert result.exit_code == 0
     assert "male:LFWT-male:LUPA (509 mm from male:LFWT)" in result.output
