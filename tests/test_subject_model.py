@@ -241,3 +241,20 @@ def test_cli_names_the_markers_it_never_saw(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert f"1 marker never seen in the frames learned from, not in the model: {names[2]}" in result.output
     assert names[2] not in (tmp_path / "m.json").read_text()
+
+
+def test_cli_warns_when_pooled_takes_look_like_two_subjects(tmp_path: Path) -> None:
+    """Same names, other placements: pooled, CMU 85_02's subject with 135_02's gave 5 segments
+    and every limb marker a single, without a word."""
+    printed = {}
+    for seed in (3, 4):
+        names, positions, _ = chain(seed)
+        occluded = np.zeros(positions.shape[:2], bool)
+        write_labeled(tmp_path / f"take{seed}.trc", LabeledTrajectories(names, positions, occluded, 100.0))
+    first, second = str(tmp_path / "take3.trc"), str(tmp_path / "take4.trc")
+    for key, takes in {"two": [first, second], "one": [first, first]}.items():
+        result = CliRunner().invoke(app, ["-q", "model", *takes, "--out", str(tmp_path / f"{key}.json")])
+        assert result.exit_code == (2 if key == "two" else 0), result.output  # two bodies pooled: nothing rigid left
+        printed[key] = result.output
+    assert "take4.trc: " in printed["two"] and "another subject, or markers placed again?" in printed["two"]
+    assert "another subject" not in printed["one"]

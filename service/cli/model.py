@@ -14,6 +14,7 @@ from formulations.subject.grouping import Grouping
 from formulations.subject.template import fit_template
 from service.capture.markerset import load_template
 from service.capture.model_input import MIN_SHARED
+from service.capture.pooled_takes import other_subject_warning
 from service.capture.span import frame_span
 from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out, warn
@@ -42,6 +43,8 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     unit = read[0].source.unit if read[0].source else "mm"  # the centres are written in the first take's unit
     takes = [_span(take.without_unlabeled(), path, start, end) for take, path in zip(read, inputs)]  # *N: no marker
     _check_one_marker_set(takes, inputs)
+    for path, take in zip(inputs[1:], takes[1:]):
+        warn(other_subject_warning(takes[0], take, path.name))
     for path, take in zip(inputs, takes):  # a wrong unit reads as "too static" or "cannot group" below
         line = take_scale_warning(take)
         warn(line.replace("warning: ", f"warning: {path.name}: ", 1) if line else None)
