@@ -97,3 +97,16 @@ def test_unnamed_markers_are_refused_in_camera_mode() -> None:
         Capture(capture.names, capture.first_frame, capture.rate, cameras=capture.cameras,
                 detections=capture.detections, unnamed_markers=2)
     assert replace(capture, unnamed_markers=0).unnamed_markers == 0
+
+
+def test_a_heuristics_windows_are_not_reported_as_failing_their_certificate(tmp_path: Path) -> None:
+    """nn-hungarian proves no bound: its share of integral windows read 0.0, as if every window had failed."""
+    import json
+
+    det = _walkers(tmp_path / "det.txt")
+    figures = {}
+    for name in ("lp-l1", "nn-hungarian"):
+        run = runner.invoke(app, ["boxes", str(det), "-o", str(tmp_path / f"{name}.txt"), "--formulation", name, "--json"])
+        assert run.exit_code == 0, run.output
+        figures[name] = json.loads(run.stdout)["integral_window_fraction"]
+    assert figures == {"lp-l1": 1.0, "nn-hungarian": None}

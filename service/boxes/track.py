@@ -63,12 +63,14 @@ class BoxTracking:
         windows: Windows solved (windows without any object are not solved).
         integral_windows: Windows whose paths carry an optimality certificate.
         seconds: Wall time of the run.
+        bounded_windows: Windows with any proven bound (none for a heuristic formulation).
     """
 
     tracks: BoxTracks
     windows: int
     integral_windows: int
     seconds: float
+    bounded_windows: int = 0
 
 
 def track_boxes(
@@ -111,7 +113,7 @@ def track_boxes(
     owner = np.zeros(len(frame), dtype=int)  # track id of each detection, 0 = none
     rates = DetectionRates() if likelihood else None
     births = BirthRates()
-    windows = integral = 0
+    windows = integral = bounded = 0
     t0, next_ident = 1, 1
     while t0 < detections.n_frames:
         m = min(window - 1, detections.n_frames - t0)
@@ -121,7 +123,7 @@ def track_boxes(
         taken = np.zeros((0, m), int)
         if objects.n_objects:
             objects, taken, certified = _solve(solver, before, posing, owner)
-            windows, integral = windows + 1, integral + certified
+            windows, integral, bounded = windows + 1, integral + certified[0], bounded + certified[1]
         old, born_after = before.n_objects, 0
         unclaimed, returned = owner.copy(), np.zeros(len(frame), bool)
         if lifecycle.returns_compete:  # a lost object's chain: a return or a newcomer
@@ -139,7 +141,7 @@ def track_boxes(
             owner[inside] = 0  # the window again, with the new objects competing from their first box
             before = before.joined(new)
             objects, taken, certified = _solve(solver, before, posing, owner, barred)
-            windows, integral = windows + 1, integral + certified
+            windows, integral, bounded = windows + 1, integral + certified[0], bounded + certified[1]
             kept = (starts == t0) | (taken[old:] >= 0).any(axis=1)
             keep = np.r_[np.ones(old, bool), kept]
             objects, next_ident = _named(objects.subset(keep), old, owner, next_ident)
@@ -155,7 +157,7 @@ def track_boxes(
     tracks = BoxTracks(frame=frame[tracked], track_id=owner[tracked], box=detections.box[tracked],
                        confidence=detections.confidence[tracked], n_frames=detections.n_frames,
                        occluded=np.zeros(len(tracked), bool))
-    return BoxTracking(tracks, windows, integral, time.perf_counter() - start)
+    return BoxTracking(tracks, windows, integral, time.perf_counter() - start, bounded)
 
 
 @dataclass(frozen=True)
@@ -176,9 +178,10 @@ class _Posing:
 def _solve(
     solver: Formulation, objects: BoxObjects, posing: _Posing, owner: np.ndarray,
     barred: list[tuple[int, np.ndarray]] | None = None,
-) -> tuple[BoxObjects, np.ndarray, bool]:
+) -> tuple[BoxObjects, np.ndarray, tuple[bool, bool]]:
     """Solve one window; write each taken detection's owner; return the objects moved on, the
-    ``(N, M)`` detection each took (-1 occluded) and the certificate. ``barred``: (object row,
+    ``(N, M)`` detection each took (-1 occluded) and the certificate: integral, and bounded
+    at all (a formulation that proves no bound never is). ``barred``: (object row,
     detections) it may not take (``returns.tested_chains``)."""
     p = posing
     index = np.flatnonzero((p.frame > p.t0) & (p.frame <= p.t0 + p.m))
@@ -196,7 +199,7 @@ def _solve(
     for n in range(objects.n_objects):
         owner[taken[n][taken[n] >= 0]] = objects.ident[n]
     moved = advance(objects, p.t0, taken, p.boxes, p.histograms, HISTOGRAM_RATE)
-    return moved, taken, bool(solution.integral)
+    return moved, taken, (bool(solution.integral), bool(np.isfinite(solution.gap)))
 
 
 def _named(objects: BoxObjects, old: int, owner: np.ndarray, next_ident: int) -> tuple[BoxObjects, int]:

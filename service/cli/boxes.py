@@ -64,7 +64,8 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
         "frames": boxes.n_frames, "detections": len(boxes.frame), "tracked_boxes": len(run.tracks.frame),
         "occluded_boxes": int(tracks.occluded.sum()),
         "tracks": int(len(set(run.tracks.track_id.tolist()))), "formulation": formulation, "window": window,
-        "integral_window_fraction": run.integral_windows / run.windows if run.windows else None,
+        # None where no window proved a bound (nn-hungarian): 0 % would read as every window failing
+        "integral_window_fraction": run.integral_windows / run.windows if run.bounded_windows else None,
         "seconds": round(run.seconds, 3), "frames_per_second": round(boxes.n_frames / max(run.seconds, 1e-9), 1),
         "histograms": histograms is not None, "newcomer_test": newcomer_test, "output": str(output),
     }
