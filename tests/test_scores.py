@@ -118,6 +118,16 @@ def test_first_frame_is_not_scored() -> None:
     assert _score({(0, 0): 0, (0, 1): 1, (0, 2): 2}) == _score({})
 
 
+def test_a_first_frame_named_by_a_model_is_scored() -> None:
+    """``eval --model`` gives the labeler no frame: its frame 0 was left out of the scores."""
+    point_index = PERFECT.copy()
+    point_index[0, [0, 1]] = point_index[0, [1, 0]]  # the model swapped two markers in frame 0
+    given = label_scores(_capture(), _labeled(point_index))
+    named = label_scores(_capture(), _labeled(point_index), first_given=False)
+    assert named.marker_frames == given.marker_frames + 3 and named.correct == given.correct + 1
+    assert named.swaps == given.swaps + 2
+
+
 def test_empty_labeling_has_zero_accuracy_and_declares_every_point() -> None:
     s = label_scores(_capture(), _labeled(np.full(PERFECT.shape, -1)))
     assert (s.label_accuracy, s.missed, s.ghost_recall) == (0.0, MARKER_FRAMES, 1.0)

@@ -52,7 +52,8 @@ def evaluate_from_model(
     labeled, windows = labeling.label(progress)
     seconds = time.perf_counter() - start
     result = _columns(labeled, [names.index(n) for n in shared])
-    return Evaluation(simulated, result, windows, label_scores(simulated, result), seconds, labeling.formulation.name)
+    scores = label_scores(simulated, result, first_given=False)  # the model named frame 0 too: it is scored
+    return Evaluation(simulated, result, windows, scores, seconds, labeling.formulation.name)
 
 
 def _columns(result: LabeledTrajectories, columns: list[int]) -> LabeledTrajectories:

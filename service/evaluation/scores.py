@@ -40,11 +40,12 @@ class LabelScores:
     declared_ghosts: int
 
 
-def label_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> LabelScores:
+def label_scores(capture: SimulatedCapture, result: LabeledTrajectories, first_given: bool = True) -> LabelScores:
     """Score ``result.point_index`` against the true marker of every input point.
 
     With ``t[f, n]`` the index of marker ``n``'s point in frame ``f`` (-1 if it has none)
-    and ``p[f, n] = result.point_index[f, n]``, over frames ``f >= 1``:
+    and ``p[f, n] = result.point_index[f, n]``, over frames ``f >= 1`` (``f >= 0`` when the
+    labeler was not given frame 0: ``first_given`` False, a start from a subject model):
     ``marker_frames = #{t >= 0}``, ``correct = #{t >= 0, p == t}``; a swap starts at
     ``(f, n)`` when ``n`` holds another marker's point in ``f`` but not in ``f - 1``.
 
@@ -52,7 +53,7 @@ def label_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> Labe
         ValueError: If ``point_index`` is not ``(frames, markers)`` or names a point that
             the frame does not have.
     """
-    marker, frame, offsets, taken, scored, visible, correct = _marked(capture, result)
+    marker, frame, offsets, taken, scored, visible, correct = _marked(capture, result, first_given)
     rows, cols = np.nonzero((taken >= 0) & scored[:, None])
     flat_taken = offsets[rows] + taken[rows, cols]
     held = np.full(taken.shape, -2)  # -2: holds no point, -1: holds a ghost
@@ -103,7 +104,7 @@ class _Marked(NamedTuple):
     correct: np.ndarray
 
 
-def _marked(capture: SimulatedCapture, result: LabeledTrajectories) -> _Marked:
+def _marked(capture: SimulatedCapture, result: LabeledTrajectories, first_given: bool = True) -> _Marked:
     """The flat points (``_flatten``), the labeling, and per marker-frame masks.
 
     ``scored[f]``: frame ``f >= 1``; ``visible[f, n]``: scored and ``n`` has a point;
@@ -111,8 +112,8 @@ def _marked(capture: SimulatedCapture, result: LabeledTrajectories) -> _Marked:
     """
     marker, frame, offsets = _flatten(capture.point_marker)
     taken = _checked_point_index(capture, result, offsets)
-    # Frame 0 is given by the user, so nothing in it is scored.
-    scored = np.arange(taken.shape[0]) >= 1
+    # Frame 0 is given by the user, so nothing in it is scored (unless a model named it).
+    scored = np.arange(taken.shape[0]) >= (1 if first_given else 0)
     true_index = _true_index(marker, frame, offsets, taken.shape)
     visible = (true_index >= 0) & scored[:, None]
     correct = visible & (taken == true_index)
