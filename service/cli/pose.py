@@ -104,8 +104,16 @@ def _calibration_unit(calibration: Path) -> str:
 
 
 def _subject_body(path: Path, metres_per_unit: float) -> BodyModel:
+    """The body of a subject model; a line names the joints it leaves out (on segments not
+    joined to the largest tree: the model's RAnkle went missing from the TRC without a word)."""
     try:
-        return subject_body(SubjectModel.from_json(path.read_text()), metres_per_unit)
+        subject = SubjectModel.from_json(path.read_text())
+        body = subject_body(subject, metres_per_unit)
+        left = [joint.name for joint in subject.joints if joint.name not in {node.name for node in body.nodes}]
+        if left:
+            report.warn(f"warning: {path.name}: {len(left)} joint{'s' * (len(left) > 1)} on segments not joined to "
+                        f"the rest of the body, not fitted or written: {', '.join(left[:8])}")
+        return body
     except OSError as error:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
     except FormulationError as error:
