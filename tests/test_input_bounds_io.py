@@ -251,6 +251,8 @@ def test_a_body_in_cm_read_as_mm_is_warned_of_by_its_landmarks():
     assert scale_warning(_body(1.0)[0], _body(1.0), 100.0, "mm", names=BODY) is None
     hand = [f"F{k}" for k in range(10)]  # a hand or face set in mm is as small: no landmark names
     assert scale_warning(small[0], small, 100.0, "mm", names=hand) is None
+    face = [f"{side}Cheek{k}" for side in "LR" for k in range(5)]  # "Cheek" holds HEE, not a heel
+    assert scale_warning(small[0], small, 100.0, "mm", names=face) is None
 
 
 def test_one_marker_and_unlabeled_frames_have_no_scale_to_judge():
@@ -312,3 +314,17 @@ def test_times_printed_to_3_decimals_at_240_hz_are_even_enough(tmp_path, suffix)
         lines[i] = separator.join([frame, f"{(i - first_row) / 240:.3f}", rest])
     path.write_text("\n".join(lines) + "\n")
     assert read_labeled(path).positions.shape == (30, 4, 3)
+
+
+def test_a_jobs_warnings_say_a_body_in_cm_read_as_mm_too():
+    """The service's job warnings (``result_warnings``) judged the spacing without the names."""
+    from service.capture.capture import Capture
+    from service.labeling.capture_labeling import CaptureLabeling
+    from service.labeling.result_warnings import result_warnings
+
+    small = np.concatenate([_body(0.1) + [0.5 * k, 0.0, 0.0] for k in range(6)])  # 12 frames, walking slowly
+    capture = Capture(BODY, small[0], 100.0, points=list(small))
+    labels = CaptureLabeling(capture).label()[0]
+    assert any("(a body in cm read as mm?)" in line for line in result_warnings(capture, labels, []))
+    face = Capture([f"F{k}" for k in range(10)], small[0], 100.0, points=list(small))
+    assert not any("cm read as mm" in line for line in result_warnings(face, CaptureLabeling(face).label()[0], []))

@@ -85,3 +85,11 @@ def test_a_space_separated_file_is_told_so(tmp_path: Path) -> None:
     result = _write(tmp_path / "r.txt", [line.replace(",", " ") for line in _lines(TUD / "test.txt")])
     with pytest.raises(InputError, match="separated by spaces or tabs"):
         mot_scores(result, TUD / "gt.txt")
+
+
+def test_a_result_given_as_the_ground_truth_is_refused(tmp_path: Path) -> None:
+    """A tracker's confidences in column 7 scored as consider flags (MOT17-09: HOTA 0.240, MOTA -5.98)."""
+    rows = [line.split(",") for line in _lines(TUD / "test.txt")]
+    result = _write(tmp_path / "r.txt", [",".join(row[:6] + ["0.9866"] + row[7:]) for row in rows])
+    with pytest.raises(InputError, match=r"r.txt: line 1: 0.9866 in column 7, where a ground truth has its consider flag"):
+        mot_scores(TUD / "gt.txt", result)

@@ -233,6 +233,7 @@ def test_unnamed_markers_need_the_cloud_and_fewer_than_the_take(rec) -> None:
     ({"pixel_noise": 9000.0}, "'pixel_noise' applies to mode = \"cameras\"; this scenario's mode is \"cloud\""),
     ({"mode": "cameras", "calibration": "c.toml", "noise_mm": 500.0}, "'noise_mm' applies to mode = \"cloud\""),
     ({"formulation_parameters": {"time_limit": 1e-4}}, "unknown scenario key 'formulation_parameters'"),
+    ({"mode": "cameras", "calibration": "c.toml", "second_pass": False}, "'second_pass' applies to mode = \"cloud\""),
 ])
 def test_a_key_the_mode_ignores_is_refused(keys: dict, said: str) -> None:
     """They were accepted and changed nothing (or, undocumented, changed the formulation)."""

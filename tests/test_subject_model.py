@@ -258,3 +258,14 @@ def test_cli_warns_when_pooled_takes_look_like_two_subjects(tmp_path: Path) -> N
         printed[key] = result.output
     assert "take4.trc: " in printed["two"] and "another subject, or markers placed again?" in printed["two"]
     assert "another subject" not in printed["one"]
+
+
+def test_cli_says_when_pooled_takes_differ_only_in_case(tmp_path: Path) -> None:
+    """CMU's 85_02 says Male:, 135_02 male:; the refusal gave no hint."""
+    names, positions, _ = chain(3)
+    occluded = np.zeros(positions.shape[:2], bool)
+    write_labeled(tmp_path / "a.trc", LabeledTrajectories(names, positions, occluded, 100.0))
+    write_labeled(tmp_path / "b.trc", LabeledTrajectories([n.lower() for n in names], positions, occluded, 100.0))
+    result = CliRunner().invoke(app, ["model", str(tmp_path / "a.trc"), str(tmp_path / "b.trc"),
+                                      "--out", str(tmp_path / "m.json")])
+    assert result.exit_code == 2 and "differ from its names only in upper/lower case" in result.output

@@ -46,6 +46,22 @@ def benchmark(truth: MotTable) -> str:
     return "MOT17" if valid.all() else "MOT15"
 
 
+def check_consider_flags(truth: MotTable) -> None:
+    """A ground truth's 7th column is a consider flag, 0 or 1 (-1 in some MOT15 files); a
+    detector's confidence there (0.986) is a result file given as the ground truth, which
+    scored (HOTA 0.240 for MPNTrack against Lif_T) instead of being refused.
+
+    Raises:
+        InputError: The first line whose flag is another number.
+    """
+    flags = truth.rows[:, 6]
+    bad = ~np.isin(flags, (0.0, 1.0, -1.0))
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise InputError(f"{truth.at(row)}: {flags[row]:g} in column 7, where a ground truth has its consider flag "
+                         "(0 or 1): is it a result file, with confidences there?")
+
+
 def check_unique_ids(table: MotTable) -> None:
     """Refuse an id that appears twice in one frame, naming both lines."""
     keys = table.rows[:, :2]

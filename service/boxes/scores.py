@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from service.boxes.mot_checks import benchmark, check_unique_ids, matched_share
+from service.boxes.mot_checks import benchmark, check_consider_flags, check_unique_ids, matched_share
 from service.boxes.mot_files import MotTable, dense_ids, read_seqinfo, read_table
 from service.errors import InputError
 
@@ -66,6 +66,7 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
     from trackeval.utils import TrackEvalException
 
     truth_table, result_table = read_table(gt), read_table(result, empty_ok=True)
+    check_consider_flags(truth_table)
     for table in (truth_table, result_table):
         check_unique_ids(table)
     truth, rows = truth_table.rows, result_table.rows

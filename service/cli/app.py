@@ -115,7 +115,7 @@ def model(
     inputs: Annotated[list[Path], typer.Argument(help="Labeled .c3d/.trc/.csv takes of one subject (a range of motion).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Subject model .json to write.")],
     centres: Annotated[Path | None, typer.Option(
-        help="Also write the fitted joint-centre trajectories (.trc, .csv or .c3d), in the first take's unit.",
+        help="Also write the fitted joint-centre trajectories: .trc or .c3d in the first take's unit, .csv in mm.",
     )] = None,
     markerset: Annotated[str | None, typer.Option(
         help="Marker-set template: a name in configs/markersets (cmu-41, plug-in-gait, gait2354, rajagopal) or a .toml; "

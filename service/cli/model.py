@@ -93,8 +93,11 @@ def _check_one_marker_set(takes: list[Recording], paths: list[Path]) -> None:
     for take, path in zip(takes[1:], paths[1:], strict=True):
         shared = len(first.intersection(take.names))
         if shared < MIN_SHARED * min(len(first), take.n_markers):
+            folded = {name.casefold() for name in first}
+            case = sum(name.casefold() in folded for name in take.names if name not in first)
+            hint = f" ({case} differ from its names only in upper/lower case)" if case else ""
             raise InputError(f"{path.name}: shares {shared} of its {take.n_markers} marker names with "
-                             f"{paths[0].name}; a model is fitted to takes of one marker set")
+                             f"{paths[0].name}{hint}; a model is fitted to takes of one marker set")
 
 
 def unseen_warning(names: list[str], positions: np.ndarray) -> str | None:

@@ -15,7 +15,8 @@ FIRST_FRAMES = ("labeled", "model")
 ASSOCIATIONS = ("joint-3d", "per-camera")
 # Keys one mode reads and the other ignores.
 _MODE_KEYS = {
-    "cloud": ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "drop_rate", "drop_burst_frames", "unnamed_markers"),
+    "cloud": ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "drop_rate", "drop_burst_frames", "unnamed_markers",
+              "second_pass"),
     "cameras": ("calibration", "pixel_noise", "merge_radius_px", "clutter_per_camera", "occlusion_rate",
                 "occlusion_burst_frames", "up_axis", "association"),
 }

@@ -69,7 +69,7 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
         shape_break_warning(breaks, result.names, start),
         fast_motion_warning(fast_markers(result.names, result.positions)),
         scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit,
-                      spacing=not spacing_judged),
+                      spacing=not spacing_judged, names=list(capture.names)),
         coincident_warning(coincident_pairs(result.names, result.positions)),
     ]
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against

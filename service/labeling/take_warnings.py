@@ -91,7 +91,10 @@ SPACING_MM = (1.0, 5000.0)  # median nearest-neighbour distance in the labeled f
 # A body in cm read as mm is 10x small (CMU 85_02's 41 markers within 160 mm, 11 mm apart),
 # and so are hand and face sets in mm: only the names tell them apart. Five markers named for
 # body landmarks (knee, ankle, heel, ASIS, C7, ...) within 400 mm are a body in another unit.
-BODY_LANDMARKS = re.compile(r"ASI|PSI|KNE|ANK|HEE|TOE|C7|CLAV|STRN|SHO|ELB|WR[AB]|THI|TIB|HIP|SACR|ACR", re.IGNORECASE)
+# A landmark token starts the name or follows a side letter or a separator ("LHEE", "R.Heel",
+# "Male:C7"), not another letter: "Cheek" is a face marker.
+BODY_LANDMARKS = re.compile(r"(?<![A-KM-QS-Za-km-qs-z])(?:ASI|PSI|KNE|ANK|HEE|TOE|C7|CLAV|STRN|SHO|ELB|WR[AB]|THI|TIB|HIP|"
+                            r"SACR|ACR)", re.IGNORECASE)
 SMALL_BODY = (5, 400.0)  # landmark markers at least, extent under (mm)
 MAX_SPEED_MM_S = 50_000.0  # median marker speed: a thrown ball's, not a limb's
 
