@@ -106,7 +106,7 @@ def test_a_result_given_as_ground_truth_is_refused(tmp_path):
     result = tmp_path / "result.txt"
     assert runner.invoke(app, ["boxes", str(DETECTIONS), "--out", str(result)]).exit_code == 0
     swapped = runner.invoke(app, ["mot-eval", str(GT), str(result)])
-    assert swapped.exit_code == 2 and "counts none of its boxes as ground truth" in swapped.output
+    assert swapped.exit_code == 2 and "is it a result file" in swapped.output
 
 
 @pytest.mark.skipif(not DETECTIONS.exists(), reason="needs ../shared/data (TUD-Campus detections)")

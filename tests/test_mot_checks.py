@@ -93,3 +93,10 @@ def test_a_result_given_as_the_ground_truth_is_refused(tmp_path: Path) -> None:
     result = _write(tmp_path / "r.txt", [",".join(row[:6] + ["0.9866"] + row[7:]) for row in rows])
     with pytest.raises(InputError, match=r"r.txt: line 1: 0.9866 in column 7, where a ground truth has its consider flag"):
         mot_scores(TUD / "gt.txt", result)
+
+
+def test_a_ground_truth_with_nothing_to_consider_is_refused(tmp_path: Path) -> None:
+    gt = _write(tmp_path / "gt.txt", [",".join(line.split(",")[:6] + ["0"] + line.split(",")[7:])
+                                      for line in _lines(TUD / "gt.txt")])
+    with pytest.raises(InputError, match="counts none of its boxes as ground truth"):
+        mot_scores(TUD / "test.txt", gt)
