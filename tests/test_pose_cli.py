@@ -160,39 +160,39 @@ def test_out_of_range_options_are_one_line(tmp_path, option: str, value: str, sa
     one_line_error(run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", option, value), said)
 
 
-def test_a_subject_model_naming_few_keypoints_is_warned_of(tmp_path) -> None:
-    """A model naming one keypoint was fitted to it alone and reported a small error."""
+def _leg_naming_rknee() -> dict:
+    """The leg model of ``test_pose_markers`` as JSON, its first joint named RKnee (a keypoint)."""
     from test_pose_markers import leg
 
-    take = write_take(tmp_path / "take")
-    data = json.loads(leg().to_json())
+    data: dict = json.loads(leg().to_json())
     old = data["joints"][0]["name"]
     data["joints"][0]["name"] = "RKnee"
     for limb in data["limbs"]:
         limb["joints"] = ["RKnee" if name == old else name for name in limb["joints"]]
+    return data
+
+
+def _pose_with(tmp_path, data: dict) -> subprocess.CompletedProcess[str]:
+    """``pose`` of a small take with the model ``data``, a quick schedule."""
+    take = write_take(tmp_path / "take")
     (tmp_path / "subject.json").write_text(json.dumps(data))
     result = run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", "--model", tmp_path / "subject.json",
                         "--particles", "20", "--layers", "2")
     assert result.returncode == 0, result.stderr
+    return result
+
+
+def test_a_subject_model_naming_few_keypoints_is_warned_of(tmp_path) -> None:
+    """A model naming one keypoint was fitted to it alone and reported a small error."""
+    result = _pose_with(tmp_path, _leg_naming_rknee())
     assert "warning: the model names 1 of the 21 keypoints detected (RKnee)" in result.stderr
 
 
 def test_joints_off_the_bodys_tree_are_named(tmp_path) -> None:
     """A model whose segments form two trees: the smaller one's joint was left out of the TRC without a word."""
-    from test_pose_markers import leg
-
-    take = write_take(tmp_path / "take")
-    data = json.loads(leg().to_json())
-    old = data["joints"][0]["name"]
-    data["joints"][0]["name"] = "RKnee"
-    for limb in data["limbs"]:
-        limb["joints"] = ["RKnee" if name == old else name for name in limb["joints"]]
-    apart = [{**segment, "name": f"far{k}", "markers": [f"far{k}_{m}" for m in segment["markers"]]}
-             for k, segment in enumerate(data["segments"][:2])]
-    data["segments"] += apart
+    data = _leg_naming_rknee()
+    data["segments"] += [{**segment, "name": f"far{k}", "markers": [f"far{k}_{m}" for m in segment["markers"]]}
+                         for k, segment in enumerate(data["segments"][:2])]
     data["joints"].append({**data["joints"][0], "name": "LAnkle", "segments": ["far0", "far1"]})
-    (tmp_path / "subject.json").write_text(json.dumps(data))
-    result = run_inline(take, "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", "--model", tmp_path / "subject.json",
-                        "--particles", "20", "--layers", "2")
-    assert result.returncode == 0, result.stderr
+    result = _pose_with(tmp_path, data)
     assert "1 joint on segments not joined to the rest of the body, not fitted or written: LAnkle" in result.stderr
