@@ -4,8 +4,9 @@
 same set share names but not distances, and the pooled fit then finds little rigid: CMU
 85_02's subject with 135_02's gave 5 segments and every leg and arm marker a single, without
 a word. Pairs of markers whose distance is steady within each take (MAD under 3 mm) are
-compared between takes: over the real takes' halves (85_02, 135_02, walking2, the tennis
-serve, BTS) none of them moves by more than 15 mm; 85_02 against 135_02, 69 % of them do.
+compared between takes: between halves of one real take (85_02, 135_02, walking2, the tennis
+serve, BTS) none of them moves by more than 15 mm; 85_02 against 135_02 (names made the same
+case), 52 % of 23 pairs do over the whole takes, 69 % of 58 over their first halves.
 """
 
 from __future__ import annotations

@@ -103,8 +103,6 @@ def run_track(
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
         result, windows = labeling.label(progress)
-    if carried is not None:  # the summary counts the leftover points the output holds
-        result = carried.without_their_samples(result)
     written = with_absent(result, absent)
     if carried is not None and not is_copy(output, source):
         written = carried.appended_to(written)

@@ -7,10 +7,9 @@ samples under the input's names, so the output still holds everything the input 
 
 Their samples are taken out of the capture before labeling (``out_of``): they keep the
 input's names, so a model marker that took one wrote one point under two names (BTS from
-frame 337 with a model of its first 337 frames: SCR2 on "r bar 2"'s point in 170 frames).
-Whatever of them still comes out as a leftover ``*N`` trajectory, ``without_their_samples``
-takes out, for every output (the C3D copy included), so a sample is written once and the
-summary's count of leftover points is of points that are nowhere else in the output.
+frame 337 with a model of its first 337 frames: SCR2 on "r bar 2"'s point in 170 frames),
+and one no marker took came out again as a leftover ``*N`` trajectory. So each sample is
+written once, and the summary's count of leftover points is of points nowhere else.
 """
 
 from __future__ import annotations
@@ -20,7 +19,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from service.capture.capture import Capture
-from service.io.formats.conventions import without_samples
 from service.io.recording import LabeledTrajectories, Recording, is_unlabeled
 from service.labeling.absent_markers import with_absent
 
@@ -54,11 +52,6 @@ class CarriedMarkers:
             return capture
         return replace(capture, points=[_without(frame, self.positions[f]) for f, frame in enumerate(capture.points)])
 
-    def without_their_samples(self, result: LabeledTrajectories) -> LabeledTrajectories:
-        """``result`` whose leftover channels no longer hold these markers' samples (a channel
-        left empty is dropped)."""
-        return replace(result, unlabeled=without_samples(result.unlabeled, self.positions, SAME_SAMPLE_MM))
-
     def appended_to(self, result: LabeledTrajectories) -> LabeledTrajectories:
         """``result`` with these markers as further columns, occluded where missing: for an
         output that is not a copy of the input C3D (which keeps them itself)."""
@@ -66,14 +59,11 @@ class CarriedMarkers:
 
 
 def _without(points: np.ndarray, samples: np.ndarray) -> np.ndarray:
-    """``points`` less the one nearest each finite sample, where it is that sample."""
+    """``points`` less the one nearest each finite sample, where it is that sample (the first
+    of exact copies: a model marker's sample copied under another name keeps its point)."""
     samples = samples[np.isfinite(samples).all(axis=1)]
     if not len(samples) or not len(points):
         return points
-    apart = np.linalg.norm(points[:, None] - samples[None], axis=2)
-    gone = set()
-    for s in range(len(samples)):
-        order = [p for p in np.argsort(apart[:, s]) if p not in gone]
-        if order and apart[order[0], s] <= SAME_SAMPLE_MM:
-            gone.add(int(order[0]))
-    return np.delete(points, sorted(gone), axis=0)
+    apart = np.linalg.norm(points[:, None] - samples[None], axis=2)  # (P, S)
+    nearest = apart.argmin(axis=0)
+    return np.delete(points, np.unique(nearest[apart[nearest, np.arange(len(samples))] <= SAME_SAMPLE_MM]), axis=0)
