@@ -33,7 +33,7 @@ from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
 from service.labeling.stats import DOUBTFUL_BELOW, REPORTED_DOUBTFUL_BELOW  # noqa: E402
 
-FIVE = ["default", "noise-2", "noise-4", "drop-30", "ghosts-10"]  # the conditions the README's matrices run
+FIVE = ["default", "noise-2", "noise-4", "drop-30", "ghosts-10"]  # the conditions the matrices in docs/ run
 
 
 def cell_labels(recording: str, condition: str, seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:

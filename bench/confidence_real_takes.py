@@ -9,7 +9,7 @@ took is the file's own point for that marker; labels where the file has none are
 recall (the same labels raw and calibrated: the map is monotone), and the Brier score and
 the expected calibration error of the raw and of the calibrated p
 (``formulations.confidence.calibration``). The file's own labels are no truth where they
-are corrupt (CMU 135_02's left foot from frame 4486, README).
+are corrupt (CMU 135_02's left foot from frame 4486, docs/measured.md).
 
     .venv/bin/python bench/confidence_real_takes.py [--only NAME ...]
 """

@@ -59,7 +59,7 @@ def measure(path: Path, frames: int, runs: int, model: bool = False) -> dict[str
 
 def _run(capture: Capture, n: int) -> dict[str, float]:
     """One pass's time per frame and where it goes (what labeling as frames arrive costs), and
-    the default labeling's with its second pass (README, "Second pass") when it runs."""
+    the default labeling's with its second pass (docs/track.md, "Second pass") when it runs."""
     start = time.perf_counter()
     _, windows = CaptureLabeling(capture, LabelingOptions(second_pass=False)).label()
     total = time.perf_counter() - start

@@ -1,6 +1,6 @@
 """A fully labeled, fitting segment is read from its labels instead of searched for, and on
 clean synthetic takes identification with those readings names the cloud as the full search
-does (on real takes it differs where the search misreads such a segment: README)."""
+does (on real takes it differs where the search misreads such a segment: docs/subject-model.md)."""
 
 from __future__ import annotations
 

@@ -164,6 +164,6 @@ def test_real_take_from_a_frame_with_absent_markers(tmp_path: Path) -> None:
     # reappears near it. At 169 MEDH vanishes as STYLu appears 33 mm from it; an unnamed track is
     # born there, but the window still gives it to MEDH, which keeps it to the end, and LASTC
     # takes MEDH's point when it is back at 189 (2.1 % of labels; before unnamed tracks MEDH let
-    # go at 188 and the two were wrong 23 frames, 1.4 %: README, "Unnamed tracks").
+    # go at 188 and the two were wrong 23 frames, 1.4 %: docs/how-a-window-is-solved.md, "Unnamed tracks").
     assert same[labeled[kept, span]].mean() >= 0.975
     assert labeled[kept, span][present[kept, span]].mean() >= 0.99

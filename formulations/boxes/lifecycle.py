@@ -63,7 +63,7 @@ class Lifecycle:
         returns_compete: Test the chains a lost object took after a miss against a newcomer
             (module docstring). On by default: on the sequences the box costs were chosen on
             (TUD-Campus, MOT17-02) it gains HOTA and IDF1 (MOT17-02: 0.476 -> 0.481, 0.521 ->
-            0.537) at the same ID switches (README, Boxes).
+            0.537) at the same ID switches (docs/boxes.md).
     """
 
     min_hits: int = 3

@@ -25,7 +25,7 @@ change needs weighed by the chance that the labels it undoes are right. RTOE and
 apart on CMU 85_02's forefoot, came back exchanged with deviations 30-34 mm against 15-18 mm
 swapped back (gain 15-19 mm, under the 40 mm two sure markers need), both at c = 0.00-0.01,
 for the 225 frames to the end. Accuracy matrix (600 frames, seed 0, five conditions, lp-l1):
-validation half 96.28 -> 96.42 %, tuning half 95.58 -> 95.79 % (README, Confidence). Waiving
+validation half 96.28 -> 96.42 %, tuning half 95.58 -> 95.79 % (docs/confidence.md). Waiving
 the gain for doubtful markers outright also moved a wrist marker at c = 0.66 alone onto a
 free point at the tennis serve (96.2 -> 94.1 %).
 
@@ -43,7 +43,7 @@ took another marker's point, continued). A visible marker's own free point is ta
 back either way. Accuracy matrix, lp-l1, 600 frames: seed 0 (85 rows) 97.209 -> 97.338 %,
 swaps 1,645 -> 1,584; seeds 1-2 (170 rows) 97.119 -> 97.211 %; ``unnamed-3`` seeds 0-2
 96.214 -> 96.130 %. Barring unseen markers from free points outright, or allowing only
-points inside their gate, was tried and lost more than it gained (README, Recovery).
+points inside their gate, was tried and lost more than it gained (docs/how-a-window-is-solved.md, Recovery).
 
 Nor does an unseen marker take a free point whose track was seen beside it
 (``coexistence``): a track followed back to the frame the marker was last seen in, and

@@ -264,7 +264,7 @@ class MarkerState:
         neighbour count took the seed-0 accuracy matrix 97.104 -> 95.438 % (the running takes
         down by up to 22 points); as a fallback 97.037 % (seeds 1-2 98.857 -> 98.793 %); with
         the sure predictions only 97.109 %, swaps 1,711 -> 1,678, and seeds 1-2 99.037 %,
-        swaps 534 -> 488 (README, How a window is solved).
+        swaps 534 -> 488 (docs/how-a-window-is-solved.md).
         """
         seen_now = self.visible[self.neighbours]
         usable: np.ndarray = self.anchor_valid & seen_now

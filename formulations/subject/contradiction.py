@@ -46,7 +46,7 @@ def labeled_misfits(geometry: ModelGeometry, positions: Array) -> list[SegmentMi
     A frame the user labeled is right, so such a segment says the model does not describe the
     take: a marker placed otherwise, or markers grouped from a trial with too little motion to
     separate them (03_rolling's first 562 frames gave 10-marker segments: its head 45 mm off at
-    frame 562, tolerance 33; no segment is off at the other starts measured, README).
+    frame 562, tolerance 33; no segment is off at the other starts measured, docs/subject-model.md).
     """
     placed, ratio = _residual_ratio(geometry, positions)
     misfits = []

@@ -94,7 +94,7 @@ def track_boxes(
         likelihood: Price arcs as negative log-likelihoods with P_D and false alarms learned
             window by window (``formulations.boxes.likelihood``), else Jiang's weighted costs
             (``model``'s constants). Off by default: on MOT17 it lets the window's look-ahead
-            carry lost objects onto other people's boxes (README, Boxes).
+            carry lost objects onto other people's boxes (docs/boxes.md).
 
     Raises:
         InputError: A window shorter than 2, an unknown formulation, histograms of the wrong shape.

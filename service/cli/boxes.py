@@ -15,7 +15,7 @@ from service.cli.output import check_not_input, check_writable_folder
 from service.cli.report import out, warn
 from service.errors import InputError
 
-TUNED_WINDOW = 5  # the default --window, the one the box costs were chosen at (README, Boxes)
+TUNED_WINDOW = 5  # the default --window, the one the box costs were chosen at (docs/boxes.md)
 UNTRACKED_WARNING = 0.25  # detections in no track, past a longer window: objects were dropped
 
 

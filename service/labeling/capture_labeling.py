@@ -98,7 +98,7 @@ class CaptureLabeling:
             # Identified, nothing labeled: the take may correct the model. Labels already place
             # their segments; relearning beside them cost 03_rolling's second half (labels of
             # frame 1152 kept, model of 0-1151) 10 points (69.45 % without, 59.48 % with) and
-            # changed no label of the basket sprint, racing, BTS or the OpenSim walks (README).
+            # changed no label of the basket sprint, racing, BTS or the OpenSim walks (docs/subject-model.md).
             if not np.isfinite(capture.first_frame).any():
                 model = learn_from_take(model, capture.points[: options.window])
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))

@@ -14,7 +14,7 @@ The labels' own doubt was the judge before, and a poor one: each pass's confiden
 conditional on the spreads it started from, so a second pass from wider spreads doubts the
 same right labels more (CMU 135_02, hard preset, seed 0: 83.6 % right and 20.8 % doubtful
 against 95.6 % right and 25.2 % doubtful; the doubt kept the first). Both passes run to
-the end and kept by each judge (``bench/pass_choice.py``, lp-l1, command in the README): over the 31 of 44 runs of 11
+the end and kept by each judge (``bench/pass_choice.py``, lp-l1, command in docs/track.md): over the 31 of 44 runs of 11
 takes under four matrix conditions (seed 0, 600 frames) where a second pass runs, the mean
 accuracy kept is 96.69 % by the doubt, 96.92 % by the first frame, 96.96 % keeping the better
 pass each time; over the hard preset's 9 runs (3 takes, seeds 0-2) 88.65 %, 89.98 % and 89.98 %.

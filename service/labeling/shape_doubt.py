@@ -17,7 +17,7 @@ from formulations.markers.shape_breaks import ShapeBreak, shape_breaks
 from service.io.recording import LabeledTrajectories
 
 # The reported confidence of a label inside a break: of the labels in breaks on the real takes
-# that have any (relabeled by ``bench/real_takes.py`` from the README's start frames), 32 % were
+# that have any (relabeled by ``bench/real_takes.py`` from docs/measured.md's start frames), 32 % were
 # right on CMU 135_02 (1,911 labels), 1 % on 03_rolling (2,610) and 0 % on the basket sprint
 # (328): 13 % pooled. The fourteen other takes had no break at all, and on the accuracy matrix's
 # simulated takes (``bench/shape_breaks_matrix.py``) 1 run of 68 had one: 139 labels, none right.
