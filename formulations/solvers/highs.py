@@ -8,6 +8,7 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
+from formulations.errors import SolverFailure
 from formulations.solvers.base import LinearModel, SolverBackend, SolveResult
 
 PRIMAL_SIMPLEX = 4  # HiGHS simplex_strategy: primal
@@ -111,7 +112,14 @@ class HighsBackend(SolverBackend):
 
     def solve(self) -> SolveResult:
         start = time.perf_counter()
-        self._highs.run()
+        if self._highs.run() == highspy.HighsStatus.kError:
+            # HiGHS' thread scheduler is one per process: once another HiGHS (cvxpy's, a
+            # user's) started it with more threads, every run asking threads=1 is refused,
+            # silently with output off. Take the scheduler as it is.
+            self._set("threads", 0)
+            if self._highs.run() == highspy.HighsStatus.kError:
+                status = self._highs.modelStatusToString(self._highs.getModelStatus())
+                raise SolverFailure(f"HiGHS stopped with an error (model status {status!r})")
         seconds = time.perf_counter() - start
         status = self._highs.getModelStatus()
         text = self._highs.modelStatusToString(status)
