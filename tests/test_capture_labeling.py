@@ -71,3 +71,31 @@ def test_window_outcome_bytes_round_trip_exactly():
 def test_bad_options_are_input_errors(fields, message):
     with pytest.raises(InputError, match=message):
         CaptureLabeling(points_capture(frames=5), LabelingOptions(**fields))
+
+
+def test_a_library_user_gets_the_warnings_track_prints():
+    """A take in micrometres is labeled (every marker moves 'too far' for its gates) and the
+    library said nothing; ``warnings`` gives the lines `track` prints, here the spacing's."""
+    capture = points_capture(frames=30)
+    scaled = replace(capture, first_frame=np.asarray(capture.first_frame) * 1000,
+                     points=[np.asarray(p) * 1000 for p in capture.points])
+    for take, expected in ((capture, False), (scaled, True)):
+        labeling = CaptureLabeling(take, LabelingOptions(window=10, second_pass=False))
+        labels, windows = labeling.label()
+        lines = labeling.warnings(labels, windows)
+        assert any("human-sized" in line for line in lines) is expected, lines
+
+
+def test_a_time_limit_hit_is_among_the_warnings():
+    """Deletions make the window LPs take longer than a microsecond (clean ones end in presolve)."""
+    capture, rng = points_capture(frames=30), np.random.default_rng(0)
+    gappy = [capture.points[0]] + [np.asarray(p)[rng.random(len(p)) > 0.1] for p in capture.points[1:]]
+    labeling = CaptureLabeling(replace(capture, points=gappy),
+                               LabelingOptions(formulation={"name": "lp-l1", "time_limit": 1e-6}, window=10))
+    labels, windows = labeling.label()
+    assert any("stopped at the solver's time limit" in line for line in labeling.warnings(labels, windows))
+
+
+def test_a_camera_association_on_3d_points_is_refused():
+    with pytest.raises(InputError, match="association 'per-camera' applies to camera captures"):
+        CaptureLabeling(points_capture(frames=5), LabelingOptions(association="per-camera"))

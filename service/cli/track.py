@@ -29,13 +29,12 @@ from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
-from service.labeling.result_warnings import early_scale_warning, result_warnings, time_limit_warning
+from service.labeling.result_warnings import early_scale_warning
 from service.labeling.second_pass import PassChoice
 from service.labeling.shape_doubt import shape_break_summary
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import (
     fast_markers,
-    model_misfit_warning,
 )
 
 
@@ -127,13 +126,11 @@ def run_track(
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
-    for line in result_warnings(capture, result, labeling.shape_breaks, unit, start or 0, spacing_judged=True):
+    for line in labeling.warnings(result, windows, unit, start or 0, spacing_judged=True):
         warn(line)
-    warn(time_limit_warning([w.status for w in windows]))
     warn(not_kept)
     warn(absent_warning(absent, start or 0))
     warn(_unknown_warning(unknown, start or 0))
-    warn(model_misfit_warning(labeling.model_misfits, start or 0))
 
 
 def track_summary(

@@ -52,11 +52,12 @@ from service.labeling.loop import Observer, Progress, WindowChain, first_marker_
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
 from service.labeling.per_camera import PerCameraChain
+from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
-from service.labeling.take_warnings import refuse_sub_millimetre, spacing_frame
+from service.labeling.take_warnings import model_misfit_warning, refuse_sub_millimetre, spacing_frame
 
 
 class Association(WindowChain[Any], Protocol):
@@ -83,7 +84,7 @@ class CaptureLabeling:
         refuse_sub_millimetre(spacing_frame(capture.first_frame, capture.points))
         self.formulation = resolve_formulation(options.formulation)
         self.n_windows = len(window_spans(capture.n_frames, options.window))
-        self._frames, self._window = capture.n_frames, options.window
+        self._capture, self._frames, self._window = capture, capture.n_frames, options.window
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
@@ -186,6 +187,19 @@ class CaptureLabeling:
         filled, doubt = rigid_refill(labels.positions, tied, guides)
         return pose_fill(self._geometry, labels.names, labels.positions, filled, doubt)
 
+    def warnings(self, result: LabeledTrajectories, windows: list[WindowStats], unit: str = "mm", start: int = 0,
+                 spacing_judged: bool = False) -> list[str]:
+        """The lines ``markerflow track`` prints after its summary, for what ``label`` returned
+        (the input in ``unit``, its frame ``start`` labeled first): many doubtful labels, labels
+        off their rigid neighbours, markers faster than their spacing, a spacing not human-sized
+        in ``unit`` (unless ``spacing_judged`` before labeling), copied columns, points with no
+        marker named, a frame 0 off the calibration, windows stopped at the time limit, segments
+        the labeled frame says the model gets wrong. Empty when none applies: an optimal window
+        is optimal under the model, and these say where the labels are likely wrong anyway."""
+        lines = result_warnings(self._capture, result, self.shape_breaks, unit, start, spacing_judged)
+        more = (time_limit_warning([w.status for w in windows]), model_misfit_warning(self.model_misfits, start))
+        return lines + [line for line in more if line is not None]
+
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
         """``(F, N, C)`` detection each marker took in each camera, -1 for none (camera mode).
 
@@ -241,6 +255,8 @@ def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -
     # track told from them (a birth is followed three frames).
     gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0, unnamed_tracks=False)
     if capture.points is not None:
+        if options.association != "joint-3d":  # the default; a choice made for cameras must not pass unsaid
+            raise InputError(f"association {options.association!r} applies to camera captures; this capture is 3D points")
         cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
         return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight,
                           unnamed_markers=capture.unnamed_markers)

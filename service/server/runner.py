@@ -31,8 +31,6 @@ from service.errors import InputError
 from service.labeling.absent_markers import absent_warning
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import StaleOutcome, WindowOutcome
-from service.labeling.result_warnings import result_warnings
-from service.labeling.take_warnings import model_misfit_warning
 from service.server.results import trajectories_to_bytes
 from service.server.store import JobStore, WindowTaken, store_for
 
@@ -73,13 +71,11 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
         # The kept windows replace the stored ones with the result, in one transaction: a
         # restart then finds either the first pass (and refines it again) or a finished job.
         result = labeling.result(kept)
-        misfit = model_misfit_warning(labeling.model_misfits, 0)  # said at submission too; kept with the result
         upload = store.upload(job_id)  # frames numbered as the file's, from its start, as track says them
         start, unit = (upload.start, "the file's unit") if upload is not None else (0, "mm")
         absent = absent_warning(list(upload.absent), upload.start) if upload is not None else None
         store.finish(job_id, trajectories_to_bytes(result), None if kept is outcomes else (kept, worker),
-                     result_warnings(capture, result, labeling.shape_breaks, unit, start)
-                     + [line for line in (absent, misfit) if line])
+                     labeling.warnings(result, [o.stats for o in kept], unit, start) + ([absent] if absent else []))
     except WindowTaken as taken:
         log.warning("%s; another runner has the job", taken)
     except OperationalError:  # the store itself (down, disk full): the job is retried, not failed by it
