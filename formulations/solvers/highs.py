@@ -118,8 +118,8 @@ class HighsBackend(SolverBackend):
             # silently with output off. Take the scheduler as it is.
             self._set("threads", 0)
             if self._highs.run() == highspy.HighsStatus.kError:
-                status = self._highs.modelStatusToString(self._highs.getModelStatus())
-                raise SolverFailure(f"HiGHS stopped with an error (model status {status!r})")
+                failed = self._highs.modelStatusToString(self._highs.getModelStatus())
+                raise SolverFailure(f"HiGHS stopped with an error (model status {failed!r})")
         seconds = time.perf_counter() - start
         status = self._highs.getModelStatus()
         text = self._highs.modelStatusToString(status)
