@@ -99,3 +99,22 @@ def test_a_time_limit_hit_is_among_the_warnings():
 def test_a_camera_association_on_3d_points_is_refused():
     with pytest.raises(InputError, match="association 'per-camera' applies to camera captures"):
         CaptureLabeling(points_capture(frames=5), LabelingOptions(association="per-camera"))
+
+
+def test_outcomes_of_another_labeling_are_refused():
+    """Resumed with another window size, the stored state was used as the template of another
+    frame and 9 labels came out wrong, silently; another capture's windows failed in numpy."""
+    capture = points_capture(frames=60)
+    stored = list(CaptureLabeling(capture, LabelingOptions(window=20, second_pass=False)).windows())
+    other_size = CaptureLabeling(capture, LabelingOptions(window=10, second_pass=False))
+    with pytest.raises(InputError, match="window 1 .frames 19-38. is not a window of this labeling"):
+        other_size.windows(after=stored[1])
+    with pytest.raises(InputError, match="not a window of this labeling"):
+        other_size.result(stored)
+    fewer = replace(capture, names=capture.names[:9], first_frame=np.asarray(capture.first_frame)[:9])
+    with pytest.raises(InputError, match="holds the state of 41 markers; this capture labels 9"):
+        CaptureLabeling(fewer, LabelingOptions(window=20, second_pass=False)).result(stored)
+    same = CaptureLabeling(capture, LabelingOptions(window=20, second_pass=False))
+    with pytest.raises(InputError, match="windows 0, 1, ... in order"):
+        same.result(stored[1:])
+    assert same.result(stored).n_frames == 60  # its own windows still assemble

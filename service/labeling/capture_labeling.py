@@ -7,7 +7,7 @@ Dask workers share:
     outcomes = []
     for outcome in labeling.windows(after=outcomes[-1] if outcomes else None):
         outcomes.append(outcome)  # persist it here to survive a crash
-    result = labeling.result(outcomes)
+    result = labeling.result(labeling.refine(outcomes))  # refine: the second pass, as label() runs it
 
 3D points are labeled by the window LP directly. Camera detections are either matched
 across cameras first (``joint-3d``) into 3D points whose resources are their detections,
@@ -51,6 +51,7 @@ from service.labeling.leftover_points import with_leftover_points
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
+from service.labeling.outcome_fit import check_outcomes, check_resumable
 from service.labeling.per_camera import PerCameraChain
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.second_pass import PassChoice, Stop, second_pass
@@ -83,7 +84,8 @@ class CaptureLabeling:
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
         refuse_sub_millimetre(spacing_frame(capture.first_frame, capture.points))
         self.formulation = resolve_formulation(options.formulation)
-        self.n_windows = len(window_spans(capture.n_frames, options.window))
+        self._spans = window_spans(capture.n_frames, options.window)
+        self.n_windows = len(self._spans)
         self._capture, self._frames, self._window = capture, capture.n_frames, options.window
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
@@ -118,7 +120,12 @@ class CaptureLabeling:
 
         ``progress`` is called with (windows done, windows), ``observer`` with (template
         frame, problem, solution), after each window.
+
+        Raises:
+            InputError: ``after`` is not a window of this labeling (another window size or capture).
         """
+        if after is not None:
+            check_resumable(after, self._spans, len(self._first.position))
         return label_windows(
             self._association, self.formulation, self._first, self._frames, self._window, after, progress, observer
         )
@@ -148,7 +155,12 @@ class CaptureLabeling:
         mode with each marker's best view per frame (``service.best_view.markers``); with every
         label's confidence, ``calibrated`` as reported (else the windows' raw ones), and then
         doubtful where a label left its rigid neighbours (``shape_doubt``); 3D points no marker
-        took kept as unlabeled trajectories (``leftover_points``)."""
+        took kept as unlabeled trajectories (``leftover_points``).
+
+        Raises:
+            InputError: ``outcomes`` are not this labeling's windows 0, 1, ... in order.
+        """
+        check_outcomes(outcomes, self._spans, len(self._first.position))
         labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)
