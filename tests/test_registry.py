@@ -80,3 +80,27 @@ def test_parameter_messages_say_what_is_wanted() -> None:
         get_formulation("nn-hungarian", foo=1)
     with pytest.raises(FormulationError, match="'hypotheses' must be an integer, got True"):
         get_formulation("mht", hypotheses=True)
+
+
+def test_a_table_builds_what_name_and_parameters_build():
+    """``LabelingOptions`` takes a table; ``get_formulation`` answered one with "unhashable type"."""
+    assert get_formulation({"name": "ilp", "time_limit": 10}) == get_formulation("ilp", time_limit=10)
+    with pytest.raises(FormulationError, match="needs a 'name'"):
+        get_formulation({"time_limit": 10})
+    with pytest.raises(FormulationError, match="a name, a table or a Formulation, got 3"):
+        get_formulation(3)  # type: ignore[arg-type]
+
+
+def test_numpy_scalars_are_the_numbers_they_hold():
+    """A notebook's ``np.int64(5)`` was refused as "must be an integer, got np.int64(5)"."""
+    import numpy as np
+
+    from formulations.methods.ilp import Ilp
+    from service.capture.capture import LabelingOptions
+
+    mht = get_formulation("mht", hypotheses=np.int64(5), noise=np.float32(2.0))
+    assert mht == get_formulation("mht", hypotheses=5, noise=2.0) and type(mht.hypotheses) is int
+    assert Ilp(time_limit=np.int64(10)).time_limit == 10
+    options = LabelingOptions(window=np.int32(10), layout_weight=np.float32(1.0), second_pass=np.bool_(False))
+    assert (options.window, options.layout_weight, options.second_pass) == (10, 1.0, False)
+    assert type(options.second_pass) is bool and type(options.window) is int

@@ -7,6 +7,8 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import ClassVar
 
+import numpy as np
+
 from formulations.errors import FormulationError
 from formulations.window.problem import WindowProblem
 from formulations.window.solution import WindowSolution
@@ -48,6 +50,12 @@ TABLE_BRANCHING, MAX_BRANCHING = 100, 10_000
 MAX_INTEGRALITY_TOLERANCE = 0.5
 
 
+def plain(value: object) -> object:
+    """A numpy scalar as the Python value it holds (``np.int64(5)`` is no ``int``, and a
+    formulation's parameters are written to JSON); anything else as is."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def check_parameters(
     formulation: Formulation, positive: tuple[str, ...] = (), non_negative: tuple[str, ...] = (),
     optional_positive: tuple[str, ...] = (), flags: tuple[str, ...] = (), integers: tuple[str, ...] = (),
@@ -64,10 +72,10 @@ def check_parameters(
 
     upper, strict = at_most or {}, below or {}
     for name in flags:
-        if not isinstance(getattr(formulation, name), bool):
+        if not isinstance(plain(getattr(formulation, name)), bool):
             raise bad(name, getattr(formulation, name), "true or false")
     for name in positive + non_negative + optional_positive:
-        value = getattr(formulation, name)
+        value = plain(getattr(formulation, name))
         if value is None and name in optional_positive:
             continue
         if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:

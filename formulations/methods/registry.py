@@ -10,12 +10,13 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import import_module
 from typing import Any
 
 from formulations.errors import FormulationError
-from formulations.methods.formulation import Formulation
+from formulations.methods.formulation import Formulation, plain
 
 # name -> "module:Class"; imported on first use so one solver's absence breaks only its formulation.
 _FORMULATIONS = {
@@ -49,6 +50,7 @@ class Description:
 
 
 def names() -> list[str]:
+    """The registered formulations' names, sorted (``markerflow formulations`` lists them)."""
     return sorted(_FORMULATIONS)
 
 
@@ -60,8 +62,9 @@ def formulation_class(name: str) -> type[Formulation]:
     return formulation
 
 
-def get_formulation(spec: str | Formulation, **parameters: Any) -> Formulation:
-    """A formulation instance from a name (with parameters) or an instance (returned as is).
+def get_formulation(spec: str | Mapping[str, Any] | Formulation, **parameters: Any) -> Formulation:
+    """A formulation instance from a name (with parameters), a table (``{"name": "ilp",
+    "time_limit": 10}``, as a ``[formulation]`` TOML table reads) or an instance (returned as is).
 
     Raises:
         FormulationError: Unknown name or parameter, or a value out of range, named.
@@ -70,6 +73,15 @@ def get_formulation(spec: str | Formulation, **parameters: Any) -> Formulation:
         if parameters:
             raise FormulationError("parameters go with a formulation name, not with an instance")
         return spec
+    if isinstance(spec, Mapping):
+        table = dict(spec)
+        name = table.pop("name", None)
+        if not isinstance(name, str):
+            raise FormulationError(f"a formulation table needs a 'name' (one of {', '.join(names())}), got {spec!r}")
+        return get_formulation(name, **table, **parameters)
+    if not isinstance(spec, str):
+        raise FormulationError(f"a formulation is a name, a table or a Formulation, got {spec!r}")
+    parameters = {key: plain(value) for key, value in parameters.items()}
     cls = formulation_class(spec)
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(parameters) - known)

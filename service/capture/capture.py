@@ -8,12 +8,12 @@ cameras, 2D detections per camera. Frame 0 of the points/detections is the label
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from formulations.cameras.camera import Camera
-from formulations.methods.formulation import Formulation
+from formulations.methods.formulation import Formulation, plain
 from formulations.subject.model import SubjectModel
 from service.capture.checks import (
     checked_count,
@@ -24,6 +24,7 @@ from service.capture.checks import (
     checked_rate,
     first_off_sensor,
 )
+from service.capture.frame0_points import check_frame0_points
 from service.capture.reprojection import frame0_distances, frame0_offsets, frame0_problem
 from service.errors import InputError
 
@@ -61,6 +62,8 @@ class LabelingOptions:
     second_pass: bool = True
 
     def __post_init__(self) -> None:
+        for option in fields(self):  # a notebook's np.float32(1.0) or np.bool_(False) is a plain value
+            object.__setattr__(self, option.name, plain(getattr(self, option.name)))
         if not isinstance(self.formulation, (str, dict, Formulation)):
             raise InputError(f"formulation must be a name, a table or a Formulation, got {self.formulation!r}")
         checked_count(self.window, "window", least=2)
@@ -113,8 +116,11 @@ class Capture:
         self.first_frame = checked_first_frame(self.first_frame, len(self.names))
         self.rate = checked_rate(self.rate)
         self.unnamed_markers = checked_count(self.unnamed_markers, "unnamed_markers")
+        if not self.names:
+            raise InputError("a capture needs at least one named marker (names is empty)")
         if self.points is not None:
             self.points = checked_frames(self.points, 3, "points")
+            check_frame0_points(self.first_frame, self.points[0])
         elif self.unnamed_markers:
             raise InputError(f"unnamed_markers={self.unnamed_markers}: unnamed tracks are followed in 3D points only; "
                              "in camera mode every marker the detections show must be named in the first frame")
