@@ -54,6 +54,10 @@ def checked_first_frame(first_frame: object, n_markers: int) -> np.ndarray:
     array = _float_array(first_frame, "first_frame")
     if array.shape != (n_markers, 3):
         raise InputError(f"first_frame must be ({n_markers}, 3), one (x, y, z) per marker name; got shape {array.shape}")
+    bad = np.flatnonzero((np.abs(array) > MAX_COORDINATE).any(axis=1))  # NaN passes: a marker left unlabeled
+    if len(bad):
+        raise InputError(f"first_frame[{bad[0]}]: {array[bad[0]].tolist()} is not a finite coordinate within "
+                         f"{MAX_COORDINATE:g} (NaN for a marker the labeled frame lacks)")
     return array
 
 
