@@ -18,6 +18,7 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
     from service.io.formats import read_labeled, write_labeled
     from service.io.recording import LabeledTrajectories, Recording, UnlabeledCloud
     from service.labeling.capture_labeling import CaptureLabeling
+    from service.labeling.outcome import WindowOutcome
 
 # Loaded on first use (PEP 562), so that ``markerflow --help`` and commands that do not label
 # (boxes, mot-eval, serve) do not import the whole labeler first (about a second).
@@ -27,12 +28,12 @@ _WHERE = {
     "load_calibration": "service.io.calibration", "read_labeled": "service.io.formats",
     "write_labeled": "service.io.formats", "LabeledTrajectories": "service.io.recording",
     "Recording": "service.io.recording", "UnlabeledCloud": "service.io.recording",
-    "CaptureLabeling": "service.labeling.capture_labeling",
+    "CaptureLabeling": "service.labeling.capture_labeling", "WindowOutcome": "service.labeling.outcome",
 }
 
 __all__ = [
     "Capture", "CaptureDocument", "CaptureLabeling", "InputError", "LabeledTrajectories", "LabelingOptions",
-    "Recording", "UnlabeledCloud", "load_calibration", "read_labeled", "write_labeled",
+    "Recording", "UnlabeledCloud", "WindowOutcome", "load_calibration", "read_labeled", "write_labeled",
 ]
 
 

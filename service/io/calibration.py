@@ -115,7 +115,7 @@ def save_markerflow_json(path: Path, cameras: list[Camera], units: str = "mm") -
     Path(path).write_text(json.dumps({"units": units, "cameras": entries}, indent=2) + "\n")
 
 
-def load_calibration(path: Path, units: str | None = None) -> list[Camera]:
+def load_calibration(path: str | Path, units: str | None = None) -> list[Camera]:
     """Any supported calibration: ``.json`` is markerflow JSON; a ``.toml`` with ``[cameras.N]``
     tables is caliscope, otherwise Pose2Sim."""
     path = Path(path)
