@@ -12,7 +12,8 @@ from typer.testing import CliRunner
 from formulations.window.solution import WindowSolution
 from service.cli.app import app
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+REPO = Path(__file__).resolve().parents[1]
+README = REPO / "README.md"
 
 
 def _block(heading: str, language: str) -> str:
@@ -39,3 +40,21 @@ def test_the_window_solution_comment_names_its_fields() -> None:
     named = [name.strip() for name in found.group(1).split(",")]
     fields = {field.name for field in dataclasses.fields(WindowSolution)}
     assert named and all(name in fields or isinstance(getattr(WindowSolution, name, None), property) for name in named)
+
+
+def test_the_library_example_runs_as_written(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The Quick start's Python block, run on 30 frames of CMU 85_02 with a ghost per frame: it
+    labels, prints the warnings and writes the C3D it says it writes."""
+    import numpy as np
+
+    from service.io.formats import read_labeled
+
+    take = read_labeled(REPO.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d")
+    rng = np.random.default_rng(0)
+    frames = [take.positions[0]] + [np.vstack([p, p[:1] + rng.normal(0, 200, (1, 3))]) for p in take.positions[1:30]]
+    monkeypatch.chdir(tmp_path)
+    scope = {"names": list(take.names), "first_frame": take.positions[0], "frames": frames}
+    exec(_block("## Quick start", "python"), scope)  # noqa: S102  # the README's own code
+    written = read_labeled(tmp_path / "take_labeled.c3d")
+    assert written.n_frames == 30 and written.names[: len(take.names)] == list(take.names)
+    assert np.nanmax(np.abs(written.positions[:, : len(take.names)] - take.positions[:30])) < 1e-3
