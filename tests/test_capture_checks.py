@@ -41,7 +41,6 @@ def _frames(n: int = 6) -> list[np.ndarray]:
         ({"points": [FIRST, [[1.0, 2.0, 3.0], [1.0, 2.0]]]}, "points[1]: not an array of numbers"),
         ({"unnamed_markers": -1}, "unnamed_markers must be a whole number of at least 0"),
         ({"unnamed_markers": 1.5}, "unnamed_markers must be a whole number"),
-        ({"names": [], "first_frame": np.zeros((0, 3)), "unnamed_markers": 4}, "at least one named marker"),
         ({"first_frame": np.vstack([FIRST[:3], [1e12, 0, 0]])}, "first_frame[3]: [1000000000000.0, 0.0, 0.0] is not a"),
         ({"first_frame": np.vstack([FIRST[:3], [np.inf, 0, 0]])}, "first_frame[3]: [inf, 0.0, 0.0] is not a finite"),
         ({"first_frame": FIRST + 500.0}, "4 of 4 labeled markers have no point of frame 0 within half their spacing"),
@@ -60,6 +59,13 @@ def test_a_first_frame_near_frame_0_s_points_is_taken() -> None:
     frames = _frames()
     frames[0] = frames[0][:3] + 3.0
     Capture(NAMES, FIRST, rate=100.0, points=frames)
+
+
+def test_a_capture_without_names_is_refused_when_labeled() -> None:
+    """It failed in scipy's cKDTree (zero-size array); unnamed, a capture is what a model names."""
+    unnamed = Capture([], np.zeros((0, 3)), rate=100.0, points=_frames(), unnamed_markers=4)
+    with pytest.raises(InputError, match="needs at least one named marker"):
+        CaptureLabeling(unnamed)
 
 
 def test_frames_as_lists_label_as_arrays_do() -> None:

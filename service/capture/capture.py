@@ -116,8 +116,6 @@ class Capture:
         self.first_frame = checked_first_frame(self.first_frame, len(self.names))
         self.rate = checked_rate(self.rate)
         self.unnamed_markers = checked_count(self.unnamed_markers, "unnamed_markers")
-        if not self.names:
-            raise InputError("a capture needs at least one named marker (names is empty)")
         if self.points is not None:
             self.points = checked_frames(self.points, 3, "points")
             check_frame0_points(self.first_frame, self.points[0])

@@ -82,6 +82,8 @@ class CaptureLabeling:
     """
 
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
+        if not capture.names:  # a capture may be built unnamed (``with_model`` then names it), not labeled so
+            raise InputError("a capture to label needs at least one named marker (names is empty)")
         refuse_sub_millimetre(spacing_frame(capture.first_frame, capture.points))
         self.formulation = resolve_formulation(options.formulation)
         self._spans = window_spans(capture.n_frames, options.window)
