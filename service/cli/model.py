@@ -20,6 +20,7 @@ from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out, warn
 from service.errors import InputError
 from service.io.formats import read_labeled
+from service.io.formats.replace_file import replacing
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 from service.labeling.take_warnings import take_scale_warning
 
@@ -59,14 +60,15 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     _print(fit, len(positions))
     warn(unseen_warning(names, positions))
     warn(far_joint_warning(far_joints(fit.model)))
-    try:
-        output.write_text(fit.model.to_json())
-    except OSError as error:
-        raise InputError(f"{output}: cannot write ({error.strerror})") from None
+    with replacing(output) as temp:  # a full disk or a Ctrl-C leaves an earlier model whole, not cut
+        temp.write_text(fit.model.to_json(), encoding="utf-8")
     if centres is not None:
         from service.io.formats import write_labeled
 
-        write_labeled(centres, _centre_trajectories(fit, rate), SourceFile(unit=unit))
+        try:
+            write_labeled(centres, _centre_trajectories(fit, rate), SourceFile(unit=unit))
+        except InputError as error:  # the model is written by now: say so, or the user thinks nothing was
+            raise InputError(f"{error}; the model was written to {output}") from None
     out.print(f"-> {output}" + (f", joint centres -> {centres}" if centres else ""), highlight=False)
 
 
