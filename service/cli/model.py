@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -20,13 +21,15 @@ from service.cli.output import check_writable_folder, check_writable_output
 from service.cli.report import out, warn
 from service.errors import InputError
 from service.io.formats import read_labeled
+from service.io.formats.replace_file import replacing
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 from service.labeling.take_warnings import take_scale_warning
 
 
 def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset: str | None = None,
               start: int = 0, end: int | None = None) -> None:
-    """Fit a subject model to ``inputs``, print it, write it as JSON and optionally the joint centres as TRC.
+    """Fit a subject model to ``inputs``, print it, write it as JSON and optionally the joint centres
+    (TRC, C3D or CSV, numbered as the first take's frames ``start ..``).
 
     With ``markerset`` (a template name or file) the segments and joint centres come from the
     template and the takes (a static trial is enough) give the marker coordinates. Only frames
@@ -40,7 +43,6 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     if markerset is not None and centres is not None:
         raise InputError("--centres needs a fitted model: a --markerset model places its centres from markers")
     read = [read_labeled(path) for path in inputs]
-    unit = read[0].source.unit if read[0].source else "mm"  # the centres are written in the first take's unit
     takes = [_span(take.without_unlabeled(), path, start, end) for take, path in zip(read, inputs)]  # *N: no marker
     _check_one_marker_set(takes, inputs)
     for path, take in zip(inputs[1:], takes[1:]):
@@ -59,15 +61,27 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     _print(fit, len(positions))
     warn(unseen_warning(names, positions))
     warn(far_joint_warning(far_joints(fit.model)))
-    try:
-        output.write_text(fit.model.to_json())
-    except OSError as error:
-        raise InputError(f"{output}: cannot write ({error.strerror})") from None
+    with replacing(output) as temp:  # a full disk or a Ctrl-C leaves an earlier model whole, not cut
+        temp.write_text(fit.model.to_json(), encoding="utf-8")
     if centres is not None:
-        from service.io.formats import write_labeled
-
-        write_labeled(centres, _centre_trajectories(fit, rate), SourceFile(unit=unit))
+        _write_centres(centres, fit, rate, read[0].source, start, output)
+        if len(inputs) > 1:  # one file cannot number two takes' frames as their own
+            warn(f"warning: {centres.name} holds the joint centres of the {len(inputs)} takes one after another, "
+                 f"numbered on from {inputs[0].name}'s frames")
     out.print(f"-> {output}" + (f", joint centres -> {centres}" if centres else ""), highlight=False)
+
+
+def _write_centres(path: Path, fit: SubjectFit, rate: float, source: SourceFile | None, start: int,
+                   model: Path) -> None:
+    """The joint centres in the first take's unit, frame numbers and times, as ``track``
+    numbers a span of it; a new file of the centres alone, not a copy of the take's C3D."""
+    from service.io.formats import write_labeled
+
+    kept = replace(source, c3d=None) if source is not None else SourceFile()
+    try:
+        write_labeled(path, _centre_trajectories(fit, rate), kept, start)
+    except InputError as error:  # the model is written by now: say so, or the user thinks nothing was
+        raise InputError(f"{error}; the model was written to {model}") from None
 
 
 def _span(take: Recording, path: Path, start: int, end: int | None) -> Recording:

@@ -85,7 +85,8 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
         c3d = _new_c3d(traj, source, start) if source.c3d is None else copy.deepcopy(source.c3d)
     except InputError as error:
         raise InputError(f"{path}: {error}") from None
-    outside = _with_labels(c3d, traj, source.unit, at, path)
+    quality = SampleQuality.of(c3d["data"]["points"], c3d["data"]["meta_points"])  # before labels replace points
+    outside = _with_labels(c3d, traj, quality, source.unit, at, path)
     # gathered (``unlabeled`` has the frames, with or without channels): the input's own *N
     # points were in the capture, so they were labeled or are in the new *N
     if source.c3d is not None and traj.unlabeled.shape[0]:
@@ -93,7 +94,7 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     placed = _placed(traj.unlabeled, source.unit, at, c3d["data"]["points"].shape[2])
     unlabeled = np.concatenate([outside, _not_kept(placed, c3d, traj.names)], axis=1)
     if unlabeled.shape[1]:
-        _with_unlabeled(c3d, unlabeled, path)
+        _with_unlabeled(c3d, unlabeled, quality, path)
     channels = with_confidence(c3d, traj, at) if traj.confidence.size else {}
     _write(c3d, path, channels)
 
@@ -112,7 +113,8 @@ def _new_c3d(traj: LabeledTrajectories, source: SourceFile, start: int) -> ezc3d
     return c3d
 
 
-def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: int, path: Path) -> np.ndarray:
+def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, quality: SampleQuality, unit: str, start: int,
+                 path: Path) -> np.ndarray:
     """Replace the points ``traj`` names (in place): the labels in frames ``start ..``, missing
     in every other frame, each with the residual and camera mask of the input sample it took
     (``c3d_quality``). Returns ``(3, U, frames)`` the input samples of those points outside the
@@ -129,7 +131,7 @@ def _with_labels(c3d: ezc3d.c3d, traj: LabeledTrajectories, unit: str, start: in
     kept = np.where(outside, own, np.nan)[:, outside.any(axis=1)]
     hidden = hidden_samples(traj)
     values = np.where(hidden[..., None], np.nan, from_millimetres(traj.positions, unit)).T  # (3, M, F')
-    residuals, masks = SampleQuality.of(points, meta).taken(values, start)
+    residuals, masks = quality.taken(values, start)
     points[:3, columns], meta["residuals"][0, columns] = 0.0, -1.0
     # (0, 0, 0) under residual -1: readers that ignore residuals see the usual zero gap.
     points[:3, columns, frames] = np.nan_to_num(values, nan=0.0)
@@ -165,20 +167,22 @@ def _not_kept(placed: np.ndarray, c3d: ezc3d.c3d, names: list[str]) -> np.ndarra
     return without_samples(placed.T, samples.T, SAME_SAMPLE).T
 
 
-def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
+def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, quality: SampleQuality, path: Path) -> None:
     """One point per channel of ``unlabeled`` ``(3, U, frames)`` (the file's unit, NaN where
     empty), in place: first in the file's own ``*N`` points left empty (a relabel emptied them,
     and each run on markerflow's own output added as many again), the rest appended, named
-    ``*N`` from one past the highest such name the file has."""
+    ``*N`` from one past the highest such name the file has. Each sample is an input sample and
+    keeps its residual and camera mask (``c3d_quality``), as a label does."""
     points, meta = c3d["data"]["points"], c3d["data"]["meta_points"]
     labels = _labels(c3d, points.shape[1], path)
     empty = [i for i, label in enumerate(labels) if is_unlabeled(label) and (meta["residuals"][0, i] < 0).all()]
     reused = empty[: unlabeled.shape[1]]
     present = np.isfinite(unlabeled).all(axis=0)  # (channels, frames)
-    values, residual = np.where(present, unlabeled, 0.0), np.where(present, 0.0, -1.0)
+    taken, masks = quality.taken(unlabeled, 0)
+    values, residual = np.where(present, unlabeled, 0.0), np.where(present, taken, -1.0)
     points[:3, reused], meta["residuals"][0, reused] = values[:, : len(reused)], residual[: len(reused)]
-    if reused and "camera_masks" in meta and meta["camera_masks"].size:
-        meta["camera_masks"][:, reused] = False
+    if masks is not None:
+        meta["camera_masks"][:, reused] = masks[:, : len(reused)]
     extra = unlabeled.shape[1] - len(reused)
     if not extra:
         return
@@ -187,9 +191,8 @@ def _with_unlabeled(c3d: ezc3d.c3d, unlabeled: np.ndarray, path: Path) -> None:
     added[:3] = values[:, len(reused) :]
     c3d["data"]["points"] = np.concatenate([points, added], axis=1)
     meta["residuals"] = np.concatenate([meta["residuals"], residual[None, len(reused) :]], axis=1)
-    if "camera_masks" in meta and meta["camera_masks"].size:
-        masks = np.zeros((meta["camera_masks"].shape[0], extra, points.shape[2]), bool)
-        meta["camera_masks"] = np.concatenate([meta["camera_masks"], masks], axis=1)
+    if masks is not None:
+        meta["camera_masks"] = np.concatenate([meta["camera_masks"], masks[:, len(reused) :]], axis=1)
     names = [f"{UNLABELED_PREFIX}{first + k}" for k in range(extra)]
     append_entries(c3d, "LABELS", names)
     append_entries(c3d, "DESCRIPTIONS", [""] * len(names))  # ezc3d blanks every description if one is lacking

@@ -1,11 +1,12 @@
-"""Each label keeps the measurement quality of the input sample it took.
+"""Each label, and each unlabeled ``*N`` sample, keeps the measurement quality of the input
+sample it is.
 
-A C3D copy's labeled points hold the input's own samples: a label is the point a marker
-took. The residual and camera mask the capture system gave that sample describe the
-measurement, not the name, so they go with the sample wherever the labels put it. Residual
-0 on every label would tell Nexus or Visual3D that every labeled sample was gap-filled, and
-a cleared mask that no camera saw it. A label matching no input sample of its frame gets
-residual 0 and no camera.
+A C3D copy's points hold the input's own samples: a label is the point a marker took, a
+``*N`` sample a point none took (or an input sample outside the labeled frames). The
+residual and camera mask the capture system gave that sample describe the measurement, not
+the name, so they go with the sample wherever the labels put it. Residual 0 would tell Nexus
+or Visual3D that the sample was gap-filled, and a cleared mask that no camera saw it. A
+sample matching no input sample of its frame gets residual 0 and no camera.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 SAME_SAMPLE = 1e-6  # in the file's unit: one input sample written back through mm (round off ~1e-12)
-CHUNK_FRAMES = 256  # frames matched at a time: the (frames, labels, points) distances stay small
+CHUNK_SAMPLES = 2_000_000  # (labels, points, frames) distances matched at a time: ~50 MB however many points
 
 
 @dataclass(frozen=True)
@@ -52,8 +53,9 @@ class SampleQuality:
     def _matches(self, values: np.ndarray, start: int) -> np.ndarray:
         """``(M, F')`` the input column holding each label's sample in its frame, -1 for none."""
         match = np.full(values.shape[1:], -1)
-        for first in range(0, values.shape[2], CHUNK_FRAMES):
-            span = slice(first, min(first + CHUNK_FRAMES, values.shape[2]))
+        step = max(1, CHUNK_SAMPLES // max(1, values.shape[1] * self.points.shape[1]))
+        for first in range(0, values.shape[2], step):
+            span = slice(first, min(first + step, values.shape[2]))
             given = self.points[:, :, start + span.start : start + span.stop]  # (3, P, f)
             gap = np.linalg.norm(values[:, :, None, span] - given[:, None], axis=0)  # (M, P, f)
             valid = self.residuals[None, :, start + span.start : start + span.stop] >= 0
