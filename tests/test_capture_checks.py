@@ -97,6 +97,9 @@ def test_an_empty_frame_may_be_an_empty_list() -> None:
         ({"layout_weight": "0.5"}, "layout_weight must be a finite number"),
         ({"best_view_switch_cost": float("inf")}, "best_view_switch_cost must be a finite number"),
         ({"second_pass": "no"}, "second_pass must be True or False"),
+        ({"formulation": "simplex"}, "unknown formulation 'simplex'"),
+        ({"formulation": {"name": "mht", "hypotheses": 101}}, "mht: parameter 'hypotheses' must be <= 100, got 101"),
+        ({"formulation": {"name": "lp-l1", "decompose": "true"}}, "parameter 'decompose' must be true or false"),
     ],
 )
 def test_bad_labeling_options_are_refused_in_one_line(change: dict, message: str) -> None:

@@ -24,6 +24,7 @@ from service.capture.checks import (
     checked_rate,
     first_off_sensor,
 )
+from service.capture.formulation_spec import resolve_formulation
 from service.capture.frame0_points import check_frame0_points
 from service.capture.reprojection import frame0_distances, frame0_offsets, frame0_problem
 from service.errors import InputError
@@ -66,6 +67,8 @@ class LabelingOptions:
             object.__setattr__(self, option.name, plain(getattr(self, option.name)))
         if not isinstance(self.formulation, (str, dict, Formulation)):
             raise InputError(f"formulation must be a name, a table or a Formulation, got {self.formulation!r}")
+        if not isinstance(self.formulation, Formulation):  # a name or a table is checked now, not at labeling
+            resolve_formulation(self.formulation)
         checked_count(self.window, "window", least=2)
         checked_count(self.best_view_window, "best_view_window", least=1)
         if self.association not in ASSOCIATIONS:
