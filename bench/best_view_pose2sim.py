@@ -114,7 +114,7 @@ def contact_sheet(views: PeopleViews, dp: np.ndarray, argmax: np.ndarray, path: 
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--switch-cost", type=float, default=1.0)
     parser.add_argument("--window", type=int, default=30)
     parser.add_argument("--out", type=Path, default=ROOT / "out")

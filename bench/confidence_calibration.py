@@ -59,8 +59,8 @@ def scores(p: np.ndarray, right: np.ndarray, below: float) -> str:
     doubtful, wrong = p < below, ~right
     bins = np.clip((p * 10).astype(int), 0, 9)
     ece = sum(abs(right[bins == b].mean() - p[bins == b].mean()) * (bins == b).mean() for b in range(10) if (bins == b).any())
-    recall = (doubtful & wrong).sum() / wrong.sum() if wrong.any() else float("nan")
-    return (f"doubtful below {below:.4f} {doubtful.mean():6.2%}, recall {recall:.3f}, "
+    recall = f"{(doubtful & wrong).sum() / wrong.sum():.3f}" if wrong.any() else "- (no label wrong)"
+    return (f"doubtful below {below:.4f} {doubtful.mean():6.2%}, recall {recall}, "
             f"Brier {np.mean((p - right) ** 2):.4f}, calibration error {ece:.4f}")
 
 
@@ -69,7 +69,7 @@ def _cell(args: tuple[str, str, int, int]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--jobs", type=int, default=2)

@@ -54,7 +54,7 @@ def take_labels(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--only", nargs="+", help="recording names (as in the accuracy matrix)")
     args = parser.parse_args()
     pooled: list[tuple[np.ndarray, np.ndarray]] = []

@@ -55,7 +55,7 @@ def _figures(error: np.ndarray) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--conditions", nargs="+", default=["default", "drop-30"], choices=list(CONDITIONS))
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
     parser.add_argument("--frames", type=int, default=600, help="cap on frames per take; 0: full length")

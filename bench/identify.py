@@ -30,7 +30,7 @@ GHOSTS = 5
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--step", type=int, default=5)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()

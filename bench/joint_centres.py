@@ -17,6 +17,7 @@ reach it, and the disagreement is in the directions the motion does determine.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -109,5 +110,6 @@ def rajagopal() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " ")).parse_args()  # --help; no options
     walking2()
     rajagopal()

@@ -35,7 +35,7 @@ DATA = ROOT.parent / "shared" / "data" / "c3d_mocaprecovery_cmu_hdm05_numediart"
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--hypotheses", type=int, default=5)

@@ -106,7 +106,7 @@ def real_take(path: str) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--cap", type=int, default=1200, help="frames to fit on and to label, per half")
     args = parser.parse_args()
     scenario = Scenario.from_toml(SCENARIO)

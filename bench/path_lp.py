@@ -78,7 +78,7 @@ def timed(problems: list[WindowProblem], backend: str) -> tuple[float, int, list
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--takes", nargs="*", default=["numediart-rolling", "ktk-racing", "ktk-tennis"])
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()

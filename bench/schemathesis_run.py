@@ -48,7 +48,7 @@ def run(store: str, db: str, folder: Path, cases: int) -> int:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--cases", type=int, default=200, help="generated cases per operation")
     parser.add_argument("--store", action="append", choices=["sqlite", "postgresql"])
     args = parser.parse_args()

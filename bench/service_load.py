@@ -79,7 +79,7 @@ def load(url: str, path: str, body: bytes, requests: int, clients: int, expect: 
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--clients", type=int, default=8)
     parser.add_argument("--jobs", type=int, default=400)
     parser.add_argument("--solves", type=int, default=200)

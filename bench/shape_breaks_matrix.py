@@ -43,7 +43,7 @@ def cell(job: tuple[str, str, int, int]) -> tuple[str, str, int, int, int, int]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--conditions", nargs="*", default=["default", "noise-4", "drop-30", "ghosts-10"])
     parser.add_argument("--seeds", nargs="*", type=int, default=[0])
     parser.add_argument("--frames", type=int, default=600)

@@ -25,7 +25,7 @@ from service_fixtures import ServerProcess, fuzz_uploads, upload_fuzz  # noqa: E
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--count", type=int, default=200)
     parser.add_argument("--seed", type=int, default=15)
     args = parser.parse_args()

@@ -78,7 +78,7 @@ def wait(client: httpx.Client, job_id: str, timeout: float = 300) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--frames", type=int, default=300)
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args()
