@@ -9,8 +9,9 @@ from typing import Any
 
 from service.errors import InputError
 from service.io.formats.c3d import point_labels, read_c3d, write_c3d
+from service.io.formats.conventions import require_names
 from service.io.formats.csv import read_csv, write_csv
-from service.io.formats.trc import read_trc, write_trc
+from service.io.formats.trc import check_trc_names, read_trc, write_trc
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": read_csv}
@@ -44,10 +45,31 @@ def write_labeled(
             (a C3D output still holds every input frame, unlabeled outside the span).
 
     Raises:
-        InputError: unsupported suffix, labels that do not fit the source, or a path that
-            cannot be written.
+        InputError: unsupported suffix, labels the format's reader would refuse
+            (``check_labels_fit``), labels that do not fit the source, or a path that cannot
+            be written.
     """
-    _by_suffix(_WRITERS, path, "write")(path, traj, source, start)
+    writer = _by_suffix(_WRITERS, path, "write")
+    check_labels_fit(path, list(traj.names), traj.n_frames, source, start)
+    writer(path, traj, source, start)
+
+
+def check_labels_fit(
+    path: str | Path, names: list[str], n_frames: int, source: SourceFile | None = None, start: int = 0
+) -> None:
+    """Fail before labeling if labels of ``names`` over ``n_frames`` frames from input frame
+    ``start`` cannot be written to ``path`` (as ``write_labeled``): a name a .trc or .csv
+    cannot carry back (its reader refuses it).
+
+    Raises:
+        InputError: one line naming ``path``.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".trc":
+        check_trc_names(names, path)
+    if suffix in (".trc", ".csv"):
+        require_names(names, path)
 
 
 def kept_source(source: SourceFile | None, names: list[str]) -> tuple[SourceFile | None, list[str]]:

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from service.errors import InputError
+from service.io.marker_names import first_name_problem, shown
 from service.io.recording import LabeledTrajectories
 
 MM_PER_UNIT = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
@@ -111,6 +112,18 @@ def require_samples(names: list[str], positions: np.ndarray, path: Path) -> None
         value = float(positions[frame, marker, axis])
         why = "" if np.isinf(value) else f", beyond the {MAX_MM:.0e} mm any capture fits in"
         raise InputError(f"{path}: marker {names[marker]!r} has {'xyz'[axis]} = {value:.3g} mm in frame {frame}{why}")
+
+
+def require_names(names: list[str], path: Path) -> None:
+    """Refuse a name no output carries back as itself (``name_problem``: a NUL came back from
+    a C3D cut out, a name over 255 bytes made a C3D no reader opens), as the capture JSON does.
+
+    Raises:
+        InputError: the first such name.
+    """
+    found = first_name_problem(names)
+    if found is not None:
+        raise InputError(f"{path}: marker name {shown(found[0])} {found[1]}")
 
 
 def from_millimetres(values: np.ndarray, unit: str) -> np.ndarray:

@@ -14,6 +14,7 @@ from service.io.formats.conventions import (
     hidden_samples,
     read_text,
     require_file,
+    require_names,
     require_samples,
     sample_cells,
 )
@@ -93,6 +94,7 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
         raise InputError(f"{path}: not a CSV table ({exc})") from exc
     rows, confidence = _split_confidence(rows, path)
     names, with_views = _names(rows[0] if rows else [], path)
+    require_names(names, path)
     width = 2 + 3 * len(names)
     views = [_view_cells(row, width, len(names), path, i) for i, row in enumerate(rows[1:], start=2)] if with_views else []
     table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in enumerate(rows[1:], start=2)])

@@ -18,6 +18,7 @@ from service.io.formats.conventions import (
     hidden_samples,
     read_text,
     require_file,
+    require_names,
     require_samples,
     sample_cells,
     to_millimetres,
@@ -39,8 +40,9 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     Raises:
         InputError: missing or malformed file (header, a NumMarkers other than the names
             on line 4, a non-numeric cell, a row count other than NumFrames, rows out of
-            order), zero frames, an unknown unit, more markers or frames than allowed, or a
-            name twice or an infinite or absurd coordinate (``require_samples``).
+            order), zero frames, an unknown unit, more markers or frames than allowed, a
+            name no output carries back (``require_names``: a control character, over 255
+            bytes), or a name twice or an infinite or absurd coordinate (``require_samples``).
     """
     path = require_file(path)
     lines = read_text(path).splitlines()
@@ -54,6 +56,7 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     _at_most(n_markers, "markers", max_markers, "max_markers", path)
     _at_most(declared, "frames", max_frames, "max_frames", path)
     names = _names(lines[3], n_markers, path)
+    require_names(names, path)
     numbered = [
         (f"{path}:{number}", line)
         for number, line in enumerate(lines[_FIRST_DATA_LINE - 1 :], start=_FIRST_DATA_LINE)
@@ -120,7 +123,7 @@ def check_trc_names(names: list[str], path: str | Path) -> None:
     for name in names:
         if re.search(r"[\t\r\n]", name):
             raise InputError(f"{path}: marker name {name!r} holds a tab or line break, which a TRC cannot; "
-                             "write .c3d or .csv")
+                             "write .c3d")  # a .csv would hold it, but its reader refuses control characters
 
 
 def _at_most(count: int, what: str, limit: int | None, name: str, path: Path) -> None:
