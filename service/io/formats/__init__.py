@@ -9,6 +9,7 @@ from typing import Any
 
 from service.errors import InputError
 from service.io.formats.c3d import point_labels, read_c3d, write_c3d
+from service.io.formats.c3d_parameters import check_frame_numbers
 from service.io.formats.conventions import require_names
 from service.io.formats.csv import read_csv, write_csv
 from service.io.formats.trc import check_trc_names, read_trc, write_trc
@@ -59,7 +60,8 @@ def check_labels_fit(
 ) -> None:
     """Fail before labeling if labels of ``names`` over ``n_frames`` frames from input frame
     ``start`` cannot be written to ``path`` (as ``write_labeled``): a name a .trc or .csv
-    cannot carry back (its reader refuses it).
+    cannot carry back (its reader refuses it), or, for a new .c3d, frame numbers past 65535
+    (a table's own: a TRC whose Frame# starts at 70000 was refused after labeling).
 
     Raises:
         InputError: one line naming ``path``.
@@ -70,6 +72,11 @@ def check_labels_fit(
         check_trc_names(names, path)
     if suffix in (".trc", ".csv"):
         require_names(names, path)
+    if suffix == ".c3d" and not is_copy(path, source):  # a copy keeps the input's own numbers
+        try:
+            check_frame_numbers(max((source or SourceFile()).first_frame + start, 0), n_frames)
+        except InputError as error:
+            raise InputError(f"{path}: {error}") from None
 
 
 def kept_source(source: SourceFile | None, names: list[str]) -> tuple[SourceFile | None, list[str]]:
