@@ -10,13 +10,14 @@ from typing import Any
 from service.errors import InputError
 from service.io.formats.c3d import point_labels, read_c3d, write_c3d
 from service.io.formats.c3d_parameters import check_frame_numbers
-from service.io.formats.conventions import require_names
+from service.io.formats.conventions import check_labels, require_names
 from service.io.formats.csv import read_csv, write_csv
 from service.io.formats.trc import check_trc_names, read_trc, write_trc
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": read_csv}
 _WRITERS = {".c3d": write_c3d, ".trc": write_trc, ".csv": write_csv}
+_LEAST_FRAMES = {".csv": 2}  # a CSV's rate is read from its time column: one row gives none
 
 
 def read_labeled(path: str | Path) -> Recording:
@@ -46,11 +47,13 @@ def write_labeled(
             (a C3D output still holds every input frame, unlabeled outside the span).
 
     Raises:
-        InputError: unsupported suffix, labels the format's reader would refuse
-            (``check_labels_fit``), labels that do not fit the source, or a path that cannot
+        InputError: unsupported suffix, labels whose arrays disagree with their names and
+            positions or that the format's reader would refuse (``check_labels``,
+            ``check_labels_fit``), labels that do not fit the source, or a path that cannot
             be written.
     """
     writer = _by_suffix(_WRITERS, path, "write")
+    check_labels(traj, Path(path), _LEAST_FRAMES.get(Path(path).suffix.lower(), 1))
     check_labels_fit(path, list(traj.names), traj.n_frames, source, start)
     writer(path, traj, source, start)
 

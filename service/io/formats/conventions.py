@@ -126,6 +126,36 @@ def require_names(names: list[str], path: Path) -> None:
         raise InputError(f"{path}: marker name {shown(found[0])} {found[1]}")
 
 
+def check_labels(traj: LabeledTrajectories, path: Path, least_frames: int) -> None:
+    """Refuse labels a file of them would not hold, or hold so that its reader refuses it:
+    arrays of other shapes than the names and positions say (a numpy broadcast error for a
+    .c3d, a .trc of "values past the named markers"), no marker, fewer than ``least_frames``
+    frames, or no positive frame rate.
+
+    Raises:
+        InputError: one line, naming ``path``.
+    """
+    positions = np.asarray(traj.positions)
+    if positions.ndim != 3 or positions.shape[2] != 3:
+        raise InputError(f"{path}: positions must be (frames, markers, 3), got shape {positions.shape}")
+    frames, markers = positions.shape[:2]
+    if not all(isinstance(name, str) for name in traj.names) or len(traj.names) != markers:
+        raise InputError(f"{path}: names must be one string per marker of positions {positions.shape}; got "
+                         f"{len(traj.names)} names")
+    arrays = [("occluded", traj.occluded, (frames, markers)), ("confidence", traj.confidence, (frames, markers))]
+    arrays += [("best_view", traj.best_view, (frames, markers))] if traj.view_names else []
+    for what, array, shape in arrays:
+        if np.shape(array) != shape and (what == "occluded" or np.size(array)):
+            raise InputError(f"{path}: {what} must be (frames, markers) = {shape} as positions, got {np.shape(array)}")
+    if np.size(traj.unlabeled) and (np.ndim(traj.unlabeled) != 3 or np.shape(traj.unlabeled)[::2] != (frames, 3)):
+        raise InputError(f"{path}: unlabeled must be ({frames}, channels, 3) as positions, got {np.shape(traj.unlabeled)}")
+    if not markers or frames < least_frames:
+        raise InputError(f"{path}: nothing to write that reads back: {markers} markers x {frames} frames (a "
+                         f"{path.suffix.lower()} needs a marker and {least_frames} frame{'s' * (least_frames > 1)})")
+    if not (np.isfinite(traj.rate) and traj.rate > 0):
+        raise InputError(f"{path}: frame rate must be a positive number, got {traj.rate!r}")
+
+
 def from_millimetres(values: np.ndarray, unit: str) -> np.ndarray:
     """Millimetres in ``unit`` (one ``to_millimetres`` accepts): the inverse scaling."""
     return np.asarray(values, dtype=float) / MM_PER_UNIT[unit.strip().lower()]
