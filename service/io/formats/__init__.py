@@ -105,9 +105,9 @@ def check_output(path: str | Path) -> None:
     Raises:
         InputError: unsupported suffix, a folder that does not exist, or a folder as the path.
     """
-    _by_suffix(_WRITERS, path, "write")
-    if Path(path).is_dir():
+    if Path(path).is_dir():  # first: a folder given with its trailing slash has no suffix either
         raise InputError(f"{path}: is a folder; name the output file")
+    _by_suffix(_WRITERS, path, "write")
     folder = Path(path).parent
     if not folder.is_dir():
         raise InputError(f"{path}: cannot write there, folder {folder} does not exist")

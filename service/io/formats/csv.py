@@ -88,19 +88,16 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
 def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
     """The labels of a ``write_csv`` table, and its numbering (first frame less 1, first time)."""
     path = require_file(path)
-    try:
-        rows = list(csv.reader(io.StringIO(read_text(path), newline="")))
-    except csv.Error as exc:
-        raise InputError(f"{path}: not a CSV table ({exc})") from exc
-    rows, confidence = _split_confidence(rows, path)
+    lines, rows = _rows(path)
+    rows, confidence = _split_confidence(rows, lines, path)
     names, with_views = _names(rows[0] if rows else [], path)
     require_names(names, path)
     width = 2 + 3 * len(names)
-    views = [_view_cells(row, width, len(names), path, i) for i, row in enumerate(rows[1:], start=2)] if with_views else []
-    table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in enumerate(rows[1:], start=2)])
+    views = [_view_cells(row, width, len(names), path, i) for i, row in zip(lines[1:], rows[1:])] if with_views else []
+    table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in zip(lines[1:], rows[1:])])
     if len(table) < 2:
         raise InputError(f"{path}: needs at least two frames to infer the frame rate")
-    check_rows(table[:, 0], table[:, 1], [f"{path}:{line}" for line in range(2, len(table) + 2)])
+    check_rows(table[:, 0], table[:, 1], [f"{path}:{line}" for line in lines[1:]])
     positions = table[:, 2:].reshape(len(table), len(names), 3)
     require_samples(names, positions, path)
     occluded = np.isnan(positions).any(axis=2)
@@ -117,7 +114,31 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
                                confidence=labels.confidence), source
 
 
-def _split_confidence(rows: list[list[str]], path: Path) -> tuple[list[list[str]], tuple[list[str], np.ndarray] | None]:
+def _rows(path: Path) -> tuple[list[int], list[list[str]]]:
+    """The table's rows and the line each ends on, blank lines left out as a TRC's are (an
+    editor's trailing or separating empty line is no frame).
+
+    Raises:
+        InputError: not CSV, or cells separated by ';' (a spreadsheet in a comma-decimal locale).
+    """
+    lines, rows = [], []
+    reader = csv.reader(io.StringIO(read_text(path), newline=""))
+    try:
+        for row in reader:
+            if any(cell.strip() for cell in row):
+                lines.append(reader.line_num)
+                rows.append(row)
+    except csv.Error as exc:
+        raise InputError(f"{path}: not a CSV table ({exc})") from exc
+    if rows and len(rows[0]) == 1 and ";" in rows[0][0]:
+        raise InputError(f"{path}:{lines[0]}: the cells are separated by ';'; a markerflow CSV separates them by ',' "
+                         "(save it with ',' as the separator and '.' as the decimal point)")
+    return lines, rows
+
+
+def _split_confidence(
+    rows: list[list[str]], lines: list[int], path: Path
+) -> tuple[list[list[str]], tuple[list[str], np.ndarray] | None]:
     """The table without its trailing ``<name>_confidence`` columns, and those columns'
     names and values (None when there are none)."""
     header = rows[0] if rows else []
@@ -125,10 +146,10 @@ def _split_confidence(rows: list[list[str]], path: Path) -> tuple[list[list[str]
     if count == 0:
         return rows, None
     cut = len(header) - count
-    for line, row in enumerate(rows[1:], start=2):
+    for line, row in zip(lines[1:], rows[1:]):
         if len(row) != len(header):
             raise InputError(f"{path}:{line}: {len(row)} cells, header has {len(header)}")
-    values = np.array([_floats(row[cut:], count, path, i) for i, row in enumerate(rows[1:], start=2)]).reshape(-1, count)
+    values = np.array([_floats(row[cut:], count, path, i) for i, row in zip(lines[1:], rows[1:])]).reshape(-1, count)
     return [row[:cut] for row in rows], ([cell[: -len(_CONFIDENCE)] for cell in header[cut:]], values)
 
 
