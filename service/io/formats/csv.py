@@ -12,6 +12,7 @@ from service.errors import InputError
 from service.io.formats.conventions import (
     check_rows,
     hidden_samples,
+    rate_of_times,
     read_text,
     require_file,
     require_names,
@@ -102,7 +103,7 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
     require_samples(names, positions, path)
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
-    labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 1], path))
+    labels = LabeledTrajectories(names, positions, occluded, rate_of_times(table[:, 1], path))
     source = SourceFile.of_table("mm", table[:, 0], table[:, 1])
     if confidence is not None:
         labels.confidence = _named_confidence(confidence, names, path)
@@ -187,26 +188,3 @@ def _floats(row: list[str], width: int, path: Path, line: int) -> list[float]:
         return [float(cell) if cell.strip() else np.nan for cell in row]
     except ValueError as exc:
         raise InputError(f"{path}:{line}: {exc}") from None
-
-
-def _rate(times: np.ndarray, path: Path) -> float:
-    """Rows per second: the labeler steps row by row (``check_rows``: evenly in time), so a
-    decimated table's frame numbers, which skip, do not give its rate."""
-    span = times[-1] - times[0]
-    rate = (len(times) - 1) / span if span > 0 else np.nan
-    if not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"{path}: the time column gives no positive frame rate")
-    # times printed to d decimals put the rate within rate^2 10^-d / span of the true one
-    # (120 Hz at 3 decimals over 124 rows reads 119.96): the shortest rate that close is it
-    close = rate**2 * _printed_step(times) / span
-    shortest = next((round(rate, q) for q in range(7) if abs(rate - round(rate, q)) <= close), rate)
-    return float(f"{shortest:.9g}")  # the times' rounding off: 100 Hz, not 99.99999999999999
-
-
-def _printed_step(times: np.ndarray) -> float:
-    """The resolution the times were printed at: 10^-d for the fewest decimals d that hold them all."""
-    for decimals in range(10):
-        scaled = times * 10.0**decimals
-        if np.all(np.abs(scaled - np.round(scaled)) < 1e-6 * np.maximum(1.0, np.abs(scaled))):
-            return 10.0**-decimals
-    return 0.0

@@ -16,6 +16,8 @@ from service.io.formats.conventions import (
     check_rows,
     from_millimetres,
     hidden_samples,
+    printed_step,
+    rate_of_times,
     read_text,
     require_file,
     require_names,
@@ -73,7 +75,9 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     positions = to_millimetres(positions, header["Units"], path)
     require_samples(names, positions, path)
     source = SourceFile.of_table(header["Units"].strip().lower(), cells[:, 0], cells[:, 1])
-    return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
+    rate = _number(header, "DataRate", path)
+    _check_rate(rate, cells[:, 1], path)
+    return Recording(names, zero_gaps_to_nan(positions), rate, source)
 
 
 def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
@@ -154,6 +158,20 @@ def _number(header: dict[str, str], key: str, path: Path) -> float:
     if not value > 0 and key != "NumFrames":
         raise InputError(f"{path}: TRC header {key} must be positive, got {header[key]}")
     return value
+
+
+def _check_rate(rate: float, times: np.ndarray, path: Path) -> None:
+    """DataRate agrees with the Time column, within how the times were printed. A header that
+    disagrees with its rows is refused, as for NumFrames: labeled at DataRate 120 a take whose
+    times step 1/60 s was labeled, and written back, at the wrong speed, without a word."""
+    if len(times) < 2:
+        return
+    span = float(times[-1] - times[0])  # > 0: check_rows
+    from_times = (len(times) - 1) / span
+    if abs(from_times - rate) > from_times**2 * printed_step(times) / span + 1e-6 * rate:
+        said = rate_of_times(times, path)
+        raise InputError(f"{path}: header says DataRate {rate:g} but the Time column steps {1 / said:.6g} s "
+                         f"({said:g} frames per second); correct one of them")
 
 
 def _count(header: dict[str, str], key: str, path: Path) -> int:
