@@ -199,14 +199,22 @@ def hidden_samples(traj: LabeledTrajectories) -> np.ndarray:
     return np.asarray(traj.occluded, dtype=bool) | np.isnan(traj.positions).any(axis=2)
 
 
-def sample_cells(xyz: np.ndarray, hidden: np.ndarray) -> list[str]:
+# Significant digits of a coordinate written in a unit other than mm: scaling to mm and back
+# leaves float noise in the last bits (0.1044258 m was written 0.10442580000000001). Three
+# roundings put it within 2 units in the last place, under half a step of the 15th digit, so
+# 15 digits give back any value of up to 15 the input had, and any other within 5e-15.
+SCALED_DIGITS = 15
+
+
+def sample_cells(xyz: np.ndarray, hidden: np.ndarray, digits: int | None = None) -> list[str]:
     """One frame's x, y, z text cells per marker, blank where hidden.
 
-    ``repr`` of a float round-trips exactly: a table read back gives the values written.
+    ``repr`` of a float (``digits`` None) round-trips exactly: a table read back gives the
+    values written; else each value to ``digits`` significant digits.
     """
     cells: list[str] = []
     for sample, gone in zip(xyz, hidden, strict=True):
-        cells += [""] * 3 if gone else [repr(float(v)) for v in sample]
+        cells += [""] * 3 if gone else [repr(float(v)) if digits is None else f"{float(v):.{digits}g}" for v in sample]
     return cells
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.conventions import (
+    SCALED_DIGITS,
     check_rows,
     from_millimetres,
     hidden_samples,
@@ -108,9 +109,10 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
         "",
     ]
     values = from_millimetres(traj.positions, source.unit)
+    digits = None if source.unit.strip().lower() == "mm" else SCALED_DIGITS  # mm: as given, exactly
     hidden = hidden_samples(traj)
     rows = [
-        "\t".join(list(numbering[f]) + sample_cells(values[f], hidden[f])) for f in range(traj.n_frames)
+        "\t".join(list(numbering[f]) + sample_cells(values[f], hidden[f], digits)) for f in range(traj.n_frames)
     ]
     with replacing(path) as temp:
         temp.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
