@@ -28,26 +28,35 @@ field path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 4
 from __future__ import annotations
 
 import json
-import unicodedata
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
 from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE, first_off_sensor
 from service.capture.model_input import model_names, parse_model, with_model
 from service.errors import InputError
+from service.io.marker_names import name_problem, shown
+from service.io.recording import UNLABELED_PREFIX, is_unlabeled
 
+
+def _not_bool(value: object) -> object:
+    """JSON ``true`` is not a number: pydantic's lax mode read ``"rate": true`` as 1 Hz."""
+    if isinstance(value, bool):
+        raise ValueError(f"Input should be a number, not {str(value).lower()}")
+    return value
+
+
+NotBool = BeforeValidator(_not_bool)
 # 1e9 (1000 km in mm) bounds every number: sums of squares of larger finite values overflow
 # to inf inside the geometry, and no capture is that big.
-Finite = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
+Finite = Annotated[float, NotBool, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
 Point3 = tuple[Finite, Finite, Finite]
 Pixel = tuple[Finite, Finite]
 MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
 _ONE_ROTATION = "give the world -> camera rotation as exactly one of R or rvec"
-MAX_NAME_BYTES = 255  # a C3D parameter's dimensions are single bytes: longer labels make an unreadable file
 
 
 class CameraDocument(BaseModel):
@@ -60,7 +69,7 @@ class CameraDocument(BaseModel):
     R: tuple[Point3, Point3, Point3] | None = None
     rvec: Point3 | None = None
     t: Point3
-    image_size: tuple[Annotated[int, Field(gt=0)], Annotated[int, Field(gt=0)]]
+    image_size: tuple[Annotated[int, NotBool, Field(gt=0)], Annotated[int, NotBool, Field(gt=0)]]
 
     @model_validator(mode="after")
     def _camera(self) -> CameraDocument:
@@ -87,7 +96,7 @@ class CaptureDocument(BaseModel):
     units: Literal["mm", "m"] = "mm"
     # Frames per second. C3D stores the rate as float32 (1e308 becomes inf, 1e-300 becomes 0),
     # and no motion capture runs below a frame per 1000 s or above 100 kHz (high-speed video).
-    rate: float = Field(gt=0, le=MAX_RATE, allow_inf_nan=False)
+    rate: Annotated[float, NotBool] = Field(gt=0, le=MAX_RATE, allow_inf_nan=False)
     markers: list[str] | None = Field(default=None, min_length=1)
     first_frame: list[Point3] | None = None
     model: dict | None = None
@@ -95,10 +104,10 @@ class CaptureDocument(BaseModel):
     cameras: list[CameraDocument] | None = None
     detections: dict[str, list[list[Pixel]]] | None = None
     formulation: str | dict = "lp-l1"
-    window: int = Field(default=20, ge=2)
+    window: Annotated[int, NotBool] = Field(default=20, ge=2)
     association: Literal[ASSOCIATIONS] = "joint-3d"  # type: ignore[valid-type]
     second_pass: bool = True
-    unnamed_markers: int = Field(default=0, ge=0)
+    unnamed_markers: Annotated[int, NotBool] = Field(default=0, ge=0)
 
     @field_validator("rate")
     @classmethod
@@ -133,6 +142,10 @@ class CaptureDocument(BaseModel):
             self._check_detections(self.detections)
         if self.n_frames < 2:
             raise ValueError("a capture needs at least 2 frames (the labeled frame and one more)")
+        if self.points is not None and self.unnamed_markers > max(len(frame) for frame in self.points):
+            # a marker unnamed is one of the points: more of them than any frame holds is a typo
+            raise ValueError(f"unnamed_markers: {self.unnamed_markers} unnamed markers, but no frame of points "
+                             f"holds more than {max(len(frame) for frame in self.points)} points")
         return self
 
     def _check_model(self) -> None:
@@ -235,28 +248,19 @@ def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[in
 
 
 def check_marker_names(names: list[str], path: str) -> None:
-    """Every name survives every result format unchanged: C3D strips labels and cuts them at a
-    NUL, so a blank, padded or overlong name would come back as another name, or not at all.
+    """Every name survives every result format unchanged (``name_problem``), and none is a
+    C3D's name of an unlabeled trajectory ``*N``: readers, markerflow's too, take such a
+    point for one, so the marker would vanish from the output read back.
 
     Raises:
         ValueError: ``<path with {i} filled in>: marker name ...`` for the first name that would not.
     """
     for i, name in enumerate(names):
-        problem = _name_problem(name)
+        problem = name_problem(name)
+        if problem is None and is_unlabeled(name):
+            problem = f"is how a C3D names an unlabeled trajectory ({UNLABELED_PREFIX}N), not a marker; rename it"
         if problem:
-            raise ValueError(f"{path.format(i=i)}: marker name {name[:40]!r} {problem}")
-
-
-def _name_problem(name: str) -> str | None:
-    if not name.strip():
-        return "is blank"
-    if name != name.strip():
-        return "starts or ends with whitespace"
-    if any(unicodedata.category(char) == "Cc" for char in name):
-        return "has a control character"
-    if len(name.encode()) > MAX_NAME_BYTES:
-        return f"is longer than {MAX_NAME_BYTES} bytes (UTF-8)"
-    return None
+            raise ValueError(f"{path.format(i=i)}: marker name {shown(name)} {problem}")
 
 
 def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:
@@ -265,8 +269,14 @@ def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:
     Raises:
         InputError: One line: ``source``, the field path, and what is wrong.
     """
+    data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
+    try:  # JSON is UTF-8; a byte-order mark (Windows editors) is skipped, as for TRC and CSV
+        data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise InputError(f"{source}: not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); "
+                         "save it as UTF-8") from None
     try:
-        return CaptureDocument.model_validate_json(text)
+        return CaptureDocument.model_validate_json(data.removeprefix(b"\xef\xbb\xbf"))
     except ValidationError as error:
         raise InputError(f"{source}: {describe_validation_error(error)}") from None
 

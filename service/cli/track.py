@@ -19,8 +19,7 @@ from service.capture.model_input import check_shared_names, read_model, with_mod
 from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, warn, window_progress
 from service.errors import InputError
-from service.io.formats import is_copy, kept_source, read_labeled, write_labeled
-from service.io.formats.trc import check_trc_names
+from service.io.formats import check_labels_fit, is_copy, kept_source, read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 from service.labeling.absent_markers import absent_warning, in_order, with_absent
 from service.labeling.capture_labeling import CaptureLabeling
@@ -71,8 +70,6 @@ def run_track(
         labels_at = (start or 0, end)
     capture, options, recording, absent = _read_input(input, shuffle, labels_at)
     source = None if recording is None else recording.source
-    if output.suffix.lower() == ".trc":  # found before labeling, not after
-        check_trc_names(capture.names + absent, output)
     not_kept: str | None = None  # what a .c3d output from a model loses of the input, if anything
     carried = None  # the input's markers the model lacks (``carried_markers``)
     unknown: list[str] = []  # markers labeled at start that the model lacks (--keep-labels)
@@ -90,6 +87,7 @@ def run_track(
         if recording is not None:
             carried = CarriedMarkers.of(recording, capture.names, start or 0, capture.n_frames)
             capture = carried.out_of(capture)
+    check_labels_fit(output, capture.names + absent, capture.n_frames, source, start or 0)  # before labeling, not after
     if formulation is not None:
         options = replace(options, formulation=_formulation_table(formulation))
     if window is not None:

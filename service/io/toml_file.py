@@ -12,13 +12,23 @@ from service.errors import InputError
 def read_toml(path: str | Path) -> dict[str, Any]:
     """The file's tables.
 
+    TOML is UTF-8 by definition; a byte-order mark, which Windows editors put first, is
+    skipped (tomllib alone took it for a statement at line 1, column 1).
+
     Raises:
-        InputError: ``<path>: cannot read (...)`` or ``<path>: not valid TOML (...)``.
+        InputError: ``<path>: cannot read (...)``, ``<path>: not UTF-8 text (...)`` or
+            ``<path>: not valid TOML (...)``.
     """
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        data = Path(path).read_bytes()
     except OSError as error:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); "
+                         "save it as UTF-8, which TOML requires") from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{path}: not valid TOML ({error})") from None

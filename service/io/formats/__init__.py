@@ -9,12 +9,15 @@ from typing import Any
 
 from service.errors import InputError
 from service.io.formats.c3d import point_labels, read_c3d, write_c3d
+from service.io.formats.c3d_parameters import check_frame_numbers
+from service.io.formats.conventions import check_labels, require_names
 from service.io.formats.csv import read_csv, write_csv
-from service.io.formats.trc import read_trc, write_trc
+from service.io.formats.trc import check_trc_names, read_trc, write_trc
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
 
 _READERS = {".c3d": read_c3d, ".trc": read_trc, ".csv": read_csv}
 _WRITERS = {".c3d": write_c3d, ".trc": write_trc, ".csv": write_csv}
+_LEAST_FRAMES = {".csv": 2}  # a CSV's rate is read from its time column: one row gives none
 
 
 def read_labeled(path: str | Path) -> Recording:
@@ -44,10 +47,39 @@ def write_labeled(
             (a C3D output still holds every input frame, unlabeled outside the span).
 
     Raises:
-        InputError: unsupported suffix, labels that do not fit the source, or a path that
-            cannot be written.
+        InputError: unsupported suffix, labels whose arrays disagree with their names and
+            positions or that the format's reader would refuse (``check_labels``,
+            ``check_labels_fit``), labels that do not fit the source, or a path that cannot
+            be written.
     """
-    _by_suffix(_WRITERS, path, "write")(path, traj, source, start)
+    writer = _by_suffix(_WRITERS, path, "write")
+    check_labels(traj, Path(path), _LEAST_FRAMES.get(Path(path).suffix.lower(), 1))
+    check_labels_fit(path, list(traj.names), traj.n_frames, source, start)
+    writer(path, traj, source, start)
+
+
+def check_labels_fit(
+    path: str | Path, names: list[str], n_frames: int, source: SourceFile | None = None, start: int = 0
+) -> None:
+    """Fail before labeling if labels of ``names`` over ``n_frames`` frames from input frame
+    ``start`` cannot be written to ``path`` (as ``write_labeled``): a name a .trc or .csv
+    cannot carry back (its reader refuses it), or, for a new .c3d, frame numbers past 65535
+    (a table's own: a TRC whose Frame# starts at 70000 was refused after labeling).
+
+    Raises:
+        InputError: one line naming ``path``.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".trc":
+        check_trc_names(names, path)
+    if suffix in (".trc", ".csv"):
+        require_names(names, path)
+    if suffix == ".c3d" and not is_copy(path, source):  # a copy keeps the input's own numbers
+        try:
+            check_frame_numbers(max((source or SourceFile()).first_frame + start, 0), n_frames)
+        except InputError as error:
+            raise InputError(f"{path}: {error}") from None
 
 
 def kept_source(source: SourceFile | None, names: list[str]) -> tuple[SourceFile | None, list[str]]:
@@ -73,9 +105,9 @@ def check_output(path: str | Path) -> None:
     Raises:
         InputError: unsupported suffix, a folder that does not exist, or a folder as the path.
     """
-    _by_suffix(_WRITERS, path, "write")
-    if Path(path).is_dir():
+    if Path(path).is_dir():  # first: a folder given with its trailing slash has no suffix either
         raise InputError(f"{path}: is a folder; name the output file")
+    _by_suffix(_WRITERS, path, "write")
     folder = Path(path).parent
     if not folder.is_dir():
         raise InputError(f"{path}: cannot write there, folder {folder} does not exist")

@@ -266,15 +266,21 @@ def _write(c3d: ezc3d.c3d, path: Path, channels: ChannelParameters) -> None:
     with replacing(path, ".c3d") as temp:  # ezc3d creates it, umask applies
         scale = float_scale(c3d)
         c3d.write(str(temp))
+        if not temp.is_file():
+            raise InputError(f"{path}: cannot write there")
+        _check_whole(temp, path)  # before reading it back: a full disk left it empty (an IndexError)
         fix_channels(str(temp), channels)
         match_header_scale(str(temp), scale)
-        if not temp.is_file() or temp.stat().st_size == 0:
-            raise InputError(f"{path}: cannot write there")
-        try:  # ezc3d says nothing of a full disk: the file it leaves is short of its own header
-            _check_layout(temp, None, None)
-        except InputError:
-            raise InputError(f"{path}: cannot write (the file came out short: is the disk full?); any earlier "
-                             "file there is untouched") from None
+        _check_whole(temp, path)  # fix_channels wrote it again
+
+
+def _check_whole(temp: Path, path: Path) -> None:
+    """ezc3d says nothing of a full disk: the file it leaves is empty or short of its own header."""
+    try:
+        _check_layout(temp, None, None)
+    except InputError:
+        raise InputError(f"{path}: cannot write (the file came out short: is the disk full?); any earlier "
+                         "file there is untouched") from None
 
 
 def _first_line(exc: Exception) -> str:

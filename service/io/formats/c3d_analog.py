@@ -20,7 +20,8 @@ from ezc3d import ezc3d as ezc3d_core
 from service.io.recording import LabeledTrajectories
 
 CONFIDENCE_SUFFIX = "_confidence"  # analog channel <marker>_confidence holds that marker's label confidence
-PARAMETER_VALUES = 255  # most values of one C3D parameter dimension
+CONFIDENCE_DESCRIPTION = "markerflow label confidence"
+PARAMETER_VALUES = 255  # most values of one C3D parameter dimension (and bytes of one label)
 CHANNEL_TEXTS = ("DESCRIPTIONS", "UNITS")
 CHANNEL_NUMBERS = ("SCALE", "OFFSET")
 
@@ -40,23 +41,28 @@ def with_confidence(c3d: ezc3d.c3d, traj: LabeledTrajectories, start: int) -> Ch
     signal: each frame's value is repeated over the analog samples of that frame (the
     file's own analog rate, or the point rate when it had none), 0 in frames outside the
     labels. Channels of these names already in the file (a relabeled markerflow output)
-    are replaced.
+    are replaced. A label too long for the suffix is cut (``confidence_labels``), and its
+    description names the point.
     """
     analog, frames = c3d["parameters"]["ANALOG"], c3d["data"]["points"].shape[2]
     data = c3d["data"]["analogs"]
     ratio = data.shape[2] // frames if data.size else 1
     labels = [str(label).strip() for label in joined_values(analog, "LABELS")] if data.size else []
-    names = [f"{name}{CONFIDENCE_SUFFIX}" for name in traj.names]
+    names = confidence_labels(traj.names)
+    points = [str(label).strip() for label in joined_values(c3d["parameters"]["POINT"], "LABELS")]
+    described = [CONFIDENCE_DESCRIPTION if label == f"{name}{CONFIDENCE_SUFFIX}" else
+                 _cut(f"{CONFIDENCE_DESCRIPTION} of point {points.index(name) + 1} ({name})", PARAMETER_VALUES)
+                 for name, label in zip(traj.names, names, strict=True)]
     kept = [i for i, label in enumerate(labels) if label not in names]
     values = np.zeros((len(names), frames))
     values[:, start : start + traj.n_frames] = np.nan_to_num(traj.confidence.T, nan=0.0)
     added = np.repeat(values, ratio, axis=1)[None]
     c3d["data"]["analogs"] = np.concatenate([data[:, kept], added], axis=1) if data.size else added
     channels: ChannelParameters = {"LABELS": [labels[i] for i in kept] + names}
-    for key, text in zip(CHANNEL_TEXTS, ("markerflow label confidence", "1"), strict=True):
+    for key, added_texts in zip(CHANNEL_TEXTS, (described, ["1"] * len(names)), strict=True):
         texts = list(joined_values(analog, key)) if data.size else []
         texts += [""] * (len(labels) - len(texts))
-        channels[key] = [texts[i] for i in kept] + [text] * len(names)
+        channels[key] = [texts[i] for i in kept] + added_texts
     for key, number in zip(CHANNEL_NUMBERS, (1.0, 0.0), strict=True):
         numbers = [float(v) for v in np.ravel(joined_values(analog, key))] if data.size else []
         numbers += [number] * (len(labels) - len(numbers))
@@ -64,6 +70,28 @@ def with_confidence(c3d: ezc3d.c3d, traj: LabeledTrajectories, start: int) -> Ch
     if not data.size:
         analog["RATE"]["value"] = np.array([float(c3d["parameters"]["POINT"]["RATE"]["value"][0])])
     return _set_channels(analog, channels)
+
+
+def confidence_labels(names: list[str]) -> list[str]:
+    """The analog channel label of each marker's confidence: ``<name>_confidence``, or where
+    that passes the 255 bytes a C3D label holds (ezc3d then writes a file no reader opens),
+    the name cut to fit ``<cut name>~<marker number>_confidence``, unique among them all."""
+    full = [f"{name}{CONFIDENCE_SUFFIX}" for name in names]
+    labels: list[str] = []
+    taken = {label for label in full if len(label.encode()) <= PARAMETER_VALUES}
+    for number, (name, label) in enumerate(zip(names, full, strict=True), start=1):
+        while len(label.encode()) > PARAMETER_VALUES or (label in taken and label != full[len(labels)]):
+            tail = f"~{number}{CONFIDENCE_SUFFIX}"
+            label = _cut(name, PARAMETER_VALUES - len(tail.encode())) + tail
+            number += len(names)  # a cut label that another marker's name spells in full: the next number
+        taken.add(label)
+        labels.append(label)
+    return labels
+
+
+def _cut(text: str, limit: int) -> str:
+    """``text`` cut to at most ``limit`` UTF-8 bytes, whole characters only."""
+    return text.encode()[:limit].decode(errors="ignore")
 
 
 def fix_channels(path: str, channels: ChannelParameters) -> None:

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from service.errors import InputError
+from service.io.marker_names import first_name_problem, shown
 from service.io.recording import LabeledTrajectories
 
 MM_PER_UNIT = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
@@ -77,6 +78,29 @@ def check_rows(numbers: np.ndarray, times: np.ndarray, lines: list[str]) -> None
                              "samples is a row of empty cells)")
 
 
+def rate_of_times(times: np.ndarray, path: Path) -> float:
+    """Rows per second: the labeler steps row by row (``check_rows``: evenly in time), so a
+    decimated table's frame numbers, which skip, do not give its rate."""
+    span = times[-1] - times[0]
+    rate = (len(times) - 1) / span if span > 0 else np.nan
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"{path}: the time column gives no positive frame rate")
+    # times printed to d decimals put the rate within rate^2 10^-d / span of the true one
+    # (120 Hz at 3 decimals over 124 rows reads 119.96): the shortest rate that close is it
+    close = rate**2 * printed_step(times) / span
+    shortest = next((round(rate, q) for q in range(7) if abs(rate - round(rate, q)) <= close), rate)
+    return float(f"{shortest:.9g}")  # the times' rounding off: 100 Hz, not 99.99999999999999
+
+
+def printed_step(times: np.ndarray) -> float:
+    """The resolution the times were printed at: 10^-d for the fewest decimals d that hold them all."""
+    for decimals in range(10):
+        scaled = times * 10.0**decimals
+        if np.all(np.abs(scaled - np.round(scaled)) < 1e-6 * np.maximum(1.0, np.abs(scaled))):
+            return 10.0**-decimals
+    return 0.0
+
+
 def to_millimetres(values: np.ndarray, unit: str, path: Path) -> np.ndarray:
     """Scale lengths given in ``unit`` (mm, cm or m; case and spaces ignored) to mm.
 
@@ -113,6 +137,48 @@ def require_samples(names: list[str], positions: np.ndarray, path: Path) -> None
         raise InputError(f"{path}: marker {names[marker]!r} has {'xyz'[axis]} = {value:.3g} mm in frame {frame}{why}")
 
 
+def require_names(names: list[str], path: Path) -> None:
+    """Refuse a name no output carries back as itself (``name_problem``: a NUL came back from
+    a C3D cut out, a name over 255 bytes made a C3D no reader opens), as the capture JSON does.
+
+    Raises:
+        InputError: the first such name.
+    """
+    found = first_name_problem(names)
+    if found is not None:
+        raise InputError(f"{path}: marker name {shown(found[0])} {found[1]}")
+
+
+def check_labels(traj: LabeledTrajectories, path: Path, least_frames: int) -> None:
+    """Refuse labels a file of them would not hold, or hold so that its reader refuses it:
+    arrays of other shapes than the names and positions say (a numpy broadcast error for a
+    .c3d, a .trc of "values past the named markers"), no marker, fewer than ``least_frames``
+    frames, or no positive frame rate.
+
+    Raises:
+        InputError: one line, naming ``path``.
+    """
+    positions = np.asarray(traj.positions)
+    if positions.ndim != 3 or positions.shape[2] != 3:
+        raise InputError(f"{path}: positions must be (frames, markers, 3), got shape {positions.shape}")
+    frames, markers = positions.shape[:2]
+    if not all(isinstance(name, str) for name in traj.names) or len(traj.names) != markers:
+        raise InputError(f"{path}: names must be one string per marker of positions {positions.shape}; got "
+                         f"{len(traj.names)} names")
+    arrays = [("occluded", traj.occluded, (frames, markers)), ("confidence", traj.confidence, (frames, markers))]
+    arrays += [("best_view", traj.best_view, (frames, markers))] if traj.view_names else []
+    for what, array, shape in arrays:
+        if np.shape(array) != shape and (what == "occluded" or np.size(array)):
+            raise InputError(f"{path}: {what} must be (frames, markers) = {shape} as positions, got {np.shape(array)}")
+    if np.size(traj.unlabeled) and (np.ndim(traj.unlabeled) != 3 or np.shape(traj.unlabeled)[::2] != (frames, 3)):
+        raise InputError(f"{path}: unlabeled must be ({frames}, channels, 3) as positions, got {np.shape(traj.unlabeled)}")
+    if not markers or frames < least_frames:
+        raise InputError(f"{path}: nothing to write that reads back: {markers} markers x {frames} frames (a "
+                         f"{path.suffix.lower()} needs a marker and {least_frames} frame{'s' * (least_frames > 1)})")
+    if not (np.isfinite(traj.rate) and traj.rate > 0):
+        raise InputError(f"{path}: frame rate must be a positive number, got {traj.rate!r}")
+
+
 def from_millimetres(values: np.ndarray, unit: str) -> np.ndarray:
     """Millimetres in ``unit`` (one ``to_millimetres`` accepts): the inverse scaling."""
     return np.asarray(values, dtype=float) / MM_PER_UNIT[unit.strip().lower()]
@@ -133,14 +199,22 @@ def hidden_samples(traj: LabeledTrajectories) -> np.ndarray:
     return np.asarray(traj.occluded, dtype=bool) | np.isnan(traj.positions).any(axis=2)
 
 
-def sample_cells(xyz: np.ndarray, hidden: np.ndarray) -> list[str]:
+# Significant digits of a coordinate written in a unit other than mm: scaling to mm and back
+# leaves float noise in the last bits (0.1044258 m was written 0.10442580000000001). Three
+# roundings put it within 2 units in the last place, under half a step of the 15th digit, so
+# 15 digits give back any value of up to 15 the input had, and any other within 5e-15.
+SCALED_DIGITS = 15
+
+
+def sample_cells(xyz: np.ndarray, hidden: np.ndarray, digits: int | None = None) -> list[str]:
     """One frame's x, y, z text cells per marker, blank where hidden.
 
-    ``repr`` of a float round-trips exactly: a table read back gives the values written.
+    ``repr`` of a float (``digits`` None) round-trips exactly: a table read back gives the
+    values written; else each value to ``digits`` significant digits.
     """
     cells: list[str] = []
     for sample, gone in zip(xyz, hidden, strict=True):
-        cells += [""] * 3 if gone else [repr(float(v)) for v in sample]
+        cells += [""] * 3 if gone else [repr(float(v)) if digits is None else f"{float(v):.{digits}g}" for v in sample]
     return cells
 
 

@@ -12,8 +12,10 @@ from service.errors import InputError
 from service.io.formats.conventions import (
     check_rows,
     hidden_samples,
+    rate_of_times,
     read_text,
     require_file,
+    require_names,
     require_samples,
     sample_cells,
 )
@@ -87,23 +89,21 @@ def read_csv_labeled(path: str | Path) -> LabeledTrajectories:
 def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
     """The labels of a ``write_csv`` table, and its numbering (first frame less 1, first time)."""
     path = require_file(path)
-    try:
-        rows = list(csv.reader(io.StringIO(read_text(path), newline="")))
-    except csv.Error as exc:
-        raise InputError(f"{path}: not a CSV table ({exc})") from exc
-    rows, confidence = _split_confidence(rows, path)
+    lines, rows = _rows(path)
+    rows, confidence = _split_confidence(rows, lines, path)
     names, with_views = _names(rows[0] if rows else [], path)
+    require_names(names, path)
     width = 2 + 3 * len(names)
-    views = [_view_cells(row, width, len(names), path, i) for i, row in enumerate(rows[1:], start=2)] if with_views else []
-    table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in enumerate(rows[1:], start=2)])
+    views = [_view_cells(row, width, len(names), path, i) for i, row in zip(lines[1:], rows[1:])] if with_views else []
+    table = np.array([_floats(row[:width] if with_views else row, width, path, i) for i, row in zip(lines[1:], rows[1:])])
     if len(table) < 2:
         raise InputError(f"{path}: needs at least two frames to infer the frame rate")
-    check_rows(table[:, 0], table[:, 1], [f"{path}:{line}" for line in range(2, len(table) + 2)])
+    check_rows(table[:, 0], table[:, 1], [f"{path}:{line}" for line in lines[1:]])
     positions = table[:, 2:].reshape(len(table), len(names), 3)
     require_samples(names, positions, path)
     occluded = np.isnan(positions).any(axis=2)
     positions[occluded] = np.nan
-    labels = LabeledTrajectories(names, positions, occluded, _rate(table[:, 1], path))
+    labels = LabeledTrajectories(names, positions, occluded, rate_of_times(table[:, 1], path))
     source = SourceFile.of_table("mm", table[:, 0], table[:, 1])
     if confidence is not None:
         labels.confidence = _named_confidence(confidence, names, path)
@@ -115,7 +115,31 @@ def _read_table(path: str | Path) -> tuple[LabeledTrajectories, SourceFile]:
                                confidence=labels.confidence), source
 
 
-def _split_confidence(rows: list[list[str]], path: Path) -> tuple[list[list[str]], tuple[list[str], np.ndarray] | None]:
+def _rows(path: Path) -> tuple[list[int], list[list[str]]]:
+    """The table's rows and the line each ends on, blank lines left out as a TRC's are (an
+    editor's trailing or separating empty line is no frame).
+
+    Raises:
+        InputError: not CSV, or cells separated by ';' (a spreadsheet in a comma-decimal locale).
+    """
+    lines, rows = [], []
+    reader = csv.reader(io.StringIO(read_text(path), newline=""))
+    try:
+        for row in reader:
+            if any(cell.strip() for cell in row):
+                lines.append(reader.line_num)
+                rows.append(row)
+    except csv.Error as exc:
+        raise InputError(f"{path}: not a CSV table ({exc})") from exc
+    if rows and len(rows[0]) == 1 and ";" in rows[0][0]:
+        raise InputError(f"{path}:{lines[0]}: the cells are separated by ';'; a markerflow CSV separates them by ',' "
+                         "(save it with ',' as the separator and '.' as the decimal point)")
+    return lines, rows
+
+
+def _split_confidence(
+    rows: list[list[str]], lines: list[int], path: Path
+) -> tuple[list[list[str]], tuple[list[str], np.ndarray] | None]:
     """The table without its trailing ``<name>_confidence`` columns, and those columns'
     names and values (None when there are none)."""
     header = rows[0] if rows else []
@@ -123,10 +147,10 @@ def _split_confidence(rows: list[list[str]], path: Path) -> tuple[list[list[str]
     if count == 0:
         return rows, None
     cut = len(header) - count
-    for line, row in enumerate(rows[1:], start=2):
+    for line, row in zip(lines[1:], rows[1:]):
         if len(row) != len(header):
             raise InputError(f"{path}:{line}: {len(row)} cells, header has {len(header)}")
-    values = np.array([_floats(row[cut:], count, path, i) for i, row in enumerate(rows[1:], start=2)]).reshape(-1, count)
+    values = np.array([_floats(row[cut:], count, path, i) for i, row in zip(lines[1:], rows[1:])]).reshape(-1, count)
     return [row[:cut] for row in rows], ([cell[: -len(_CONFIDENCE)] for cell in header[cut:]], values)
 
 
@@ -164,26 +188,3 @@ def _floats(row: list[str], width: int, path: Path, line: int) -> list[float]:
         return [float(cell) if cell.strip() else np.nan for cell in row]
     except ValueError as exc:
         raise InputError(f"{path}:{line}: {exc}") from None
-
-
-def _rate(times: np.ndarray, path: Path) -> float:
-    """Rows per second: the labeler steps row by row (``check_rows``: evenly in time), so a
-    decimated table's frame numbers, which skip, do not give its rate."""
-    span = times[-1] - times[0]
-    rate = (len(times) - 1) / span if span > 0 else np.nan
-    if not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"{path}: the time column gives no positive frame rate")
-    # times printed to d decimals put the rate within rate^2 10^-d / span of the true one
-    # (120 Hz at 3 decimals over 124 rows reads 119.96): the shortest rate that close is it
-    close = rate**2 * _printed_step(times) / span
-    shortest = next((round(rate, q) for q in range(7) if abs(rate - round(rate, q)) <= close), rate)
-    return float(f"{shortest:.9g}")  # the times' rounding off: 100 Hz, not 99.99999999999999
-
-
-def _printed_step(times: np.ndarray) -> float:
-    """The resolution the times were printed at: 10^-d for the fewest decimals d that hold them all."""
-    for decimals in range(10):
-        scaled = times * 10.0**decimals
-        if np.all(np.abs(scaled - np.round(scaled)) < 1e-6 * np.maximum(1.0, np.abs(scaled))):
-            return 10.0**-decimals
-    return 0.0

@@ -13,11 +13,15 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.conventions import (
+    SCALED_DIGITS,
     check_rows,
     from_millimetres,
     hidden_samples,
+    printed_step,
+    rate_of_times,
     read_text,
     require_file,
+    require_names,
     require_samples,
     sample_cells,
     to_millimetres,
@@ -39,8 +43,9 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     Raises:
         InputError: missing or malformed file (header, a NumMarkers other than the names
             on line 4, a non-numeric cell, a row count other than NumFrames, rows out of
-            order), zero frames, an unknown unit, more markers or frames than allowed, or a
-            name twice or an infinite or absurd coordinate (``require_samples``).
+            order), zero frames, an unknown unit, more markers or frames than allowed, a
+            name no output carries back (``require_names``: a control character, over 255
+            bytes), or a name twice or an infinite or absurd coordinate (``require_samples``).
     """
     path = require_file(path)
     lines = read_text(path).splitlines()
@@ -54,6 +59,7 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     _at_most(n_markers, "markers", max_markers, "max_markers", path)
     _at_most(declared, "frames", max_frames, "max_frames", path)
     names = _names(lines[3], n_markers, path)
+    require_names(names, path)
     numbered = [
         (f"{path}:{number}", line)
         for number, line in enumerate(lines[_FIRST_DATA_LINE - 1 :], start=_FIRST_DATA_LINE)
@@ -70,7 +76,9 @@ def read_trc(path: str | Path, max_markers: int | None = None, max_frames: int |
     positions = to_millimetres(positions, header["Units"], path)
     require_samples(names, positions, path)
     source = SourceFile.of_table(header["Units"].strip().lower(), cells[:, 0], cells[:, 1])
-    return Recording(names, zero_gaps_to_nan(positions), _number(header, "DataRate", path), source)
+    rate = _number(header, "DataRate", path)
+    _check_rate(rate, cells[:, 1], path)
+    return Recording(names, zero_gaps_to_nan(positions), rate, source)
 
 
 def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
@@ -101,9 +109,10 @@ def write_trc(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
         "",
     ]
     values = from_millimetres(traj.positions, source.unit)
+    digits = None if source.unit.strip().lower() == "mm" else SCALED_DIGITS  # mm: as given, exactly
     hidden = hidden_samples(traj)
     rows = [
-        "\t".join(list(numbering[f]) + sample_cells(values[f], hidden[f])) for f in range(traj.n_frames)
+        "\t".join(list(numbering[f]) + sample_cells(values[f], hidden[f], digits)) for f in range(traj.n_frames)
     ]
     with replacing(path) as temp:
         temp.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
@@ -120,7 +129,7 @@ def check_trc_names(names: list[str], path: str | Path) -> None:
     for name in names:
         if re.search(r"[\t\r\n]", name):
             raise InputError(f"{path}: marker name {name!r} holds a tab or line break, which a TRC cannot; "
-                             "write .c3d or .csv")
+                             "write .c3d")  # a .csv would hold it, but its reader refuses control characters
 
 
 def _at_most(count: int, what: str, limit: int | None, name: str, path: Path) -> None:
@@ -151,6 +160,20 @@ def _number(header: dict[str, str], key: str, path: Path) -> float:
     if not value > 0 and key != "NumFrames":
         raise InputError(f"{path}: TRC header {key} must be positive, got {header[key]}")
     return value
+
+
+def _check_rate(rate: float, times: np.ndarray, path: Path) -> None:
+    """DataRate agrees with the Time column, within how the times were printed. A header that
+    disagrees with its rows is refused, as for NumFrames: labeled at DataRate 120 a take whose
+    times step 1/60 s was labeled, and written back, at the wrong speed, without a word."""
+    if len(times) < 2:
+        return
+    span = float(times[-1] - times[0])  # > 0: check_rows
+    from_times = (len(times) - 1) / span
+    if abs(from_times - rate) > from_times**2 * printed_step(times) / span + 1e-6 * rate:
+        said = rate_of_times(times, path)
+        raise InputError(f"{path}: header says DataRate {rate:g} but the Time column steps {1 / said:.6g} s "
+                         f"({said:g} frames per second); correct one of them")
 
 
 def _count(header: dict[str, str], key: str, path: Path) -> int:
