@@ -243,6 +243,8 @@ def _read_input(
     start, end = span or (None, None)
     if input.suffix.lower() != ".json":
         recording = read_labeled(input)
+        if recording.n_frames < 2:  # said here, where the file is known
+            raise InputError(f"{input.name}: the take has {recording.n_frames} frame; labeling needs at least 2")
         if span is None:
             return capture_from_recording(recording, shuffle), LabelingOptions(), recording, []
         if start is None:
