@@ -51,3 +51,24 @@ def test_what_cvxpy_s_highs_prints_goes_to_stderr_and_the_result_to_stdout():
     run = subprocess.run([sys.executable, "-c", CVXPY_SOLVE], cwd=REPO, capture_output=True, text=True, timeout=60)
     assert run.returncode == 0, run.stderr
     assert run.stdout == "result 1.0\n"
+
+
+# HiGHS keeps one thread scheduler per process. Once another HiGHS (cvxpy's for `lp-l1-cvxpy`,
+# or a user's own highspy) started it with two threads, a run asking for one thread was
+# refused; with output off nothing said so, and every window came back "Not Set" with all its
+# markers occluded.
+ANOTHER_HIGHS_FIRST = """
+import highspy
+other = highspy.Highs()
+other.setOptionValue("output_flag", False)
+other.setOptionValue("threads", 2)
+other.addVar(0, 1)
+assert other.run() == highspy.HighsStatus.kOk
+"""
+
+
+@pytest.mark.parametrize("integer", [False, True])
+def test_a_scheduler_started_by_another_highs_does_not_stop_ours(integer: bool):
+    run = subprocess.run([sys.executable, "-c", ANOTHER_HIGHS_FIRST + SOLVE.format(integer=integer)],
+                         cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr  # SOLVE asserts the optimum: "Not Set" has none
