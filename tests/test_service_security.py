@@ -179,6 +179,15 @@ def test_bad_input_is_422_naming_the_field(limited, camera_document):
     assert limited.get("/v1/jobs", params={"limit": 0}).json()["message"].startswith("query.limit: Input should be greater")
 
 
+def test_a_json_body_is_read_as_a_json_file_is(limited):
+    """A byte-order mark (Windows editors write one) was "Invalid JSON ... line 1 column 1" over
+    HTTP while `track` took the same file; a body not in UTF-8 now says so."""
+    body = json.dumps(small_document()).encode()
+    assert limited.post("/v1/jobs", content=b"\xef\xbb\xbf" + body, headers=JSON).status_code == 202
+    latin = body.replace(b'"rate"', b'"rate", "markers\xe9": 1, "x"', 1)
+    assert _problem(limited, latin).startswith("not UTF-8 text (byte ")
+
+
 def test_bad_uploads_are_422_naming_the_file(limited, tmp_path):
     def upload(name: str, content: bytes, **data) -> str:
         answer = limited.post("/v1/jobs", files={"file": (name, content)}, data=data)

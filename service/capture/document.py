@@ -264,21 +264,27 @@ def check_marker_names(names: list[str], path: str) -> None:
 
 
 def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:
-    """Parse and check a capture document.
+    """Parse and check a capture document; an ``InputError`` names ``source`` first."""
+    try:
+        return capture_document_of(text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text)
+    except InputError as error:
+        raise InputError(f"{source}: {error}") from None
+
+
+def capture_document_of(data: bytes) -> CaptureDocument:
+    """The checked capture document of ``data`` (a file's bytes, an HTTP body).
 
     Raises:
-        InputError: One line: ``source``, the field path, and what is wrong.
+        InputError: One line: the field path and what is wrong.
     """
-    data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
     try:  # JSON is UTF-8; a byte-order mark (Windows editors) is skipped, as for TRC and CSV
         data.decode("utf-8")
     except UnicodeDecodeError as error:
-        raise InputError(f"{source}: not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); "
-                         "save it as UTF-8") from None
+        raise InputError(f"not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); save it as UTF-8") from None
     try:
         return CaptureDocument.model_validate_json(data.removeprefix(b"\xef\xbb\xbf"))
     except ValidationError as error:
-        raise InputError(f"{source}: {describe_validation_error(error)}") from None
+        raise InputError(describe_validation_error(error)) from None
 
 
 def describe_validation_error(error: ValidationError) -> str:

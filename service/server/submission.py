@@ -19,7 +19,7 @@ from starlette.datastructures import FormData, UploadFile
 
 from formulations.methods.registry import describe
 from service.capture.capture import LabelingOptions
-from service.capture.document import CaptureDocument, describe_validation_error
+from service.capture.document import CaptureDocument, capture_document_of, describe_validation_error
 from service.capture.formulation_spec import formulation_from_table
 from service.capture.from_recording import capture_from_span, require_complete_first_frame
 from service.capture.span import frame_span
@@ -56,11 +56,7 @@ class Submission:
 
 def document_submission(body: bytes, limits: Limits) -> Submission:
     """A JSON capture document, parsed and checked."""
-    try:
-        document = CaptureDocument.model_validate_json(body)
-    except ValidationError as error:
-        raise InputError(describe_validation_error(error)) from None
-    return _checked(document, "json", limits)
+    return _checked(capture_document_of(body), "json", limits)
 
 
 def labeled_upload(form: FormData, fields: tuple[str, ...], suffixes: tuple[str, ...], what: str) -> tuple[UploadFile, Path]:
