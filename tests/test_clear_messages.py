@@ -58,14 +58,3 @@ def test_an_output_folder_with_its_trailing_slash_is_a_folder(tmp_path: Path) ->
         check_output(f"{tmp_path / 'results'}/")
     assert_input_error(run_cli("track", CMU, "--out", f"{tmp_path / 'results'}/"), "results: is a folder")
 
-
-def test_a_one_frame_take_names_its_file(tmp_path: Path) -> None:
-    """A one-row TRC said only "the take has 1 frame", not which input."""
-    one = tmp_path / "one.trc"
-    one.write_text(
-        "PathFileType\t4\t(X/Y/Z)\tone.trc\n"
-        "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n"
-        "100\t100\t1\t2\tmm\t100\t1\t1\nFrame#\tTime\tA\t\t\tB\n\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n\n"
-        "1\t0\t1\t2\t3\t40\t50\t60\n", encoding="utf-8")
-    assert_input_error(run_cli("track", str(one), "--out", str(tmp_path / "out.csv")),
-                       "one.trc: the take has 1 frame; labeling needs at least 2")

@@ -129,7 +129,7 @@ def test_a_one_frame_take_is_one_line_that_says_so(tmp_path: Path) -> None:
     c3d["data"]["points"] = np.concatenate([np.arange(9.0).reshape(3, 3, 1), np.ones((1, 3, 1))])
     c3d.write(str(source))
     code, _, stderr = _track(source, "--out", tmp_path / "out.c3d")
-    assert code == 2 and stderr.strip() == "error: the take has 1 frame; labeling needs at least 2"
+    assert code == 2 and stderr.strip() == "error: one.c3d: the take has 1 frame; labeling needs at least 2"
 
 
 def test_a_capture_json_takes_no_start_without_a_model(tmp_path: Path) -> None:
