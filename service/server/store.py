@@ -21,7 +21,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import sessionmaker
 
 from service.labeling.outcome import WindowOutcome
-from service.server.tables import JobRow, JobState, Upload, UploadRow, WarningsRow, WindowRow, engine_for
+from service.server.tables import InputRow, JobRow, JobState, Upload, UploadRow, WarningsRow, WindowRow, engine_for
 
 ACTIVE: tuple[JobState, ...] = ("queued", "running")
 STATES: tuple[JobState, ...] = get_args(JobState)
@@ -90,13 +90,14 @@ class JobStore:
         job and False. ``upload``: the file the document was read from, kept for its output."""
         now = _now()
         row = JobRow(id=uuid.uuid4().hex, owner=owner, state="queued", source=source[:300], created_at=now,
-                     updated_at=now, windows_total=windows_total, windows_done=0, input=document,
+                     updated_at=now, windows_total=windows_total, windows_done=0, input=b"",
                      idempotency_key=key)
         try:
             with self.session.begin() as session:
                 session.add(row)
+                session.flush()  # the job row first: the input's and upload's keys refer to it
+                session.add(InputRow(job_id=row.id, document=document))
                 if upload is not None:
-                    session.flush()  # the job row first: the upload's key refers to it
                     session.add(UploadRow(job_id=row.id, suffix=upload.suffix, data=upload.data, start=upload.start,
                                           absent=json.dumps(list(upload.absent))))
         except IntegrityError:
@@ -152,7 +153,9 @@ class JobStore:
 
     def input(self, job_id: str) -> bytes:
         with self.session() as session:
-            return session.execute(select(JobRow.input).where(JobRow.id == job_id)).scalar_one()
+            document = session.execute(select(InputRow.document).where(InputRow.job_id == job_id)).scalar()
+            return document if document is not None else session.execute(
+                select(JobRow.input).where(JobRow.id == job_id)).scalar_one()
 
     def upload(self, job_id: str) -> Upload | None:
         """The file the job was uploaded as; None for a capture document."""
@@ -267,7 +270,7 @@ class JobStore:
             gone = session.execute(delete(JobRow).where(JobRow.id == job_id, JobRow.state.not_in(ACTIVE)))
             if cast(CursorResult[Any], gone).rowcount != 1:
                 return False
-            for table in (WindowRow, UploadRow, WarningsRow):
+            for table in (WindowRow, UploadRow, WarningsRow, InputRow):
                 session.execute(delete(table).where(table.job_id == job_id))
             return True
 
