@@ -74,6 +74,13 @@ def counted(count: int, noun: str, plural: str | None = None) -> str:
     return f"{count} {noun if count == 1 else plural or noun + 's'}"
 
 
+def stage(line: str) -> None:
+    """What long work comes next, a line on stderr unless quiet: after its last window a long
+    take assembles and writes for tens of seconds (50,000 frames: 35 s), silent before."""
+    if not quiet:
+        err.print(line, highlight=False, soft_wrap=True, markup=False)
+
+
 def warn(line: str | None) -> None:
     """A warning line on stderr (none for None), after the figures it qualifies."""
     if line is not None:

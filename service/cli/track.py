@@ -17,7 +17,7 @@ from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
 from service.capture.model_input import check_shared_names, read_model, with_model
 from service.cli.output import check_writable_output
-from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, warn, window_progress
+from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, stage, warn, window_progress
 from service.errors import InputError
 from service.io.formats import check_labels_fit, is_copy, kept_source, read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
@@ -99,12 +99,13 @@ def run_track(
     warn(early_scale_warning(capture, unit))
     began = time.perf_counter()
     with window_progress(f"labeling {input.name}") as progress:
-        result, windows = labeling.label(progress)
+        result, windows = labeling.label(progress, stage=lambda line: stage(f"labeling {input.name}: {line}"))
     written = with_absent(result, absent)
     if carried is not None and not is_copy(output, source):
         written = carried.appended_to(written)
     if recording is not None:  # the input's column order, with or without a model (as the service writes it)
         written = in_order(written, recording.names)
+    stage(f"writing {output}")
     write_labeled(output, written, source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()

@@ -18,7 +18,7 @@ loop, the formulation and the first marker state are the same for all.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from typing import Any, Protocol
 
@@ -224,13 +224,17 @@ class CaptureLabeling:
 
     def label(
         self, progress: Progress | None = None, observer: Observer | None = None,
+        stage: Callable[[str], None] | None = None,
     ) -> tuple[LabeledTrajectories, list[WindowStats]]:
         """Label every window in one go, and again if ``refine`` says so; ``progress``
         counts the first pass's windows, then both passes' once a second pass runs (43/43,
-        then 44/86 ...); ``observer`` sees the first pass."""
+        then 44/86 ...); ``observer`` sees the first pass; ``stage`` is told when the windows
+        are done and the labels are assembled (35 s after the last window at 50,000 frames)."""
         first = list(self.windows(progress=progress, observer=observer))
         outcomes = self.refine(first, _after(progress, self.n_windows))
         assert outcomes is not None  # only a stop abandons the second pass
+        if stage is not None:
+            stage("windows done; assembling the labels (take-wide repairs, fill, confidence)")
         return self.result(outcomes), [o.stats for o in outcomes]
 
 
