@@ -14,7 +14,7 @@ from conftest import DATA
 from service.io.formats import read_labeled
 from service.io.formats.c3d import write_c3d
 from service.io.recording import LabeledTrajectories
-from service.labeling.lost_subject import MIN_POINTS, unnamed_span
+from service.labeling.lost_subject import MIN_POINTS, away_span, unnamed_span
 
 REPO = Path(__file__).resolve().parents[1]
 CMU = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
@@ -40,6 +40,21 @@ def _track(tmp_path: Path, positions: np.ndarray, rate: float) -> tuple[dict, st
                           str(tmp_path / "out.csv"), "--json"], cwd=REPO, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
     return json.loads(run.stdout), run.stderr
+
+
+def test_the_subject_away_is_the_longest_second_without_points_followed_by_labels() -> None:
+    """A walk whose every marker left the view for 500 frames came back named from its shape
+    before alone, 14-29 % right, and nothing said so."""
+    occluded = np.zeros((60, 2), bool)
+    points = np.full(60, 6)
+    points[10:14] = 0  # under a second (rate 6 below: 6 frames) or not: the rate decides
+    points[30:45] = 0
+    occluded[30:45] = True
+    assert away_span(occluded, points, rate=6.0) == (30, 15)
+    assert away_span(occluded, points, rate=20.0) is None  # none lasts a second
+    occluded[45:] = True  # nothing labeled after it: the unnamed span's warning, not this one
+    points[45:] = 6
+    assert away_span(occluded, points, rate=6.0) is None
 
 
 def test_track_warns_when_a_subject_that_left_the_volume_comes_back_unnamed(tmp_path: Path) -> None:

@@ -18,7 +18,7 @@ from service.capture.capture import Capture
 from service.capture.reprojection import frame0_offsets, frame0_problem
 from service.io.recording import LabeledTrajectories
 from service.labeling.coincident import coincident_pairs, coincident_warning
-from service.labeling.lost_subject import unnamed_span, unnamed_warning
+from service.labeling.lost_subject import away_span, away_warning, unnamed_span, unnamed_warning
 from service.labeling.shape_doubt import shape_break_warning
 from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
 from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning, spacing_frame
@@ -73,8 +73,9 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
         coincident_warning(coincident_pairs(result.names, result.positions)),
     ]
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against
-        span = unnamed_span(result.occluded, np.array([len(p) for p in capture.points]), capture.rate)
-        lines.append(unnamed_warning(span, capture.rate, start))
+        counts = np.array([len(p) for p in capture.points])
+        lines.append(unnamed_warning(unnamed_span(result.occluded, counts, capture.rate), capture.rate, start))
+        lines.append(away_warning(away_span(result.occluded, counts, capture.rate), capture.rate, start))
     else:  # camera mode: a camera whose calibration or detections are off at frame 0
         problem = frame0_problem(capture.camera_frames()[0], frame0_offsets(capture.frame0_distances()))
         lines.append(problem[1] if problem is not None else None)
