@@ -5,6 +5,7 @@ hand, and each plot an SVG with its data drawn."""
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import numpy as np
 
@@ -86,6 +87,8 @@ def test_the_plots_draw_their_data():
     assert b"3 of 4 windows integral (4 of 9 done)" in certificate_svg(windows, total=9)
     assert b"3 of 4 windows integral</dc:title>" in certificate_svg(windows, total=4)
     assert _drawn_paths(certificate_svg(windows)) > empty_certificate
+    many = [replace(windows[i % 4], template=19 * i, last=19 * (i + 1)) for i in range(400)]  # stepped outlines
+    assert b"300 of 400 windows integral" in certificate_svg(many) and _drawn_paths(certificate_svg(many)) > empty_certificate
     assert _drawn_paths(timeline_svg(labels)) > 5 * 4  # at least a run per marker and state
     assert chosen_markers(labels, ["M3", "nope"]) == ["M3"]
     default = chosen_markers(labels, [])

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.patches import Patch
 
 from service.labeling.stats import WindowStats
 from service.web.plots.figure import new_figure, svg_bytes
 
 FRACTIONAL_HATCH = "////"
+MANY_WINDOWS = 300  # past this a bar of an 8-inch chart is under a pixel wide
 INTEGRAL = Patch(facecolor="0.35", label="integral (solid)")
 FRACTIONAL = Patch(facecolor="white", edgecolor="0.1", hatch=FRACTIONAL_HATCH, label="fractional (hatched)")
 
@@ -27,8 +29,7 @@ def certificate_svg(windows: list[WindowStats], total: int | None = None) -> byt
     proven = np.isfinite(gaps)
     seconds = np.array([w.solve_seconds for w in windows], dtype=float)
     for axes, values, label in ((gap_axes, np.where(proven, gaps, 0.0), "LP gap"), (time_axes, seconds, "solve (s)")):
-        axes.bar(index[integral], values[integral], width=0.8, color=INTEGRAL.get_facecolor())
-        axes.bar(index[~integral], values[~integral], width=0.8, color="white", edgecolor="0.1", hatch=FRACTIONAL_HATCH)
+        _bars(axes, index, values, integral)
         axes.set_ylabel(label)
         axes.grid(axis="y", alpha=0.3)
     fractional_gaps = gaps[proven & ~integral]
@@ -50,3 +51,16 @@ def certificate_svg(windows: list[WindowStats], total: int | None = None) -> byt
         title += f" ({len(windows)} of {total} done)"
     figure.suptitle(title)
     return svg_bytes(figure, title)
+
+
+def _bars(axes: Axes, index: np.ndarray, values: np.ndarray, integral: np.ndarray) -> None:
+    """A bar per window, solid where integral and hatched where fractional; past
+    ``MANY_WINDOWS`` (a bar under a pixel wide) one stepped outline per kind, since a patch per
+    window made a 2,632-window job's chart take 2.8 s, the server's other requests waiting."""
+    if len(index) <= MANY_WINDOWS:
+        axes.bar(index[integral], values[integral], width=0.8, color=INTEGRAL.get_facecolor())
+        axes.bar(index[~integral], values[~integral], width=0.8, color="white", edgecolor="0.1", hatch=FRACTIONAL_HATCH)
+        return
+    axes.fill_between(index, np.where(integral, values, 0.0), step="mid", linewidth=0, color=INTEGRAL.get_facecolor())
+    axes.fill_between(index, np.where(integral, 0.0, values), step="mid", facecolor="white", edgecolor="0.1",
+                      hatch=FRACTIONAL_HATCH, linewidth=0.5)
