@@ -5,6 +5,7 @@ Checked with ezc3d on the written file, not with markerflow's reader."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import ezc3d
@@ -136,7 +137,19 @@ def test_a_capture_json_takes_no_start_without_a_model(tmp_path: Path) -> None:
     document = tmp_path / "capture.json"
     document.write_text('{"markers": ["A"], "first_frame": [[0, 0, 0]], "rate": 100, "frames": [[[0, 0, 0]], [[0, 0, 1]]]}')
     code, _, stderr = _track(document, "--start", "1", "--out", tmp_path / "out.csv")
-    assert code == 2 and "need --model" in stderr
+    assert code == 2 and "needs --model" in stderr
+
+
+def test_a_capture_json_takes_an_end(tmp_path: Path) -> None:
+    """Frame 0's labels are enough to label frames 0 .. end - 1 (--end was refused with --start)."""
+    document, out = tmp_path / "capture.json", tmp_path / "out.csv"
+    frames = [[[0.0, 0.0, 0.0], [50.0, 0.0, 0.0]]] + [[[0.0, 0.0, k], [50.0, 0.0, k]] for k in range(1, 10)]
+    document.write_text(json.dumps({"markers": ["A", "B"], "first_frame": frames[0], "rate": 100, "points": frames}))
+    code, _, stderr = _track(document, "--end", "4", "--out", out)
+    assert code == 0, stderr
+    assert len(out.read_text().splitlines()) == 1 + 4  # the header and frames 0-3
+    code, _, stderr = _track(document, "--end", "11", "--out", out)
+    assert code == 2 and "start + 2 <= end <= 10" in stderr
 
 
 @pytest.mark.skipif(not VICON.exists(), reason="needs ../shared/data")

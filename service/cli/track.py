@@ -16,6 +16,7 @@ from service.capture.document import read_capture_document
 from service.capture.formulation_spec import formulation_table
 from service.capture.from_recording import capture_from_recording, capture_from_span, require_complete_first_frame
 from service.capture.model_input import check_shared_names, read_model, with_model
+from service.capture.span import frame_span
 from service.cli.output import check_writable_output
 from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, stage, warn, window_progress
 from service.errors import InputError
@@ -239,7 +240,7 @@ def _read_input(
     ``span`` (start, end) relabels a recording from its own labels: at ``start``
     (``capture_from_span``: markers absent there are left out), or when no start is given at
     frame 0, which must then have every marker. None (a subject model names the markers):
-    the whole input, as read. A capture JSON takes no start or end: its labels are of frame 0.
+    the whole input, as read. A capture JSON takes an end but no start: its labels are of frame 0.
     """
     start, end = span or (None, None)
     if input.suffix.lower() != ".json":
@@ -252,14 +253,24 @@ def _read_input(
             require_complete_first_frame(recording, input.name)
         capture, absent = capture_from_span(recording, start or 0, end, shuffle)
         return capture, LabelingOptions(), recording, absent
-    if start is not None or end is not None:
-        raise InputError("--start and --end of a capture JSON need --model: its labels are of frame 0 only")
+    if start:
+        raise InputError("--start of a capture JSON needs --model: its labels are of frame 0 only")
     try:
         text = input.read_bytes()
     except OSError as error:
         raise InputError(f"{input}: cannot read ({error.strerror})") from None
     document = read_capture_document(text, str(input))
-    return document.capture(), document.options(), None, []
+    return _until(document.capture(), end), document.options(), None, []
+
+
+def _until(capture: Capture, end: int | None) -> Capture:
+    """The capture's frames 0 .. ``end`` - 1 (all of them without ``end``): its labels are of frame 0."""
+    if end is None:
+        return capture
+    stop = frame_span(0, end, capture.n_frames)
+    if capture.points is not None:
+        return replace(capture, points=capture.points[:stop])
+    return replace(capture, detections=(capture.detections or [])[:stop])
 
 
 def _kept(source: SourceFile | None, names: list[str], output: Path) -> tuple[SourceFile | None, str | None]:
