@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import struct
 import subprocess
 from pathlib import Path
 
@@ -49,6 +50,18 @@ def test_the_header_scale_leaves_a_short_file_to_the_layout_check(tmp_path: Path
     short.write_bytes(b"\x02P" + b"\x00" * max(size - 2, 0) if size else b"")
     match_header_scale(str(short), -0.1)
     assert short.stat().st_size == size
+
+
+@pytest.mark.parametrize(("processor", "order"), [(84, "<f"), (86, ">f")])
+def test_the_header_scale_is_written_in_the_file_s_own_byte_order(tmp_path: Path, processor: int, order: str) -> None:
+    """The short-file guard once compared the processor byte as bytes with 86 (MIPS), so a
+    big-endian file got its scale little-endian."""
+    header = bytearray(1024)
+    header[0], header[512 + 3] = 2, processor  # parameters from block 2; its 4th byte the processor type
+    path = tmp_path / "scaled.c3d"
+    path.write_bytes(bytes(header))
+    match_header_scale(str(path), -0.1)
+    assert struct.unpack(order, path.read_bytes()[12:16])[0] == pytest.approx(-0.1)
 
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="mounting a tmpfs needs root")

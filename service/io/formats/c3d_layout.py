@@ -138,8 +138,9 @@ def match_header_scale(path: str, scale: float) -> None:
         if len(header) < BLOCK:  # a short file (a full disk): the writer's layout check says so
             return
         f.seek((header[0] - 1) * BLOCK + 3)
-        processor = f.read(1)
-        if not processor or processor[0] not in (84, MIPS) or not scale < 0:
+        read = f.read(1)
+        processor = read[0] if read else None
+        if processor not in (84, MIPS) or not scale < 0:
             return
         f.seek(12)
         f.write(struct.pack(">f" if processor == MIPS else "<f", scale))
