@@ -40,6 +40,7 @@ from service.capture.model_input import model_names, parse_model, with_model
 from service.errors import InputError
 from service.io.marker_names import name_problem, shown
 from service.io.recording import UNLABELED_PREFIX, is_unlabeled
+from service.io.utf8 import utf8_text
 
 
 def _not_bool(value: object) -> object:
@@ -277,12 +278,8 @@ def capture_document_of(data: bytes) -> CaptureDocument:
     Raises:
         InputError: One line: the field path and what is wrong.
     """
-    try:  # JSON is UTF-8; a byte-order mark (Windows editors) is skipped, as for TRC and CSV
-        data.decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise InputError(f"not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); save it as UTF-8") from None
     try:
-        return CaptureDocument.model_validate_json(data.removeprefix(b"\xef\xbb\xbf"))
+        return CaptureDocument.model_validate_json(utf8_text(data))
     except ValidationError as error:
         raise InputError(describe_validation_error(error)) from None
 

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from service.errors import InputError
+from service.io.utf8 import utf8_text
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
@@ -24,10 +25,9 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     except OSError as error:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
     try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as error:
-        raise InputError(f"{path}: not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); "
-                         "save it as UTF-8, which TOML requires") from None
+        text = utf8_text(data)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -1,0 +1,19 @@
+"""Text of a format that is UTF-8 by definition (JSON, TOML), as Windows editors save it."""
+
+from __future__ import annotations
+
+from service.errors import InputError
+
+
+def utf8_text(data: bytes) -> str:
+    """``data`` decoded as UTF-8, a leading byte-order mark skipped (json and tomllib took it
+    for a statement at line 1, column 1).
+
+    Raises:
+        InputError: ``not UTF-8 text (byte N is 0x..); save it as UTF-8`` (callers prefix the source).
+    """
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise InputError(f"not UTF-8 text (byte {error.start + 1} is 0x{data[error.start]:02x}); "
+                         "save it as UTF-8") from None
