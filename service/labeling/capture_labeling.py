@@ -88,7 +88,7 @@ class CaptureLabeling:
         self.formulation = resolve_formulation(options.formulation)
         self._spans = window_spans(capture.n_frames, options.window)
         self.n_windows = len(self._spans)
-        self._capture, self._frames, self._window = capture, capture.n_frames, options.window
+        self._capture, self._window = capture, options.window
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
@@ -129,7 +129,7 @@ class CaptureLabeling:
         if after is not None:
             check_resumable(after, self._spans, len(self._first.position))
         return label_windows(
-            self._association, self.formulation, self._first, self._frames, self._window, after, progress, observer
+            self._association, self.formulation, self._first, self._capture.n_frames, self._window, after, progress, observer
         )
 
     def refine(
@@ -141,7 +141,7 @@ class CaptureLabeling:
         if not self._second_pass:
             return outcomes
         kept = second_pass(
-            self._association, self.formulation, self._first, self._frames, self._window, outcomes,
+            self._association, self.formulation, self._first, self._capture.n_frames, self._window, outcomes,
             self._labeled, progress, stop,
         )
         if kept is None:
