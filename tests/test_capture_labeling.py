@@ -6,10 +6,13 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from capture_fixtures import camera_capture, points_capture
+from capture_fixtures import CMU, camera_capture, points_capture
 
 from service.capture.capture import LabelingOptions
+from service.capture.from_recording import capture_from_recording
 from service.errors import InputError
+from service.io.formats import read_labeled
+from service.io.recording import Recording
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.loop import first_marker_state
 from service.labeling.outcome import WindowOutcome
@@ -118,3 +121,23 @@ def test_outcomes_of_another_labeling_are_refused():
     with pytest.raises(InputError, match="windows 0, 1, ... in order"):
         same.result(stored[1:])
     assert same.result(stored).n_frames == 60  # its own windows still assemble
+
+
+def test_outcomes_of_another_take_of_the_same_markers_and_length_are_refused():
+    """Same markers, same length, same window: every span and marker-count check passed, and the
+    resumed windows were built on the other take's marker states, labels wrong without a word."""
+    truth = read_labeled(CMU)
+    options = LabelingOptions(window=20, second_pass=False)
+    first, later = (capture_from_recording(Recording(truth.names, truth.positions[s:s + 60], truth.rate))
+                    for s in (0, 60))
+    stored = [WindowOutcome.from_bytes(o.to_bytes()) for o in CaptureLabeling(first, options).windows()]
+    other = CaptureLabeling(later, options)
+    with pytest.raises(InputError, match="window 1 was labeled from another capture"):
+        other.windows(after=stored[1])
+    with pytest.raises(InputError, match="window 0 was labeled from another capture"):
+        other.result(stored)
+    own = CaptureLabeling(first, options)
+    assert all(o.labeling == own.fingerprint for o in stored)  # kept through bytes
+    assert own.result(stored).n_frames == 60
+    unstamped = [replace(o, labeling=None) for o in stored]  # stored before outcomes carried it
+    assert other.result(unstamped).n_frames == 60

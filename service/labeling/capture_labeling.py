@@ -39,6 +39,7 @@ from formulations.subject.pose_fill import pose_fill
 from formulations.subject.take_learning import learn_from_take
 from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
+from service.capture.fingerprint import capture_fingerprint
 from service.capture.formulation_spec import resolve_formulation
 from service.capture.reprojection import frame0_pixel_sigma
 from service.errors import InputError
@@ -51,7 +52,7 @@ from service.labeling.leftover_points import with_leftover_points
 from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
-from service.labeling.outcome_fit import check_outcomes, check_resumable
+from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.per_camera import PerCameraChain
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.second_pass import PassChoice, Stop, second_pass
@@ -89,6 +90,7 @@ class CaptureLabeling:
         self._spans = window_spans(capture.n_frames, options.window)
         self.n_windows = len(self._spans)
         self._capture, self._window = capture, options.window
+        self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
@@ -127,10 +129,10 @@ class CaptureLabeling:
             InputError: ``after`` is not a window of this labeling (another window size or capture).
         """
         if after is not None:
-            check_resumable(after, self._spans, len(self._first.position))
-        return label_windows(
+            check_resumable(after, self._spans, len(self._first.position), self.fingerprint)
+        return stamped(label_windows(
             self._association, self.formulation, self._first, self._capture.n_frames, self._window, after, progress, observer
-        )
+        ), self.fingerprint)
 
     def refine(
         self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
@@ -146,8 +148,8 @@ class CaptureLabeling:
         )
         if kept is None:
             return None
-        outcomes, self.choice = kept
-        return outcomes
+        kept_outcomes, self.choice = kept
+        return outcomes if kept_outcomes is outcomes else list(stamped(kept_outcomes, self.fingerprint))  # ``is``: kept as stored
 
     def result(self, outcomes: list[WindowOutcome], calibrated: bool = True) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes, their tracks extended over the
@@ -162,7 +164,7 @@ class CaptureLabeling:
         Raises:
             InputError: ``outcomes`` are not this labeling's windows 0, 1, ... in order.
         """
-        check_outcomes(outcomes, self._spans, len(self._first.position))
+        check_outcomes(outcomes, self._spans, len(self._first.position), self.fingerprint)
         labels = self._labeled(outcomes)
         if labels.filled.size:
             labels.filled = self._fill(labels)

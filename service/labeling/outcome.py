@@ -47,6 +47,8 @@ class WindowOutcome:
             window's confidences are carried on from (``carried``); None as above.
         trusted_mean, trusted_var: ``(N, K)`` each marker's neighbour distance statistics
             when its label was last trusted (``confidence.lifted``); None as above.
+        labeling: The digest of the capture it was labeled from (``capture.fingerprint``),
+            so it resumes only its own take; None in outcomes stored before it existed.
     """
 
     index: int
@@ -60,11 +62,12 @@ class WindowOutcome:
     carry: np.ndarray | None = None
     trusted_mean: np.ndarray | None = None
     trusted_var: np.ndarray | None = None
+    labeling: str | None = None
 
     def to_bytes(self) -> bytes:
         arrays = {f"state.{f.name}": getattr(self.state, f.name) for f in fields(MarkerState)}
         arrays.update({name: getattr(self, name) for name in _OPTIONAL if getattr(self, name) is not None})
-        header = json.dumps({"index": self.index, "stats": self.stats.to_dict()})
+        header = json.dumps({"index": self.index, "stats": self.stats.to_dict(), "labeling": self.labeling})
         buffer = io.BytesIO()
         np.savez_compressed(
             buffer, header=np.array(header), point_index=self.point_index, filled=self.filled, **arrays
@@ -81,6 +84,6 @@ class WindowOutcome:
             state = MarkerState(**{f.name: stored[f"state.{f.name}"] for f in fields(MarkerState)})
             return cls(
                 index=int(header["index"]), point_index=stored["point_index"], filled=stored["filled"],
-                stats=WindowStats(**header["stats"]), state=state,
+                stats=WindowStats(**header["stats"]), state=state, labeling=header.get("labeling"),
                 **{name: stored[name] for name in _OPTIONAL if name in stored.files},
             )
