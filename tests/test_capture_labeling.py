@@ -77,11 +77,11 @@ def test_bad_options_are_input_errors(fields, message):
 
 
 def test_a_library_user_gets_the_warnings_track_prints():
-    """A take in micrometres is labeled (every marker moves 'too far' for its gates) and the
-    library said nothing; ``warnings`` gives the lines `track` prints, here the spacing's."""
+    """A take in cm read as mm is labeled (gates ten times too wide for it) and the library
+    said nothing; ``warnings`` gives the lines `track` prints, here the body size's."""
     capture = points_capture(frames=30)
-    scaled = replace(capture, first_frame=np.asarray(capture.first_frame) * 1000,
-                     points=[np.asarray(p) * 1000 for p in capture.points])
+    scaled = replace(capture, first_frame=np.asarray(capture.first_frame) / 10,
+                     points=[np.asarray(p) / 10 for p in capture.points])
     for take, expected in ((capture, False), (scaled, True)):
         labeling = CaptureLabeling(take, LabelingOptions(window=10, second_pass=False))
         labels, windows = labeling.label()
@@ -141,3 +141,13 @@ def test_outcomes_of_another_take_of_the_same_markers_and_length_are_refused():
     assert own.result(stored).n_frames == 60
     unstamped = [replace(o, labeling=None) for o in stored]  # stored before outcomes carried it
     assert other.result(unstamped).n_frames == 60
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3], ids=["metres-as-mm", "mm-as-metres"])
+def test_a_take_in_the_wrong_unit_is_refused_before_labeling(scale):
+    """A thousand times too big it came back 100 % occluded, with no error."""
+    capture = points_capture(frames=5)
+    scaled = replace(capture, first_frame=np.asarray(capture.first_frame) * scale,
+                     points=[np.asarray(p) * scale for p in capture.points])
+    with pytest.raises(InputError, match="the take's length unit is wrong"):
+        CaptureLabeling(scaled)

@@ -273,14 +273,15 @@ def test_track_refuses_a_take_in_metres_labelled_mm_before_labeling(tmp_path):
     assert len(run.stderr.splitlines()) == 1
 
 
-def test_track_warns_before_labeling_of_a_take_a_thousand_times_too_big(tmp_path):
+def test_track_refuses_a_take_a_thousand_times_too_big_before_labeling(tmp_path):
+    """Millimetres read as metres: it was labeled after a warning and written 100 % occluded, rc 0."""
     path = write_c3d(tmp_path / "km.c3d", take() * 1000.0, unit="mm")
     run = subprocess.run([sys.executable, "-m", "service.cli", "track", str(path), "-o", str(tmp_path / "o.trc")],
                          capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, run.stderr[-2000:]
-    lines = run.stderr.splitlines()
-    assert lines[0].startswith("warning: read in mm, the take does not look human-sized: markers 7e+04 mm"), lines
-    assert any("labeling" in line for line in lines[1:])
+    assert run.returncode == 2 and not (tmp_path / "o.trc").exists(), run.stderr[-2000:]
+    assert run.stderr.startswith("error: markers 70 m from their nearest neighbour in the first frame: markers on a "
+                                 "subject are centimetres apart, so the take's length unit is wrong"), run.stderr
+    assert len(run.stderr.splitlines()) == 1
 
 
 def test_model_and_eval_warn_of_a_take_in_metres_labelled_mm(tmp_path):

@@ -59,7 +59,7 @@ from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
-from service.labeling.take_warnings import model_misfit_warning, refuse_sub_millimetre, spacing_frame
+from service.labeling.take_warnings import model_misfit_warning, refuse_wrong_scale, spacing_frame
 
 
 class Association(WindowChain[Any], Protocol):
@@ -85,7 +85,7 @@ class CaptureLabeling:
     def __init__(self, capture: Capture, options: LabelingOptions = LabelingOptions()) -> None:
         if not capture.names:  # a capture may be built unnamed (``with_model`` then names it), not labeled so
             raise InputError("a capture to label needs at least one named marker (names is empty)")
-        refuse_sub_millimetre(spacing_frame(capture.first_frame, capture.points))
+        refuse_wrong_scale(spacing_frame(capture.first_frame, capture.points))
         self.formulation = resolve_formulation(options.formulation)
         self._spans = window_spans(capture.n_frames, options.window)
         self.n_windows = len(self._spans)

@@ -88,6 +88,7 @@ def fast_motion_warning(fast: list[FastMarker]) -> str | None:
 # every take we hold (CMU, HDM05, OpenSim, BTS, Vicon, Qualisys, Pose2Sim) and a body moves
 # at most a few m/s. A file in the wrong unit is off by 10x-1000x and lands far outside.
 SPACING_MM = (1.0, 5000.0)  # median nearest-neighbour distance in the labeled frame
+REFUSED_FAR_MARKERS = 4  # two or three objects metres apart may be real; half of four or more cannot all be
 # A body in cm read as mm is 10x small (CMU 85_02's 41 markers within 160 mm, 11 mm apart),
 # and so are hand and face sets in mm: only the names tell them apart. Five markers named for
 # body landmarks (knee, ankle, heel, ASIS, C7, ...) within 400 mm are a body in another unit.
@@ -161,19 +162,27 @@ def spacing_frame(first_frame: np.ndarray, points: list[np.ndarray] | None) -> n
     return first if np.isfinite(first).all(axis=1).sum() >= 2 or not points else points[0]
 
 
-def refuse_sub_millimetre(frame: np.ndarray) -> None:
+def refuse_wrong_scale(frame: np.ndarray) -> None:
     """Refuse a take whose markers sit under ``SPACING_MM[0]`` apart: optical markers are
     millimetres wide, so that is a wrong unit (metres read as mm), and labeling it puts
-    every point in every gate (20 frames of a walk ran for over ten minutes).
+    every point in every gate (20 frames of a walk ran for over ten minutes). Likewise over
+    ``SPACING_MM[1]`` apart, with ``REFUSED_FAR_MARKERS`` markers or more (markers on a subject
+    are centimetres apart: millimetres read as metres): every step is then a thousand times
+    the gates, and CMU 85_02 so scaled came back 100 % occluded, written without an error.
 
     Raises:
-        InputError: ``markers X mm from their nearest neighbour ...``.
+        InputError: ``markers X mm (or m) from their nearest neighbour ...``.
     """
     apart = marker_spacing_mm(frame)
     if apart is not None and apart < SPACING_MM[0]:
         raise InputError(f"markers {apart:.3g} mm from their nearest neighbour in the first frame: optical markers are "
                          "millimetres wide, so the take's length unit is wrong (a file in metres read as mm? "
                          'A capture JSON gives its unit in "units")')
+    seen = int(np.isfinite(np.asarray(frame, dtype=float)).all(axis=1).sum())
+    if apart is not None and apart > SPACING_MM[1] and seen >= REFUSED_FAR_MARKERS:
+        raise InputError(f"markers {apart / 1000:.3g} m from their nearest neighbour in the first frame: markers on a "
+                         "subject are centimetres apart, so the take's length unit is wrong (a file in mm read as "
+                         'metres? A capture JSON gives its unit in "units")')
 
 
 def take_scale_warning(take: Recording) -> str | None:
