@@ -87,3 +87,16 @@ def test_a_document_not_in_utf8_says_so(encoding: str) -> None:
     document["markers"][0] = "épaule"
     with pytest.raises(InputError, match=r"^c.json: not UTF-8 text \(byte \d+ is 0x[0-9a-f]{2}\); save it as UTF-8$"):
         read_capture_document(json.dumps(document, ensure_ascii=False).encode(encoding), "c.json")
+
+
+@pytest.mark.parametrize(("mutate", "where"), [
+    (lambda d: d["points"][1][0].__setitem__(2, float("nan")), "points.1.0.2: Input should be a finite number, not nan"),
+    (lambda d: d["first_frame"][0].__setitem__(0, float("-inf")),
+     "first_frame.0.0: Input should be a finite number, not -inf"),
+])
+def test_nan_and_infinity_are_said_as_such(mutate: Callable[[dict], None], where: str) -> None:
+    """Python's JSON reads NaN and Infinity; they were refused as "greater than or equal to -1e9"."""
+    document = _points_document()
+    mutate(document)
+    with pytest.raises(InputError, match=f"^n.json: {where}$"):
+        read_capture_document(json.dumps(document), "n.json")

@@ -27,6 +27,7 @@ field path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 4
 
 from __future__ import annotations
 
+import math
 import json
 from typing import Annotated, Literal
 
@@ -44,9 +45,12 @@ from service.io.utf8 import utf8_text
 
 
 def _not_bool(value: object) -> object:
-    """JSON ``true`` is not a number: pydantic's lax mode read ``"rate": true`` as 1 Hz."""
+    """JSON ``true`` is not a number: pydantic's lax mode read ``"rate": true`` as 1 Hz. NaN
+    and Infinity (Python's JSON reads them) are said as such, not as out of range."""
     if isinstance(value, bool):
         raise ValueError(f"Input should be a number, not {str(value).lower()}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"Input should be a finite number, not {value}")
     return value
 
 
