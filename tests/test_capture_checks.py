@@ -119,6 +119,7 @@ def _camera(name: str) -> Camera:
         (["c1", "c2"], [[np.zeros((1, 2))]] * 3, "detections[0] must hold one (D, 2) array per camera (2 cameras)"),
         (["c1", "c2"], [[np.zeros((1, 2)), np.full((1, 2), 700.0)]] * 3, "is outside its 640x480 image"),
         (["c1", "c2"], [[np.zeros((2, 1)), np.zeros((1, 2))]] * 3, "detections[0][0]: points must be (D, 2)"),
+        (["cam", "cam", "c3"], [[np.zeros((1, 2))] * 3] * 3, "camera names must be unique (outputs name views by them): 'cam'"),
     ],
 )
 def test_bad_camera_detections_are_refused_in_one_line(cameras: list, detections: list, message: str) -> None:

@@ -27,8 +27,8 @@ field path of what is wrong (pydantic's ``loc``), so the HTTP layer can answer 4
 
 from __future__ import annotations
 
-import math
 import json
+import math
 from typing import Annotated, Literal
 
 import numpy as np
