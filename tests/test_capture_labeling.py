@@ -151,3 +151,14 @@ def test_a_take_in_the_wrong_unit_is_refused_before_labeling(scale):
                      points=[np.asarray(p) * scale for p in capture.points])
     with pytest.raises(InputError, match="the take's length unit is wrong"):
         CaptureLabeling(scaled)
+
+
+def test_a_take_whose_markers_are_mostly_occluded_is_warned_of():
+    """Cameras that saw nothing after frame 0: 99.3 % occluded, written with no warning line."""
+    capture = camera_capture(frames=30)
+    blind = replace(capture, detections=capture.detections[:1] + [[np.zeros((0, 2))] * len(capture.cameras)] * 29)
+    for take, expected in ((capture, False), (blind, True)):
+        labeling = CaptureLabeling(take, LabelingOptions(window=10))
+        labels, windows = labeling.label()
+        lines = labeling.warnings(labels, windows)
+        assert any("of the marker-frames after the labeled frame are occluded" in line for line in lines) is expected, lines

@@ -2,7 +2,7 @@
 after its summary, and a job's status and page show once it is done.
 
 An integral window is optimal under the model, not proven right: a take whose labels are
-mostly doubtful, whose labels leave the shape of their rigid neighbours, whose markers move
+mostly doubtful or mostly occluded, whose labels leave the shape of their rigid neighbours, whose markers move
 further per frame than they are apart, that is not
 human-sized in its unit, has copied columns, or where no marker is labeled though points are
 there, is labeled wrongly in ways the certificate does not see. These lines say so.
@@ -56,6 +56,20 @@ def doubtful_warning(fraction: float | None, advice: str = "check them") -> str 
             f"another reading of their window is nearly as likely); {advice}")
 
 
+OCCLUDED_WARNING = 0.5  # warn when more than this share of the marker-frames after the labeled one took nothing
+
+
+def occluded_warning(occluded: np.ndarray) -> str | None:
+    """A line when most marker-frames after the labeled frame are occluded: a camera take with
+    no detection after frame 0 came back 99.3 % occluded with nothing said but the summary."""
+    later = np.asarray(occluded)[1:]
+    share = float(later.mean()) if later.size else 0.0
+    if share <= OCCLUDED_WARNING:
+        return None
+    return (f"warning: {share:.1%} of the marker-frames after the labeled frame are occluded (no point or detection "
+            "taken): check that the input holds the markers in those frames")
+
+
 def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[ShapeBreak], unit: str = "mm",
                     start: int = 0, spacing_judged: bool = False) -> list[str]:
     """Every line that applies to ``result``, the labeling of ``capture`` (whose input was in
@@ -65,6 +79,7 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
     fraction = doubtful_fraction(result.confidence, result.occluded) if result.confidence.size else None
     identified = capture.model is not None and not np.isfinite(np.asarray(capture.first_frame, dtype=float)).any()
     lines = [
+        occluded_warning(result.occluded),
         doubtful_warning(fraction, MODEL_ADVICE if identified else "check them"),
         shape_break_warning(breaks, result.names, start),
         fast_motion_warning(fast_markers(result.names, result.positions)),
