@@ -110,3 +110,14 @@ def test_cli_tracks_a_labeled_file_from_the_model(tmp_path: Path) -> None:
     subject.write_text("{")
     result = runner.invoke(app, ["track", str(take), "--model", str(subject), "--out", str(out)])
     assert result.exit_code == 2 and "subject model is not JSON" in result.output
+
+
+def test_a_capture_json_whose_markers_the_model_lacks_is_refused() -> None:
+    """Another marker set's model named the points its way and the document's markers vanished
+    from the result (the job ended done); an upload with such a model was already refused."""
+    chain_names, positions, model = _take(1, frames=300)
+    names = [f"OTHER{i}" for i in range(4)]
+    body = {"rate": 100, "model": json.loads(model.to_json()), "points": positions[FIT:FIT + 5].tolist(),
+            "markers": names, "first_frame": positions[FIT, :4].tolist()}
+    with pytest.raises(InputError, match=r"^c.json: markers: only 0 of its 4 markers are in the model \(not in it: OTHER0"):
+        read_capture_document(json.dumps(body), "c.json")

@@ -37,10 +37,9 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
 from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE, first_off_sensor
-from service.capture.model_input import model_names, parse_model, with_model
+from service.capture.model_input import check_shared_names, model_names, parse_model, with_model
 from service.errors import InputError
-from service.io.marker_names import name_problem, shown
-from service.io.recording import UNLABELED_PREFIX, is_unlabeled
+from service.io.marker_names import check_marker_names
 from service.io.utf8 import utf8_text
 
 
@@ -156,14 +155,18 @@ class CaptureDocument(BaseModel):
     def _check_model(self) -> None:
         if self.points is None:
             raise ValueError("model: labeling from a subject model needs points (3D mode)")
-        names = model_names(parse_model(json.dumps(self.model), "model"))
-        check_marker_names(names, "model (marker {i})")
+        model = parse_model(json.dumps(self.model), "model")
+        check_marker_names(model_names(model), "model (marker {i})")
         if (self.first_frame is None) != (self.markers is None):
             raise ValueError("model: give markers and first_frame together (a partly labeled frame 0), or neither")
         if self.first_frame is not None and self.markers is not None:
             if len(self.first_frame) != len(self.markers):
                 raise ValueError(f"first_frame has {len(self.first_frame)} rows for {len(self.markers)} markers")
             check_marker_names(self.markers, "markers.{i}")  # those the model lacks become its singles
+            try:  # the model of another marker set named the take its way, and the document's names vanished
+                check_shared_names(self.markers, model, "markers")
+            except InputError as error:
+                raise ValueError(str(error)) from None
 
     def _check_detections(self, detections: dict[str, list[list[Pixel]]]) -> None:
         if not self.cameras:
@@ -250,22 +253,6 @@ def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[in
         raise ValueError(
             f"detections.{camera}.{f}.{d}: ({u:g}, {v:g}) is outside the {image_size[0]}x{image_size[1]} image"
         )
-
-
-def check_marker_names(names: list[str], path: str) -> None:
-    """Every name survives every result format unchanged (``name_problem``), and none is a
-    C3D's name of an unlabeled trajectory ``*N``: readers, markerflow's too, take such a
-    point for one, so the marker would vanish from the output read back.
-
-    Raises:
-        ValueError: ``<path with {i} filled in>: marker name ...`` for the first name that would not.
-    """
-    for i, name in enumerate(names):
-        problem = name_problem(name)
-        if problem is None and is_unlabeled(name):
-            problem = f"is how a C3D names an unlabeled trajectory ({UNLABELED_PREFIX}N), not a marker; rename it"
-        if problem:
-            raise ValueError(f"{path.format(i=i)}: marker name {shown(name)} {problem}")
 
 
 def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import unicodedata
 
+from service.io.recording import UNLABELED_PREFIX, is_unlabeled
+
 MAX_NAME_BYTES = 255  # a C3D parameter's dimensions are single bytes: longer labels make an unreadable file
 
 
@@ -38,3 +40,19 @@ def first_name_problem(names: list[str]) -> tuple[str, str] | None:
 def shown(name: str) -> str:
     """``name`` quoted for a one-line message: control characters escaped, cut at 40 characters."""
     return repr(name[:40]) + ("..." if len(name) > 40 else "")
+
+
+def check_marker_names(names: list[str], path: str) -> None:
+    """Every name survives every result format unchanged (``name_problem``), and none is a
+    C3D's name of an unlabeled trajectory ``*N``: readers, markerflow's too, take such a
+    point for one, so the marker would vanish from the output read back.
+
+    Raises:
+        ValueError: ``<path with {i} filled in>: marker name ...`` for the first name that would not.
+    """
+    for i, name in enumerate(names):
+        problem = name_problem(name)
+        if problem is None and is_unlabeled(name):
+            problem = f"is how a C3D names an unlabeled trajectory ({UNLABELED_PREFIX}N), not a marker; rename it"
+        if problem:
+            raise ValueError(f"{path.format(i=i)}: marker name {shown(name)} {problem}")
