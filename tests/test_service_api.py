@@ -4,6 +4,7 @@ are checked against windows solved by the formulations themselves."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import time
 
@@ -26,6 +27,7 @@ from service.io.recording import Recording, is_unlabeled
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.cloud import MARKER_COSTS
 from service.labeling.stats import WindowStats, finite_or_none
+from service.server.events import job_events
 from service.server.settings import Settings
 
 OPTIONS = LabelingOptions(window=10)
@@ -265,3 +267,16 @@ def test_openapi_documents_every_route_with_examples(client):
     answer = client.post("/v1/solve", json=example)
     assert answer.status_code == 200 and answer.json()["certificate"]["integral"]
     assert "CaptureDocument" in schema["components"]["schemas"] and "CameraDocument" in schema["components"]["schemas"]
+
+
+def test_a_stream_whose_job_is_removed_between_polls_ends_with_a_removed_event():
+    """Cancelled and removed between two polls, the job vanished under the stream: the server
+    logged NoResultFound and cut the stream off with no last event."""
+    class Removed:  # the store as the stream's next poll finds it
+        def get(self, job_id: str) -> None:
+            return None
+
+    async def collect() -> list[str]:
+        return [event async for event in job_events(Removed(), "abc", 0.01)]  # type: ignore[arg-type]
+
+    assert asyncio.run(collect()) == ['event: removed\ndata: {"id": "abc"}\n\n']

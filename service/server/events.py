@@ -1,5 +1,6 @@
 """Server-sent events of a job's progress: one ``window`` event per finished window, and a
-``state`` event at each change of state; the stream ends when the job does.
+``state`` event at each change of state; the stream ends when the job does (with a
+``removed`` event when the job was removed in between).
 
 The stream polls the store (every ``events_poll_seconds``, 0.2 s by default) rather than
 listening to the runner: the runner may be another process or a Dask worker, and the
@@ -34,7 +35,10 @@ async def job_events(store: JobStore, job_id: str, poll_seconds: float,
     sent, state = -1, None
     while True:
         # The job first, then its windows: a job seen terminal has all its windows stored.
-        job = await run_in_threadpool(store.known, job_id)
+        job = await run_in_threadpool(store.get, job_id)
+        if job is None:  # cancelled and removed between two polls: said, not a broken stream
+            yield sse("removed", {"id": job_id})
+            return
         for window in await run_in_threadpool(store.windows, job_id, sent):
             sent = window.index
             summary = WindowSummary.of_stored(window).model_dump()

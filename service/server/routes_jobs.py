@@ -145,7 +145,7 @@ async def cancel_job(request: Request, job_id: str, owner: str = Depends(caller)
     "/{job_id}/events", responses={
         **ERRORS, 429: {"model": ErrorBody, "description": "This token has max_event_streams_per_token streams open."},
         200: {"content": {"text/event-stream": {"schema": {"type": "string"}}},
-              "description": "`window` events, then `state` events."}},
+              "description": "`window` events, then `state` events (`removed` if the job is removed meanwhile)."}},
 )
 async def job_progress(request: Request, job_id: str, owner: str = Depends(caller)) -> Response:
     """Server-sent events: one `window` event per finished window, `state` at each change; ends with the job.

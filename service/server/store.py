@@ -133,7 +133,7 @@ class JobStore:
             return Job.of(row) if row else None
 
     def known(self, job_id: str) -> Job:
-        """A job known to exist (jobs are never deleted), e.g. one a runner or an event stream follows."""
+        """A job known to exist (an active job cannot be removed), e.g. one a runner follows."""
         with self.session() as session:
             return Job.of(session.execute(select(JobRow).where(JobRow.id == job_id)).scalar_one())
 
