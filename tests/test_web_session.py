@@ -111,6 +111,20 @@ def test_the_forms_parameters_alone_keep_the_documents_formulation(client):
     assert "ilp" in options and "time_limit" in options and "lp-l1" not in options
 
 
+def test_the_forms_options_for_a_document_are_read_as_for_an_upload(client):
+    """For a capture document "maybe" was stored as second_pass false, and a "name" among the
+    parameters ran mht in place of the ilp chosen; an upload refused the one and kept ilp."""
+    document = document_json(generated_capture(frames=8, seed=1), LabelingOptions(window=4))
+    browser = _signed_in(client)
+    answer = browser.post("/jobs", files={"file": ("take.json", document)}, data={"second_pass": "maybe"})
+    assert answer.status_code == 422 and "second_pass: expected true or false" in answer.text, answer.text[-3000:]
+    answer = browser.post("/jobs", files={"file": ("take.json", document)},
+                          data={"formulation": "ilp", "parameters": '{"name": "mht", "time_limit": 5}'})
+    assert answer.status_code == 303
+    options = browser.get(answer.headers["location"]).text.split("<dt>Options</dt>")[1].split("</dd>")[0]
+    assert "ilp" in options and "mht" not in options
+
+
 def test_a_done_jobs_page_counts_doubt_on_the_labels_it_draws(client):
     """The page summed the windows' counts, from before the second pass: 28.5 % beside a
     warning line of 32.7 % on the basket sprint."""

@@ -85,7 +85,7 @@ def upload_submission(form: FormData, limits: Limits) -> Submission:
     subject model JSON: frame 0 may then be partly labeled, ``model_submission``)."""
     upload, filename = labeled_upload(form, UPLOAD_FIELDS, UPLOAD_SUFFIXES, "file")
     options = LabelingOptions(formulation=_formulation_field(form.get("formulation")), window=_window_field(form.get("window")),
-                              second_pass=_flag_field(form.get("second_pass"), "second_pass"))
+                              second_pass=flag_field(form.get("second_pass"), "second_pass"))
     model = model_field(form.get("model"))
     start, end = _frame_field(form.get("start"), "start"), _frame_field(form.get("end"), "end")
     recording = read_upload(upload, filename, limits)
@@ -179,7 +179,7 @@ def json_object_field(value: str, field: str) -> dict:
     return table
 
 
-def _flag_field(value: str | UploadFile | None, field: str) -> bool:
+def flag_field(value: str | UploadFile | None, field: str) -> bool:
     """``true`` or ``false`` (as a capture document's JSON says them); absent: true."""
     if value is None:
         return True

@@ -23,6 +23,7 @@ from service.server.submission import (
     UPLOAD_SUFFIXES,
     Submission,
     document_submission,
+    flag_field,
     json_object_field,
     upload_submission,
 )
@@ -69,7 +70,7 @@ def form_submission(form: FormData, limits: Limits) -> Submission:
     if window:
         document["window"] = _whole(window)
     if passes := _text(form, "second_pass"):
-        document["second_pass"] = passes == "true"
+        document["second_pass"] = flag_field(passes, "second_pass")  # "maybe" was read as false
     association = _text(form, "association")
     if association:
         document["association"] = association
@@ -100,7 +101,10 @@ def _documents_formulation(own: object, chosen: str, parameters: str) -> str | d
     table = {"name": own} if isinstance(own, str) else dict(own) if isinstance(own, dict) else {"name": "lp-l1"}
     if chosen and chosen != table.get("name"):
         table = {"name": chosen}
-    return {**table, **json_object_field(parameters, "parameters")} if parameters else table
+    if not parameters:
+        return table
+    # the chosen name stays: a "name" among the parameters once ran mht in place of the ilp chosen
+    return {**table, **json_object_field(parameters, "parameters"), **({"name": table["name"]} if "name" in table else {})}
 
 
 def _whole(window: str) -> int:
