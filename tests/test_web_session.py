@@ -225,3 +225,10 @@ def test_an_upload_chooses_one_pass(tmp_path):
                              data={"second_pass": "no"})
     assert json.loads(store_for(db).input(job_id))["second_pass"] is False
     assert refused.status_code == 422 and "second_pass: expected true or false" in refused.text
+
+
+def test_a_jobs_page_offset_past_the_database_integers_is_a_422(client):
+    """?older= past 2**63 reached SQLite and answered 500 (OverflowError)."""
+    browser = _signed_in(client)
+    assert browser.get("/?older=9223372036854775808").status_code == 422
+    assert browser.get("/?older=5").status_code == 200

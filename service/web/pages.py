@@ -36,7 +36,7 @@ def mount_web(app: FastAPI) -> None:
 
 
 @router.get("/")
-async def jobs_page(request: Request, older: Annotated[int, Query(ge=0)] = 0) -> Response:
+async def jobs_page(request: Request, older: Annotated[int, Query(ge=0, le=2**62)] = 0) -> Response:
     owner = signed_in(request)
     if owner is None:
         return page(request, "sign_in.html", 401, signed_in=False)
