@@ -6,6 +6,7 @@ an unlabeled trajectory), and a UTF-8 byte-order mark was "Invalid JSON ... line
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 
 import pytest
@@ -100,3 +101,18 @@ def test_nan_and_infinity_are_said_as_such(mutate: Callable[[dict], None], where
     mutate(document)
     with pytest.raises(InputError, match=f"^n.json: {where}$"):
         read_capture_document(json.dumps(document), "n.json")
+
+
+@pytest.mark.parametrize(("mutate", "where"), [
+    (_set("rate", "120"), "rate: Input should be a number, not a string ('120')"),
+    (_set("window", "20"), "window: Input should be a number, not a string ('20')"),
+    (lambda d: d["points"][1][0].__setitem__(2, "3"), "points.1.0.2: Input should be a number, not a string ('3')"),
+    (_set("second_pass", "no"), "second_pass: Input should be a valid boolean"),
+    (_set("second_pass", 0), "second_pass: Input should be a valid boolean"),
+])
+def test_strings_and_numbers_are_not_what_they_might_mean(mutate: Callable[[dict], None], where: str) -> None:
+    """Lax parsing read "120" as 120 Hz and "no" or 0 as no second pass; the README says numbers are JSON numbers."""
+    document = _points_document()
+    mutate(document)
+    with pytest.raises(InputError, match=f"^s.json: {re.escape(where)}"):
+        read_capture_document(json.dumps(document), "s.json")

@@ -44,10 +44,12 @@ from service.io.utf8 import utf8_text
 
 
 def _not_bool(value: object) -> object:
-    """JSON ``true`` is not a number: pydantic's lax mode read ``"rate": true`` as 1 Hz. NaN
+    """JSON ``true`` or a string is not a number: pydantic's lax mode read ``"rate": true`` as 1 Hz. NaN
     and Infinity (Python's JSON reads them) are said as such, not as out of range."""
     if isinstance(value, bool):
         raise ValueError(f"Input should be a number, not {str(value).lower()}")
+    if isinstance(value, str):  # lax mode read "120" as 120 Hz
+        raise ValueError(f"Input should be a number, not a string ({value!r})")
     if isinstance(value, float) and not math.isfinite(value):
         raise ValueError(f"Input should be a finite number, not {value}")
     return value
@@ -110,7 +112,7 @@ class CaptureDocument(BaseModel):
     formulation: str | dict = "lp-l1"
     window: Annotated[int, NotBool] = Field(default=20, ge=2)
     association: Literal[ASSOCIATIONS] = "joint-3d"  # type: ignore[valid-type]
-    second_pass: bool = True
+    second_pass: bool = Field(default=True, strict=True)  # "no" and 0 were read as false
     unnamed_markers: Annotated[int, NotBool] = Field(default=0, ge=0)
 
     @field_validator("rate")
