@@ -48,6 +48,14 @@ def test_the_issues_500s_are_one_line_4xx(client):
     assert answer.status_code == 202 and answer.json()["source"] == long_name[:300]
 
 
+def test_a_window_past_the_limit_is_refused_on_either_path(client):
+    """580 frames a window held a job slot in its first window for minutes; no limit bounded it."""
+    assert _upload(client, window="251") == (422, "window: 251 frames exceeds the limit of 250 (limits.max_window)")
+    document = {**small_document(), "window": 10**30}
+    answer = client.post("/v1/jobs", content=json.dumps(document), headers=JSON)
+    assert answer.status_code == 422 and answer.json()["message"].startswith("window: 10000000000000000000000000000")
+
+
 def _limit_messages(document: dict) -> tuple[str | None, str | None]:
     """(refused from the bytes, refused after parsing): the messages, or None where accepted."""
     body = json.dumps(document).encode()

@@ -95,6 +95,7 @@ def check_limits(document: CaptureDocument, limits: Limits) -> None:
         InputError: ``frames: 120000 frames exceeds the limit of 100000 (limits.max_frames)``.
     """
     _at_most("frames", document.n_frames, "frames", limits.max_frames, "max_frames")
+    _at_most("window", document.window, "frames", limits.max_window, "max_window")
     _at_most("markers", len(document.markers or []), "markers", limits.max_markers, "max_markers")
     if document.points is not None:
         for f, points in enumerate(document.points):

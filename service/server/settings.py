@@ -36,6 +36,9 @@ class Limits(BaseModel):
     max_detections_per_camera: int = Field(default=2_000, gt=0)
     max_cameras: int = Field(default=64, gt=0)
     max_solve_frames: int = Field(default=200, ge=2)
+    # A job's window: its LP grows with it; Vicon.c3d at 580 frames a window was still in its
+    # first window after 4 minutes, holding one of the job slots (the default window is 20).
+    max_window: int = Field(default=250, ge=2)
     reader_memory_bytes: int = Field(default=2 * 2**30, gt=0)
     reader_seconds: float = Field(default=60.0, gt=0)
 
