@@ -153,6 +153,27 @@ def test_a_running_job_page_says_when_its_stream_is_lost(browser, base_url):
         context.close()
 
 
+def test_a_job_page_whose_stream_is_refused_says_so_and_reloads(browser, base_url):
+    """Refused with 429 (the token's streams all open elsewhere), the stream was closed for good
+    and the page said "running" while the job finished."""
+    slow = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=200)
+    context, page = _signed_in(browser, base_url, BOB)
+    try:
+        body = document_json(generated_capture(frames=402, seed=3, ghosts_per_frame=15.0), slow)
+        answer = page.request.post(f"{base_url}/v1/jobs", data=body,
+                                   headers={"Authorization": f"Bearer {BOB}", "Content-Type": "application/json"})
+        job_id = answer.json()["id"]
+        page.route("**/events", lambda route: route.fulfill(status=429, body='{"message": "20 event streams are open"}'))
+        page.goto(f"{base_url}/jobs/{job_id}")
+        page.wait_for_function("document.getElementById('progress-text').textContent.includes('refused')")
+        assert "live progress refused by the server; reloading every 10 s" in page.locator("#progress-text").inner_text()
+        with page.expect_event("load", timeout=20_000):
+            pass  # the page reloads by itself
+        page.request.delete(f"{base_url}/v1/jobs/{job_id}", headers={"Authorization": f"Bearer {BOB}"})
+    finally:
+        context.close()
+
+
 def test_another_token_sees_none_of_the_job(browser, base_url, done_job):
     _, job_id = done_job
     context, page = _signed_in(browser, base_url, BOB)

@@ -2,7 +2,9 @@
 // session cookie: EventSource cannot send an Authorization header). Each finished window moves
 // the progress bar and, at most every two seconds, redraws the certificate chart; when the job
 // ends the page reloads once to draw what the result holds. While the stream is down (the
-// server restarting) the progress line says so; the browser reconnects by itself.
+// server restarting) the progress line says so; the browser reconnects by itself. A stream the
+// server refuses (too many open for the token) is not retried by the browser: the page says so
+// and reloads every 10 s instead.
 "use strict";
 (function () {
   const job = document.getElementById("job");
@@ -22,8 +24,20 @@
 
   const stream = new EventSource("/jobs/" + id + "/events");
   let lost = false;
+  let refused = false;
+  const RELOAD_MS = 10000;
   stream.addEventListener("error", function () {
-    if (!lost && stream.readyState !== EventSource.CLOSED) {
+    if (stream.readyState === EventSource.CLOSED) {
+      // Refused (429: this token's streams are all open elsewhere): the browser does not retry,
+      // and the page said "running" for good. Reloading shows the progress as it is then.
+      if (!refused) {
+        refused = true;
+        progressText.textContent += " (live progress refused by the server; reloading every 10 s)";
+        setTimeout(function () { window.location.reload(); }, RELOAD_MS);
+      }
+      return;
+    }
+    if (!lost) {
       lost = true;
       progressText.textContent += " (connection to the server lost; retrying)";
     }
@@ -42,6 +56,10 @@
     if (pending === null) {
       pending = setTimeout(redrawChart, Math.max(0, 2000 - (Date.now() - lastDrawn)));
     }
+  });
+  stream.addEventListener("removed", function () {  // removed meanwhile: the reload says not found
+    stream.close();
+    window.location.reload();
   });
   stream.addEventListener("state", function (event) {
     const data = JSON.parse(event.data);
