@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import numpy as np
 from conftest import DATA
 
 from formulations.cameras.camera import Camera
@@ -42,3 +45,17 @@ def capture_of(cameras: list[Camera], simulated: CameraCapture) -> Capture:
     """What a user hands markerflow of a simulated camera capture: detections and frame 0."""
     first = simulated.first_frame
     return Capture(first.names, first.positions[0], first.rate, cameras=cameras, detections=simulated.detections)
+
+
+def seen_once_in_frame0(cameras: list[Camera], simulated: CameraCapture, marker: int) -> tuple[Capture, np.ndarray]:
+    """The capture with ``marker``'s frame-0 detection left out of every camera but the last,
+    and ``(N, C)`` each marker's frame-0 detection there (-1 none)."""
+    capture = capture_of(cameras, simulated)
+    expected = simulated.marker_detection[0].T.copy()
+    assert (expected[marker] >= 0).all()  # the simulation shows every marker to every camera in frame 0
+    detections = [list(frame) for frame in capture.detections]
+    for c in range(len(cameras) - 1):
+        detections[0][c] = np.delete(detections[0][c], expected[marker, c], axis=0)
+        expected[:, c] -= expected[:, c] > expected[marker, c]
+        expected[marker, c] = -1
+    return replace(capture, detections=detections), expected

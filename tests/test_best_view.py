@@ -71,6 +71,39 @@ def test_dp_equals_brute_force_over_every_camera_sequence(seed):
         np.testing.assert_array_equal(chosen[:, k], brute_force_views(costs[:, k], switch_cost, window))
 
 
+@pytest.mark.parametrize("seed", range(12))
+def test_dp_with_ruled_out_cameras_equals_brute_force_over_the_allowed_sequences(seed):
+    rng = np.random.default_rng(300 + seed)
+    frames, cameras, window = int(rng.integers(4, 9)), int(rng.integers(2, 4)), int(rng.integers(1, 5))
+    switch_cost = float(rng.uniform(0.0, 1.5))
+    costs = random_costs(seed, frames, 2, cameras)
+    allowed = rng.random(costs.shape) < 0.6
+    allowed[np.arange(frames)[:, None], np.arange(2), rng.integers(0, cameras, (frames, 2))] = True
+    chosen = select_views(costs, switch_cost, window, allowed)
+    assert np.take_along_axis(allowed, chosen[..., None], axis=2).all()
+    for k in range(2):  # brute force: a ruled-out camera's sequences cost +inf
+        expected = brute_force_views(np.where(allowed[:, k], costs[:, k], np.inf), switch_cost, window)
+        np.testing.assert_array_equal(chosen[:, k], expected)
+
+
+def test_a_ruled_out_camera_is_left_even_where_staying_would_tie_with_a_switch():
+    """Camera 0 best in frame 0, then blind: it costs 1 like every camera of frame 1 (the
+    object is seen by none), so staying there ties with a switch at lambda = 1 and was kept."""
+    costs = np.array([[0.0, 0.5], [1.0, 1.0], [1.0, 0.0]])[:, None, :]
+    allowed = np.array([[True, True], [False, True], [False, True]])[:, None, :]
+    assert select_views(costs, 1.0, 30)[:, 0].tolist() == [0, 0, 0]
+    assert select_views(costs, 1.0, 30, allowed)[:, 0].tolist() == [0, 1, 1]
+
+
+@pytest.mark.parametrize("allowed,message", [
+    (np.ones((3, 1, 3), bool), "shape"),
+    (np.array([[[True, True]], [[False, False]], [[True, False]]]), "allowed camera"),
+])
+def test_a_bad_allowed_mask_is_one_line(allowed, message):
+    with pytest.raises(FormulationError, match=message):
+        select_views(np.zeros((3, 1, 2)), 1.0, 2, allowed)
+
+
 @pytest.mark.parametrize("seed", range(8))
 def test_dp_reproduces_jiangs_pseudo_code(seed):
     rng = np.random.default_rng(200 + seed)

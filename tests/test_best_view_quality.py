@@ -110,6 +110,31 @@ def test_a_camera_that_detects_nothing_is_never_a_best_view():
     assert not (labels.best_view == blind).any() and (labels.best_view >= 0).all()
 
 
+def test_a_camera_that_goes_blind_is_left_even_where_no_camera_shows_the_marker():
+    """docs/cameras.md: the best view never names a camera in a frame where it took no marker.
+    Camera b shows a limb's marker best in frame 0, then takes nothing; camera a takes the
+    others but its ray to the marker crosses the limb (quality 0). Every camera then cost 1,
+    staying on b tied with a switch (lambda = 1) and b stayed the best view of a blind camera."""
+    limb, hidden = _limb()
+    through, clear = looking_at_origin([-1500, -1000, 0], "a"), looking_at_origin([1500, 1000, 0], "b")
+    positions = np.repeat(limb[None], 4, axis=0)
+    labels = LabeledTrajectories([f"m{i}" for i in range(len(limb))], positions, np.zeros((4, len(limb)), bool), 120.0)
+    views = np.zeros((4, len(limb), 2), dtype=int)
+    views[0, hidden, 0] = -1  # frame 0: only b sees the marker
+    views[1:, :, 1] = -1  # then b takes nothing
+    views[1:, hidden, 0] = -1  # and a never sees it through the limb
+    chosen = MarkerViewChoice([through, clear], switch_cost=1.0, window=30).attach(labels, views).best_view
+    assert chosen[:, hidden].tolist() == [1, 0, 0, 0]
+    assert (chosen[1:] == 0).all()
+
+
+def _limb() -> tuple[np.ndarray, int]:
+    """Markers ringing a limb along z, and the index of the one at (0, 50, 20)."""
+    angles = np.deg2rad(np.arange(0, 360, 45))
+    limb = np.array([[50 * np.cos(a), 50 * np.sin(a), z] for z in (-60.0, -20.0, 20.0, 60.0) for a in angles])
+    return limb, next(i for i, x in enumerate(limb) if np.allclose(x, [0, 50, 20]))
+
+
 def test_point_jobs_have_no_best_view(tmp_path):
     labels, _ = CaptureLabeling(points_capture(12), LabelingOptions(window=6)).label()
     assert labels.best_view.size == 0 and trajectories_json(labels)["best_view"] is None
@@ -134,9 +159,7 @@ def test_an_occluded_marker_is_best_seen_by_the_camera_whose_ray_clears_the_body
     With 0/1 visibility camera a shows it best in frame 0 and no camera after (qualities 0,
     so the view stays); the occlusion-aware P_D sees that the ray to camera a crosses the
     limb (a saw it regardless in frame 0) and the ray to camera b does not."""
-    angles = np.deg2rad(np.arange(0, 360, 45))
-    limb = np.array([[50 * np.cos(a), 50 * np.sin(a), z] for z in (-60.0, -20.0, 20.0, 60.0) for a in angles])
-    hidden = next(i for i, x in enumerate(limb) if np.allclose(x, [0, 50, 20]))
+    limb, hidden = _limb()
     through, clear = looking_at_origin([-1500, -1000, 0], "a"), looking_at_origin([1500, 1000, 0], "b")
     positions = np.repeat(limb[None], 3, axis=0)
     measured, filled = positions.copy(), np.full_like(positions, np.nan)

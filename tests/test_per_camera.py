@@ -5,9 +5,11 @@ real Pose2Sim rig (0.5 px noise, 3 px merging, 10 % occlusion in 15-frame bursts
 points per camera), and a resumed run against an uninterrupted one.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
-from capture_fixtures import camera_capture, capture_of, simulated_cmu
+from capture_fixtures import camera_capture, capture_of, seen_once_in_frame0, simulated_cmu
 from windows import assert_feasible, brute_force
 
 from formulations.cameras.camera import Camera
@@ -181,6 +183,24 @@ def test_per_camera_labels_cmu_85_02_through_the_pose2sim_rig():
     assert np.isfinite(result.filled[result.occluded]).all() and np.isnan(result.filled[~result.occluded]).all()
     assert np.isnan(result.positions[result.occluded]).all() and np.isfinite(result.positions[~result.occluded]).all()
     assert scores.rmse_mm < scores.filled_rmse_mm < 100.0
+
+
+def test_frame_0_has_the_labeled_markers_detections_and_the_best_view_ignores_the_camera_order():
+    """Frame 0 had no views: every camera looked blind there, the best view of every marker
+    was the first camera listed, and the choice carried on (86-167 marker-frames up to frame
+    75 of a 150-frame take changed with the order of the cameras)."""
+    cameras, simulated = simulated_cmu(30, markers=12)
+    capture, expected = seen_once_in_frame0(cameras, simulated, 3)
+    labeling = CaptureLabeling(capture, LabelingOptions(window=10, association="per-camera"))
+    outcomes = list(labeling.windows())
+    np.testing.assert_array_equal(labeling.views(outcomes)[0], expected)
+    result = labeling.result(outcomes)
+    np.testing.assert_array_equal(result.positions[0], capture.first_frame)  # a single view does not move it
+    order = [2, 0, 3, 1]
+    reordered = replace(capture, cameras=[cameras[c] for c in order],
+                        detections=[[frame[c] for c in order] for frame in capture.detections])
+    again, _ = CaptureLabeling(reordered, LabelingOptions(window=10, association="per-camera")).label()
+    assert again.best_view_names() == result.best_view_names()
 
 
 def test_resumed_per_camera_labeling_equals_the_uninterrupted_run():

@@ -25,6 +25,14 @@ it is computed for every start frame and every object at once (N vectorised step
 (2)), and the slide itself is one argmin per frame. Both passes minimise (1) over the
 same window; where several sequences tie, this one keeps b_{-1} if it is among the
 optimal first choices, else the lowest camera index.
+
+A camera may be ruled out of a frame (``allowed`` False: it took no marker there, so
+naming it would point at a picture without the object). No finite cost can say so: the
+cost of a camera that does not show the object is 1, and it ties with a switch at
+lambda = 1, where the tie keeps b_{-1}. A ruled-out camera costs +inf in (2): V is
+then +inf exactly where the camera is ruled out (each frame keeps an allowed camera,
+so min_i V is finite and no inf - inf arises), the DP stays the exact minimum of (1)
+over the allowed sequences, and a ruled-out b_{-1} is never kept.
 """
 
 from __future__ import annotations
@@ -39,7 +47,9 @@ from formulations.errors import FormulationError
 MAX_COST = 1e100
 
 
-def select_views(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.NDArray[np.int64]:
+def select_views(
+    costs: npt.ArrayLike, switch_cost: float, window: int, allowed: npt.ArrayLike | None = None,
+) -> npt.NDArray[np.int64]:
     """Each object's camera in each frame, by Jiang's sliding-window DP.
 
     Args:
@@ -48,15 +58,18 @@ def select_views(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.N
         switch_cost: lambda >= 0, the price of one camera switch in the units of ``costs``.
         window: N >= 1 frames per window, the current frame included (N = 1 with any
             lambda is the greedy filter that switches when one frame pays for it).
+        allowed: ``(F, K, M)`` False where camera b may not be chosen (module doc); every
+            frame and object needs one allowed camera. None: every camera is allowed.
 
     Returns:
         ``(F, K)`` chosen camera index b_n* per frame and object.
 
     Raises:
         FormulationError: a cost array that is not (F, K, M) with M >= 1, a non-finite
-            cost or one past ``MAX_COST``, a negative or non-finite lambda, or a window under one frame.
+            cost or one past ``MAX_COST``, a negative or non-finite lambda, a window under one frame,
+            or an ``allowed`` mask of another shape or with a frame and object that allows no camera.
     """
-    c = _checked(costs, switch_cost, window)
+    c = _ruled_out(_checked(costs, switch_cost, window), allowed)
     n_frames, n_objects, _ = c.shape
     # Past the end a window is zero-cost padding, which changes no choice (see _cost_to_go):
     # a window longer than the take gives exactly the result of one as long as the take.
@@ -87,6 +100,19 @@ def _cost_to_go(c: npt.NDArray[np.float64], switch_cost: float, window: int) -> 
         carried = np.minimum(to_go, to_go.min(axis=2, keepdims=True) + switch_cost)
         to_go = padded[n : n + n_frames] + carried
     return to_go
+
+
+def _ruled_out(c: npt.NDArray[np.float64], allowed: npt.ArrayLike | None) -> npt.NDArray[np.float64]:
+    """``c`` with +inf where ``allowed`` is False (module doc)."""
+    if allowed is None:
+        return c
+    mask = np.asarray(allowed)
+    if mask.shape != c.shape:
+        raise FormulationError(f"best view: allowed must have the costs' shape {c.shape}, got {mask.shape}")
+    mask = mask.astype(bool)
+    if not mask.any(axis=2).all():
+        raise FormulationError("best view: every frame and object needs an allowed camera")
+    return np.where(mask, c, np.inf)
 
 
 def _checked(costs: npt.ArrayLike, switch_cost: float, window: int) -> npt.NDArray[np.float64]:

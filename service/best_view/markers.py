@@ -16,6 +16,10 @@ model's segment capsules do not apply. So an occluded marker's best view is a ca
 would see it past the body, not an arbitrary one of its all-zero qualities; and a
 detection still beats a clear ray (lambda_D < 1) at equal size and angle.
 
+A camera that took no marker in a frame is ruled out there (``select_views``' ``allowed``)
+whenever another camera took one: its cost of 1 tied with a switch at lambda = 1, so a
+camera that went blind stayed the best view while the tie lasted.
+
 The costs are relative (``relative_costs``: 0 for the frame's best camera, 1 for one
 that does not show the marker), so the switch cost is counted in frames of the
 best view. Defaults (``LabelingOptions``): lambda = 1 (a switch must win back one whole
@@ -77,7 +81,10 @@ class MarkerViewChoice:
         seeing: np.ndarray = np.asarray(detected.any(axis=1))  # (F, C)
         visibility = np.where(seeing[:, None, :], visibility, 0.0)
         quality = marker_quality(positions, visibility, self.cameras)
-        chosen = select_views(relative_costs(quality), self.switch_cost, self.window)
+        # and it is ruled out, not merely priced at 1: that ties with a switch at lambda = 1,
+        # and the tie kept a camera blind since the frame before (a frame no camera sees rules none out)
+        allowed = np.broadcast_to((seeing | ~seeing.any(axis=1, keepdims=True))[:, None, :], quality.shape)
+        chosen = select_views(relative_costs(quality), self.switch_cost, self.window, allowed)
         chosen[~np.isfinite(positions).all(axis=2)] = -1  # no position: no view of it to choose
         return replace(labels, best_view=chosen, view_names=[camera.name for camera in self.cameras])
 

@@ -14,7 +14,10 @@ A marker seen by two or more agreeing cameras is triangulated; by one, it lies o
 camera's ray nearest its prediction; by none, it is the prediction, flagged as filled.
 
 The first frame has no prediction: the user labels it (names + 3D positions, as in
-Ringer & Lasenby 2004), and its positions are the labeled ones.
+Ringer & Lasenby 2004), and its positions are the labeled ones. Its views are the
+detections nearest the labeled markers' projections (``first_frame_views``, within the
+window gate of a marker seen the frame before): without them every camera looked blind in
+frame 0, and the best view there was the first camera listed, carried into later frames.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import numpy as np
 
 from formulations.cameras.per_camera.advance import advance_state
 from formulations.cameras.per_camera.candidates import PerCameraWindow, per_camera_candidates
+from formulations.cameras.per_camera.first_frame import first_frame_views
 from formulations.cameras.per_camera.gating import PerCameraGating
 from formulations.cameras.per_camera.guide import per_camera_guide
 from formulations.cameras.per_camera.locate import FrameViews
@@ -111,6 +115,7 @@ class PerCameraChain:
         """Each marker-frame located from one view moved along its ray to where its rigid
         donors put it (``single_view``)."""
         single = ((views >= 0).sum(axis=2) == 1) & np.isfinite(positions).all(axis=2)
+        single[:1] = False  # frame 0 is the user's, where it was labeled
         frame, marker = np.nonzero(single)
         camera = np.argmax(views[frame, marker] >= 0, axis=1)
         detection = views[frame, marker, camera]
@@ -123,8 +128,12 @@ class PerCameraChain:
         return single_views_on_rays(positions, filled, single, origin, direction)
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
-        """``(F, N, C)`` detection each marker took in each camera, -1 for none (frame 0: none)."""
+        """``(F, N, C)`` detection each marker took in each camera, -1 for none (frame 0: the
+        detections nearest the labeled markers' projections, module doc)."""
         views = np.full((len(self.detections), len(self.names), len(self.rig.cameras)), -1)
+        if len(self.detections):
+            first = _undistorted(self.rig, self.detections[:1])[0]
+            views[0] = first_frame_views(self.rig, self.first_frame, first, self.gating.window_gate.radius_mm)
         for outcome in outcomes:
             views[outcome.stats.template + 1 : outcome.stats.last + 1] = outcome.views
         return views
