@@ -74,7 +74,9 @@ def test_a_window_that_raises_fails_the_job_and_keeps_the_windows_before_it(tmp_
         assert [w["index"] for w in status["windows"]] == [0, 1] and status["windows_done"] == 2
         assert client.get(f"/v1/jobs/{job.id}/result").status_code == 409
         partial = client.get(f"/v1/jobs/{job.id}/result", params={"partial": "true"}).json()
-        assert client.get(f"/v1/jobs/{job.id}/result", params={"partial": "true", "format": "csv"}).status_code == 200
+        as_csv = client.get(f"/v1/jobs/{job.id}/result", params={"partial": "true", "format": "csv"})
+        assert as_csv.status_code == 200  # named as partial: it was named as a whole result would be
+        assert f'filename="markerflow_labeled-{job.id[:8]}-partial-failed.csv"' in as_csv.headers["content-disposition"]
     positions, occluded = nan_array(partial["positions"]), np.array(partial["occluded"])
     assert np.array_equal(positions[:labeled], expected.positions[:labeled], equal_nan=True)
     assert np.array_equal(occluded[:labeled], expected.occluded[:labeled])

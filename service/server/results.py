@@ -121,9 +121,12 @@ def job_file(store: JobStore, job_id: str, format: str, done: bool) -> bytes:
 
 def attachment(job: Job, format: str) -> str:
     """``Content-Disposition`` of a result download: named after the uploaded take
-    (``walk_labeled-1a2b3c4d.c3d``), as every download was ``markerflow-<id>``; an ASCII
+    (``walk_labeled-1a2b3c4d.c3d``; ``walk_labeled-1a2b3c4d-partial-failed.c3d`` before it is
+    done), as every download was ``markerflow-<id>``; an ASCII
     name and the UTF-8 one (RFC 6266) for names beyond ASCII."""
     stem = Path(job.source).stem if job.source != "json" else "markerflow"
-    name = f"{stem}_labeled-{job.id[:8]}.{format}"
+    # a job not done gives its stored windows only: named so, not as the whole result would be
+    part = "" if job.state == "done" else f"-partial-{job.state}"
+    name = f"{stem}_labeled-{job.id[:8]}{part}.{format}"
     ascii_name = "".join(c if c.isascii() and (c.isalnum() or c in "._-") else "_" for c in name)
     return f"attachment; filename=\"{ascii_name}\"; filename*=UTF-8''{quote(name)}"
