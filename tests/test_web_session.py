@@ -139,6 +139,9 @@ def test_a_done_jobs_page_counts_doubt_on_the_labels_it_draws(client):
     assert wait_for(api, f"{job_id}")["state"] == "done"
     page = browser.get(answer.headers["location"]).text
     assert f"{100 * expected:.1f} % of labels doubtful" in page
+    ticked = labeled.names[:10]  # more than are drawn: the last two were left out without a word
+    page = browser.get(answer.headers["location"], params={"markers": ticked}).text
+    assert f"not drawn: {', '.join(ticked[8:])} (up to 8 at once)" in page
 
 
 def test_the_list_pages_through_older_jobs(tmp_path, monkeypatch):

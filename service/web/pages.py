@@ -65,5 +65,6 @@ async def job_page(request: Request, job_id: str, markers: Annotated[list[str] |
         chosen = chosen_markers(labels, markers or [])
         counts = [(name, *(int(mask[:, m].sum()) for _, mask in state_masks(labels)))
                   for m, name in enumerate(labels.names)]
-        context |= {"chosen": chosen, "counts": counts, "best_views": best_views(labels)}
+        left_out = [name for name in dict.fromkeys(markers or []) if name in labels.names and name not in chosen]
+        context |= {"chosen": chosen, "left_out": left_out, "counts": counts, "best_views": best_views(labels)}
     return page(request, "job.html", **context)
