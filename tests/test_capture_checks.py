@@ -119,6 +119,8 @@ def _camera(name: str) -> Camera:
         (["c1", "c2"], [[np.zeros((1, 2))]] * 3, "detections[0] must hold one (D, 2) array per camera (2 cameras)"),
         (["c1", "c2"], [[np.zeros((1, 2)), np.full((1, 2), 700.0)]] * 3, "is outside its 640x480 image"),
         (["c1", "c2"], [[np.zeros((2, 1)), np.zeros((1, 2))]] * 3, "detections[0][0]: points must be (D, 2)"),
+        (["c1", "c2"], [[np.zeros((1, 2)), np.ones((1, 2))], [np.array([[5.0, 6], [7, 8], [5, 6]]), np.ones((1, 2))]] * 2,
+         "detections[1] of camera 'c1': detections 0 and 2 are the same pixel (each listed twice by the export?)"),
         (["cam", "cam", "c3"], [[np.zeros((1, 2))] * 3] * 3, "camera names must be unique (outputs name views by them): 'cam'"),
     ],
 )

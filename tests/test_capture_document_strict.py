@@ -116,3 +116,15 @@ def test_strings_and_numbers_are_not_what_they_might_mean(mutate: Callable[[dict
     mutate(document)
     with pytest.raises(InputError, match=f"^s.json: {re.escape(where)}"):
         read_capture_document(json.dumps(document), "s.json")
+
+
+def test_a_detection_listed_twice_in_a_frame_is_refused() -> None:
+    """Every centroid exported twice: per-camera fused two markers onto one position, and the
+    warning blamed copied columns."""
+    document = _camera_document()
+    camera = document["cameras"][1]["name"]
+    frame = document["detections"][camera][2]
+    frame.append(list(frame[0]))
+    with pytest.raises(InputError, match=rf"^d.json: detections.{camera}.2: detections 0 and {len(frame) - 1} are the "
+                                         r"same pixel \(each listed twice by the export\?\)$"):
+        read_capture_document(json.dumps(document), "d.json")

@@ -22,6 +22,7 @@ from service.capture.checks import (
     checked_frames,
     checked_names,
     checked_rate,
+    first_duplicate,
     first_off_sensor,
 )
 from service.capture.formulation_spec import resolve_formulation
@@ -143,6 +144,10 @@ class Capture:
             if off is not None:
                 raise InputError(f"detections[{off[0]}] of camera {camera.name!r}: {off[2].tolist()} is "
                                  f"outside its {camera.image_size[0]}x{camera.image_size[1]} image")
+            twice = first_duplicate([frame[c] for frame in self.detections])
+            if twice is not None:
+                raise InputError(f"detections[{twice[0]}] of camera {camera.name!r}: detections {twice[1]} and "
+                                 f"{twice[2]} are the same pixel (each listed twice by the export?)")
         problem = frame0_problem(cameras, frame0_offsets(self.frame0_distances()))
         if problem is not None and problem[0]:  # one camera off is a warning (result_warnings)
             raise InputError(problem[1])

@@ -119,6 +119,27 @@ def first_off_sensor(frames: list, image_size: tuple[int, int]) -> tuple[int, in
     return f, first - sum(counts[:f]), pixels[first]
 
 
+def first_duplicate(frames: list) -> tuple[int, int, int] | None:
+    """``(frame, first, second)`` of one camera's first frame holding one pixel twice over its
+    ``frames`` of ``(D, 2)`` pixels, or None. An export that lists each centroid twice made
+    ``per-camera`` fuse two markers onto one position; no detector finds one blob twice to
+    the last bit, so it is refused rather than guessed at. All frames in one sort."""
+    counts = np.array([len(frame) for frame in frames])
+    if counts.sum() < 2:
+        return None
+    pixels = np.concatenate([np.asarray(frame, dtype=float).reshape(-1, 2) for frame in frames])
+    frame_of = np.repeat(np.arange(len(frames)), counts)
+    order = np.lexsort((pixels[:, 1], pixels[:, 0], frame_of))
+    same = (np.diff(frame_of[order]) == 0) & (np.diff(pixels[order], axis=0) == 0).all(axis=1)
+    if not same.any():
+        return None
+    at = np.flatnonzero(same)
+    k = at[np.argmin(frame_of[order][at])]  # the earliest frame's pair
+    f = int(frame_of[order][k])
+    first, second = sorted(int(i) - int(counts[:f].sum()) for i in order[k : k + 2])
+    return f, first, second
+
+
 def _float_array(value: object, where: str) -> np.ndarray:
     try:
         return np.asarray(value, dtype=float)

@@ -36,7 +36,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 
 from formulations.cameras.camera import Camera
 from service.capture.capture import ASSOCIATIONS, Capture, LabelingOptions
-from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE, first_off_sensor
+from service.capture.checks import MAX_COORDINATE, MAX_RATE, MIN_RATE, first_duplicate, first_off_sensor
 from service.capture.model_input import check_shared_names, model_names, parse_model, with_model
 from service.errors import InputError
 from service.io.marker_names import check_marker_names
@@ -248,13 +248,18 @@ class CaptureDocument(BaseModel):
 
 
 def _check_in_image(camera: str, frames: list[list[Pixel]], image_size: tuple[int, int]) -> None:
-    """Every detection lies on the sensor (``first_off_sensor``), named by its document path."""
+    """Every detection lies on the sensor (``first_off_sensor``), none twice in a frame (``first_duplicate``),
+    named by its document path."""
     off = first_off_sensor(frames, image_size)
     if off is not None:
         f, d, (u, v) = off
         raise ValueError(
             f"detections.{camera}.{f}.{d}: ({u:g}, {v:g}) is outside the {image_size[0]}x{image_size[1]} image"
         )
+    twice = first_duplicate(frames)
+    if twice is not None:
+        raise ValueError(f"detections.{camera}.{twice[0]}: detections {twice[1]} and {twice[2]} are the same pixel "
+                         "(each listed twice by the export?)")
 
 
 def read_capture_document(text: str | bytes, source: str) -> CaptureDocument:
