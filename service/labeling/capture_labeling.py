@@ -44,6 +44,7 @@ from service.capture.formulation_spec import resolve_formulation
 from service.capture.reprojection import frame0_pixel_sigma
 from service.errors import InputError
 from service.io.recording import LabeledTrajectories, UnlabeledCloud
+from service.labeling.camera_usage import detections_taken, unused_camera_warning
 from service.labeling.cloud import CloudChain
 from service.labeling.exchanged import exchanged_back, handed_back
 from service.labeling.extension import extended
@@ -100,6 +101,7 @@ class CaptureLabeling:
             capture.cameras, options.best_view_switch_cost, options.best_view_window)
         self.shape_breaks: list[ShapeBreak] = []  # labels off their rigid neighbours in the last result (``shape_doubt``)
         self.model_misfits: list[SegmentMisfit] = []  # segments the user's labels say the model gets wrong
+        self.detections_taken: np.ndarray | None = None  # camera mode: per camera, the share a marker took
         model = capture.model
         if model is not None and capture.points is not None:
             # Identified, nothing labeled: the take may correct the model. Labels already place
@@ -173,7 +175,9 @@ class CaptureLabeling:
         if self._view_choice is None:
             labels = with_leftover_points(labels, self._points)
         else:
-            labels = self._view_choice.attach(labels, self._association.views(outcomes))
+            views = self._association.views(outcomes)
+            self.detections_taken = detections_taken(views, self._capture.camera_frames()[1])
+            labels = self._view_choice.attach(labels, views)
         if not calibrated:
             return labels
         labels, self.shape_breaks = shape_doubted(_reported(labels))
@@ -213,7 +217,9 @@ class CaptureLabeling:
         the labeled frame says the model gets wrong. Empty when none applies: an optimal window
         is optimal under the model, and these say where the labels are likely wrong anyway."""
         lines = result_warnings(self._capture, result, self.shape_breaks, unit, start, spacing_judged)
-        more = (time_limit_warning([w.status for w in windows]), model_misfit_warning(self.model_misfits, start))
+        more = (time_limit_warning([w.status for w in windows]), model_misfit_warning(self.model_misfits, start),
+                None if self.detections_taken is None else unused_camera_warning(
+                    [camera.name for camera in self._capture.camera_frames()[0]], self.detections_taken))
         return lines + [line for line in more if line is not None]
 
     def views(self, outcomes: list[WindowOutcome]) -> np.ndarray:
