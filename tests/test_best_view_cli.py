@@ -94,3 +94,20 @@ def test_bad_options_are_one_line(tmp_path, option, value, message):
     source = write_costs(tmp_path / "costs.csv", np.zeros((2, 1, 2)), ["a"], ["x", "y"])
     result = CliRunner().invoke(app, ["best-view", str(source), "--out", str(tmp_path / "c.csv"), option, value])
     assert result.exit_code == 2 and message in result.output
+
+
+@pytest.mark.parametrize("data,line", [
+    (b"frame,object,camera,cost\n1,a,c1,0.5\n\n1,a,c2,abc\n", 4),  # after a blank line: was :3
+    (b"frame,object,camera,cost\r\n1,a,c1,0.5\r\n\r\n1,a,c2,abc\r\n", 4),  # CRLF, a blank line: was :3
+    (b"frame,object,camera,cost\r\n1,a,c1,0.5\r\n1,a,c2,abc\r\n", 3),
+    (b"frame,object,camera,cost\r1,a,c1,0.5\r\r1,a,c2,abc\r", 4),  # CR endings
+    (b"\n\nframe,object,camera,cost\n\n1,a,c1,abc\n", 5),  # blank lines before the header too: was :2
+    (b'frame,object,camera,cost\n1,"a\nb",c1,0.5\n1,a,c2,abc\n', 4),  # a line break in a quoted cell
+    (b'frame,object,camera,cost\n1,a,c1,0.5\n\n1,"a\nb",c2,abc\n', 4),  # the line the row starts on
+])
+def test_a_bad_cell_names_the_files_own_line(tmp_path, data, line):
+    source = tmp_path / "costs.csv"
+    source.write_bytes(data)
+    result = CliRunner().invoke(app, ["best-view", str(source), "--out", str(tmp_path / "c.csv")])
+    assert result.exit_code == 2
+    assert f"costs.csv:{line}: cost 'abc' is not a number" in result.output, result.output

@@ -4,6 +4,8 @@ TrackEval's words (a placeholder sequence and renumbered ids)."""
 
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 
 import motmetrics
@@ -100,3 +102,37 @@ def test_a_ground_truth_with_nothing_to_consider_is_refused(tmp_path: Path) -> N
                                       for line in _lines(TUD / "gt.txt")])
     with pytest.raises(InputError, match="counts none of its boxes as ground truth"):
         mot_scores(TUD / "test.txt", gt)
+
+
+def test_an_empty_result_has_no_matched_share(tmp_path: Path) -> None:
+    """A tracker that reported no one read as ``"matched": 1.0``, every box on the ground truth."""
+    empty = _write(tmp_path / "empty.txt", [])
+    scores = mot_scores(empty, TUD / "gt.txt")
+    assert scores.matched is None and scores.hota == 0
+    run = runner.invoke(app, ["mot-eval", str(empty), str(TUD / "gt.txt"), "--json"])
+    assert run.exit_code == 0 and json.loads(run.stdout)["matched"] is None
+    assert "warning" not in run.stderr  # the scores of 0 say it; "only 0% overlap" would ask the wrong question
+    table = runner.invoke(app, ["mot-eval", str(empty), str(TUD / "gt.txt")])
+    assert table.exit_code == 0 and re.search(r"result boxes on a ground-truth box\s*│\s*-\s*│", table.stdout)
+
+
+def _seqinfo(tmp_path: Path, length: int) -> Path:
+    path = tmp_path / "seqinfo.ini"
+    path.write_text(f"[Sequence]\nname=other\nseqLength={length}\n")
+    return path
+
+
+def test_a_seqinfo_longer_than_the_ground_truth_is_warned_of(tmp_path: Path) -> None:
+    """Another sequence's seqinfo.ini (MOT17-05's 837 frames for MOT17-02's 600) was taken silently."""
+    last = int(np.loadtxt(TUD / "gt.txt", delimiter=",")[:, 0].max())
+    longer = _seqinfo(tmp_path, last + 237)
+    run = runner.invoke(app, ["mot-eval", str(TUD / "test.txt"), str(TUD / "gt.txt"), "--seqinfo", str(longer), "--json"])
+    assert run.exit_code == 0 and json.loads(run.stdout)["frames"] == last + 237
+    warnings = [line for line in run.stderr.splitlines() if line.startswith("warning:")]
+    assert warnings == [f"warning: the ground truth ends at frame {last} of the sequence's {last + 237} ({longer}); "
+                        "is that seqinfo.ini of another sequence?"]
+    same = runner.invoke(app, ["mot-eval", str(TUD / "test.txt"), str(TUD / "gt.txt"), "--seqinfo",
+                               str(_seqinfo(tmp_path, last)), "--json"])
+    assert same.exit_code == 0 and "warning" not in same.stderr
+    with pytest.raises(InputError, match=rf"frame {last} of the ground truth is past the sequence's {last - 1} frames"):
+        mot_scores(TUD / "test.txt", TUD / "gt.txt", _seqinfo(tmp_path, last - 1))

@@ -162,10 +162,15 @@ def test_scores_count_a_marker_correct_only_with_its_own_detections():
     views_none[1, 0] = -1
     truth = np.zeros((2, 2, 3))
     result = LabeledTrajectories(["a", "b"], truth.copy(), np.zeros((2, 2), bool), 100.0, filled=np.full((2, 2, 3), np.nan))
+    # frame 1: marker a is seen by both cameras; b by camera 0 only, and rightly labeled from it,
+    # so scored too (a label written); frame 0 is the user's
     assert camera_scores(marker_detection, truth, result, views).label_accuracy == 1.0
-    assert camera_scores(marker_detection, truth, result, views_wrong).label_accuracy == 0.0
-    assert camera_scores(marker_detection, truth, result, views_none).label_accuracy == 0.0
-    assert camera_scores(marker_detection, truth, result, views).marker_frames == 1  # frame 0 and marker b excluded
+    assert camera_scores(marker_detection, truth, result, views_wrong).label_accuracy == 0.5
+    assert camera_scores(marker_detection, truth, result, views_none).label_accuracy == 0.5
+    assert camera_scores(marker_detection, truth, result, views).marker_frames == 2
+    views_b_none = views.copy()
+    views_b_none[1, 1] = -1  # b left unlabeled: seen by one camera, no 3D point, not a miss
+    assert camera_scores(marker_detection, truth, result, views_b_none).marker_frames == 1
 
 
 def test_per_camera_labels_cmu_85_02_through_the_pose2sim_rig():

@@ -42,10 +42,10 @@ def read_view_costs(path: Path) -> tuple[list[str], list[ObjectCosts]]:
             twice, a missing triple, or no rows.
     """
     rows = _rows(path)
-    if not rows or [cell.strip() for cell in rows[0]] != COSTS_HEADER:
+    if not rows or [cell.strip() for cell in rows[0][1]] != COSTS_HEADER:
         raise InputError(f"{path}: header should be {','.join(COSTS_HEADER)}")
     table: dict[tuple[str, int, str], float] = {}
-    for line, row in enumerate(rows[1:], start=2):
+    for line, row in rows[1:]:
         if len(row) != 4:
             raise InputError(f"{path}:{line}: {len(row)} cells, expected 4 ({','.join(COSTS_HEADER)})")
         frame, name, camera, cost = (cell.strip() for cell in row)
@@ -90,11 +90,21 @@ def write_choices(path: Path, cameras: list[str], objects: list[ObjectCosts], ch
         raise InputError(f"{path}: cannot write ({error.strerror})") from None
 
 
-def _rows(path: Path) -> list[list[str]]:
+def _rows(path: Path) -> list[tuple[int, list[str]]]:
+    """The non-blank rows, each with the file's line it starts on (a blank line, and a line
+    break inside a quoted cell, counted as an editor counts them; LF, CRLF or CR endings):
+    numbering the rows left after the blank ones were dropped named a line too early after
+    every blank line."""
     try:
         # utf-8-sig: spreadsheets often save with a byte-order mark.
         with path.open(newline="", encoding="utf-8-sig") as f:
-            return [row for row in csv.reader(f) if row]
+            reader = csv.reader(f)
+            rows, before = [], 0  # before: the lines read up to the row's start
+            for row in reader:
+                if row:
+                    rows.append((before + 1, row))
+                before = reader.line_num  # past a quoted cell's line breaks too
+            return rows
     except OSError as error:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
     except (csv.Error, UnicodeDecodeError) as error:

@@ -10,7 +10,9 @@ wrong, in which file and on which line:
   on distractors as false positives);
 - an id given twice in one frame;
 - a result that hardly overlaps the ground truth (another sequence's file, or boxes in
-  other units), which TrackEval scores near 0 as if the tracker were bad.
+  other units), which TrackEval scores near 0 as if the tracker were bad;
+- a seqinfo.ini longer than the ground truth (another sequence's), which changes the
+  frames counted and no score.
 """
 
 from __future__ import annotations
@@ -74,10 +76,12 @@ def check_unique_ids(table: MotTable) -> None:
                          f"(also line {int(table.lines[first])}); an id names one box per frame")
 
 
-def matched_share(result: np.ndarray, truth: np.ndarray) -> float:
-    """Share of the result's boxes that overlap a ground-truth box of their frame by IoU >= 0.5."""
+def matched_share(result: np.ndarray, truth: np.ndarray) -> float | None:
+    """Share of the result's boxes that overlap a ground-truth box of their frame by IoU >= 0.5;
+    None for a result without boxes: a share of none is no figure, and the 1.0 it was read as
+    "every box on the ground truth" beside a HOTA of 0."""
     if not len(result):
-        return 1.0
+        return None
     matched = 0
     for frame in np.unique(result[:, 0]):
         mine, theirs = result[result[:, 0] == frame, 2:6], truth[truth[:, 0] == frame, 2:6]
@@ -86,9 +90,21 @@ def matched_share(result: np.ndarray, truth: np.ndarray) -> float:
     return matched / len(result)
 
 
-def few_matched_warning(share: float, result: Path, truth: Path) -> str | None:
-    """A line when hardly any result box lies on a ground-truth box."""
-    if share >= FEW_MATCHED:
+def few_matched_warning(share: float | None, result: Path, truth: Path) -> str | None:
+    """A line when hardly any result box lies on a ground-truth box (none when there is no box)."""
+    if share is None or share >= FEW_MATCHED:
         return None
     return (f"warning: only {share:.0%} of the boxes of {result} overlap a box of {truth} in their frame "
             f"(IoU >= {MATCH_IOU}); are they the same sequence, in the same pixels?")
+
+
+def short_truth_warning(truth_last: int, length: int, source: Path) -> str | None:
+    """A line when the ground truth ends before ``seqLength``: a seqinfo.ini of another, longer
+    sequence (MOT17-05's 837 frames for MOT17-02's 600) changes no score, as frames past the
+    last box add nothing, but ``frames`` then counts the other sequence's length. A ground
+    truth may end early (nobody in the last frames), so this warns and does not refuse; one
+    with frames past ``seqLength`` is refused (``scores._length``)."""
+    if truth_last >= length:
+        return None
+    return (f"warning: the ground truth ends at frame {truth_last} of the sequence's {length} ({source}); "
+            "is that seqinfo.ini of another sequence?")

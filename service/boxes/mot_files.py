@@ -6,7 +6,9 @@ One box per line, comma-separated (Milan et al. 2016):
     frame, id, bb_left, bb_top, bb_width, bb_height, consider, class, visibility    gt.txt
 
 Frames count from 1; ``id`` is -1 in detection files. Every line of a file has the same
-number of columns, from 7 to 10; any other file is refused with one line naming it.
+number of columns, from 7 to 10; any other file is refused with one line naming it. Files are
+UTF-8 (ASCII numbers in practice), a byte-order mark first skipped as in capture JSON and
+TOML (``service.io.utf8``): a Windows editor or spreadsheet puts one there.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 
 from service.boxes.detections import BoxDetections, BoxTracks
 from service.errors import InputError
+from service.io.utf8 import utf8_file
 
 MIN_COLUMNS, MAX_COLUMNS = 7, 10
 # Frames per sequence: 55 minutes at 30 fps, a hundred times MOT17's longest. TrackEval keeps
@@ -60,12 +63,7 @@ def read_table(path: Path, empty_ok: bool = False) -> MotTable:
 
     ``empty_ok``: an empty file is ``(0, MAX_COLUMNS)`` rows (a tracker that reported no
     one), not an error."""
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a text file") from None
+    text = utf8_file(path)  # a byte-order mark skipped: it was read as part of the first number ('\ufeff1')
     numbered = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip()]
     if not numbered and empty_ok:
         return MotTable(path, np.empty((0, MAX_COLUMNS)), np.empty(0, int))
@@ -168,9 +166,9 @@ def write_tracks(path: Path, tracks: BoxTracks) -> None:
 def read_seqinfo(path: Path) -> SequenceInfo:
     """A ``seqinfo.ini``: its length is required, image size and frame rate when present."""
     parser = configparser.ConfigParser()
+    text = utf8_file(path)  # a byte-order mark skipped: configparser saw no [Sequence] after it
     try:
-        if not parser.read(path):
-            raise InputError(f"{path}: cannot read")
+        parser.read_string(text, source=str(path))
         section = parser["Sequence"]
         length = int(section["seqLength"])
         size = None

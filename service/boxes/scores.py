@@ -21,7 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from service.boxes.mot_checks import benchmark, check_consider_flags, check_unique_ids, matched_share
+from service.boxes.mot_checks import (
+    benchmark,
+    check_consider_flags,
+    check_unique_ids,
+    matched_share,
+    short_truth_warning,
+)
 from service.boxes.mot_files import MotTable, dense_ids, read_seqinfo, read_table
 from service.errors import InputError
 
@@ -39,9 +45,12 @@ class MotScores:
         idf1: Identity F1.
         id_switches: CLEAR identity switches.
         gt_ids, result_ids: Distinct identities scored on each side.
-        frames: Frames scored.
+        frames: Frames scored: seqLength of the seqinfo.ini, else the last frame of either file.
         matched: Share of the result's boxes on a ground-truth box of their frame (IoU >= 0.5),
-            whatever the ids: near 0 when the two are not of one sequence.
+            whatever the ids: near 0 when the two are not of one sequence; None for an empty
+            result (no box to place: 1.0 read as a perfect overlap).
+        warnings: Lines for stderr about the inputs (``mot_checks.short_truth_warning``);
+            not a score, so not in ``as_dict``.
     """
 
     hota: float
@@ -53,10 +62,14 @@ class MotScores:
     gt_ids: int
     result_ids: int
     frames: int
-    matched: float
+    matched: float | None
+    warnings: tuple[str, ...] = ()
 
-    def as_dict(self) -> dict[str, float | int]:
-        return asdict(self)
+    def as_dict(self) -> dict[str, float | int | None]:
+        """The scores, as ``mot-eval --json`` prints them (``matched`` null for an empty result)."""
+        scores: dict[str, float | int | None] = asdict(self)
+        del scores["warnings"]
+        return scores
 
 
 def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores:
@@ -70,7 +83,7 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
     for table in (truth_table, result_table):
         check_unique_ids(table)
     truth, rows = truth_table.rows, result_table.rows
-    length = _length(gt, seqinfo, truth, rows)
+    length, warning = _length(gt, seqinfo, truth, rows)
     chosen = benchmark(truth_table)
     with tempfile.TemporaryDirectory(prefix="markerflow-mot-") as folder:
         root = Path(folder)
@@ -102,7 +115,7 @@ def mot_scores(result: Path, gt: Path, seqinfo: Path | None = None) -> MotScores
         hota=float(np.mean(hota["HOTA"])), deta=float(np.mean(hota["DetA"])), assa=float(np.mean(hota["AssA"])),
         mota=float(clear["MOTA"]), idf1=float(identity["IDF1"]), id_switches=int(clear["IDSW"]),
         gt_ids=int(data["num_gt_ids"]), result_ids=int(data["num_tracker_ids"]), frames=length,
-        matched=matched_share(rows, truth),
+        matched=matched_share(rows, truth), warnings=(warning,) if warning else (),
     )
 
 
@@ -115,17 +128,22 @@ def _as_gt(truth: MotTable) -> np.ndarray:
     return np.column_stack([dense, np.ones(len(dense))])
 
 
-def _length(gt: Path, seqinfo: Path | None, truth: np.ndarray, rows: np.ndarray) -> int:
+def _length(gt: Path, seqinfo: Path | None, truth: np.ndarray, rows: np.ndarray) -> tuple[int, str | None]:
+    """The sequence's length, and a warning when its seqinfo.ini runs on past the ground truth.
+
+    Raises:
+        InputError: a frame of either file past seqLength.
+    """
     beside = gt.parent.parent / "seqinfo.ini"
     source = seqinfo if seqinfo is not None else (beside if beside.is_file() else None)
     if source is None:
-        return _last_frame(truth, rows)
+        return _last_frame(truth, rows), None
     length = read_seqinfo(source).length
     last = _last_frame(truth, rows)
     if last > length:
         side = "the ground truth" if truth[:, 0].max() >= last else "the result"
         raise InputError(f"frame {last} of {side} is past the sequence's {length} frames ({source})")
-    return length
+    return length, short_truth_warning(int(truth[:, 0].max()), length, source)
 
 
 def _last_frame(truth: np.ndarray, rows: np.ndarray) -> int:

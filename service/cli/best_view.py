@@ -13,7 +13,7 @@ import numpy as np
 from formulations.best_view import select_views
 from formulations.errors import FormulationError
 from service.best_view.tables import read_view_costs, write_choices
-from service.cli.output import check_not_input, check_writable_folder
+from service.cli.output import check_writable_output
 from service.cli.report import counted, out
 from service.errors import InputError
 
@@ -29,8 +29,7 @@ def run_best_view(costs_path: Path, output: Path, switch_cost: float, window: in
         raise InputError(f"--switch-cost must be a finite number >= 0, got {switch_cost}")
     if window < 1:
         raise InputError(f"--window must be at least 1 frame, got {window}")
-    check_writable_folder(output.parent)
-    check_not_input(output, costs_path)
+    check_writable_output(output, costs_path, labeled=False)
     cameras, objects = read_view_costs(costs_path)
     try:
         chosen = [select_views(obj.costs[:, None, :], switch_cost, window)[:, 0] for obj in objects]

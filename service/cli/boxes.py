@@ -11,7 +11,7 @@ from service.boxes.image_checks import normalised_warning, outside_image_warning
 from service.boxes.mot_files import read_detections, read_seqinfo, write_tracks
 from service.boxes.track import track_boxes
 from service.capture.formulation_spec import formulation_from_spec
-from service.cli.output import check_not_input, check_writable_folder
+from service.cli.output import check_writable_output
 from service.cli.report import out, warn
 from service.errors import InputError
 
@@ -46,8 +46,7 @@ def run_boxes(detections: Path, output: Path, formulation: str, seqinfo: Path | 
     """Read ``detections``, track them window by window, write ``output``, print the figures;
     ``newcomer_test``: ``Lifecycle.returns_compete``; ``occluded``: also write each object's
     boxes while it was held occluded between two sightings (``BoxTracks.with_occluded``)."""
-    check_writable_folder(output.parent if str(output.parent) else Path("."))
-    check_not_input(output, detections)
+    check_writable_output(output, detections, labeled=False)
     info = read_seqinfo(seqinfo) if seqinfo is not None else None
     boxes = read_detections(detections, info)
     if boxes.n_frames < 2:  # as `track`: nothing to follow from one frame

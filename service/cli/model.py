@@ -17,7 +17,7 @@ from service.capture.markerset import load_template
 from service.capture.model_input import MIN_SHARED
 from service.capture.pooled_takes import other_subject_warning
 from service.capture.span import frame_span
-from service.cli.output import check_writable_folder, check_writable_output
+from service.cli.output import check_writable_output
 from service.cli.report import out, warn
 from service.errors import InputError
 from service.io.formats import read_labeled
@@ -37,7 +37,7 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     """
     if output.suffix.lower() != ".json":  # a model is JSON: another suffix would mislead every reader
         raise InputError(f"{output}: a subject model is written as JSON; name it .json")
-    check_writable_folder(output.parent)
+    check_writable_output(output, *inputs, labeled=False)
     if centres is not None:
         check_writable_output(centres, *inputs)
     if markerset is not None and centres is not None:

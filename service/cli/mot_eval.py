@@ -17,15 +17,16 @@ LABELS = {"hota": "HOTA", "deta": "DetA", "assa": "AssA", "mota": "MOTA", "idf1"
 
 
 def run_mot_eval(result: Path, gt: Path, seqinfo: Path | None, as_json: bool) -> None:
-    """Score ``result`` against ``gt`` and print the figures (one JSON line with ``as_json``)."""
+    """Score ``result`` against ``gt`` and print the figures (one JSON line with ``as_json``);
+    a figure that does not exist (``matched`` of an empty result) is null, ``-`` in the table."""
     found = mot_scores(result, gt, seqinfo)
-    scores, warning = found.as_dict(), few_matched_warning(found.matched, result, gt)
+    scores, warnings = found.as_dict(), [*found.warnings, few_matched_warning(found.matched, result, gt)]
     if as_json:
         print(json.dumps(scores))
+    else:
+        table = Table(title=f"{result.name} against {gt}", show_header=False)
+        for key, value in scores.items():
+            table.add_row(LABELS[key], "-" if value is None else f"{value:.3f}" if isinstance(value, float) else str(value))
+        out.print(table)
+    for warning in warnings:
         warn(warning)
-        return
-    table = Table(title=f"{result.name} against {gt}", show_header=False)
-    for key, value in scores.items():
-        table.add_row(LABELS[key], f"{value:.3f}" if isinstance(value, float) else str(value))
-    out.print(table)
-    warn(warning)

@@ -9,15 +9,19 @@ from service.errors import InputError
 from service.io.formats import check_output
 
 
-def check_writable_output(path: Path, *inputs: Path) -> None:
+def check_writable_output(path: Path, *inputs: Path, labeled: bool = True) -> None:
     """A supported suffix in an existing folder (``check_output``) that takes a file, and
     none of ``inputs``: writing over the take being read would lose it for good.
 
+    ``labeled=False`` for an output that is not labeled trajectories (``model``'s JSON,
+    ``boxes``' result, ``best-view``'s CHOICES.csv): the same checks but the suffix, so a
+    folder as the output is refused before the work, not after it.
+
     Raises:
-        InputError: unsupported suffix, a missing folder, one this user cannot write in, or
-            an input's own path.
+        InputError: unsupported suffix, a folder as the path, a missing folder, one this user
+            cannot write in, or an input's own path.
     """
-    check_output(path)
+    check_output(path, labeled)
     check_not_input(path, *inputs)
     check_writable_folder(path.parent)
 

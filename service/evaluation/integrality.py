@@ -7,6 +7,7 @@ per corpus, per window, the LP objective, whether the LP was integral, and the I
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,8 +40,13 @@ class CorpusFigures:
 def load_corpus(folder: Path) -> dict[str, list[dict]]:
     """``recorded.json`` of a corpus folder: corpus name -> window records.
 
+    Checked here, before any window is solved, because the figures need at least one window
+    per corpus (a median of none was a numpy traceback) and a numeric optimum to compare
+    each cost with (a string or null was a TypeError after the whole corpus was solved).
+
     Raises:
-        InputError: No such file, not JSON, or a window record without ``file`` and ``ilp_optimum``.
+        InputError: No such file, not JSON, no corpus, a corpus without windows, or a window
+            record without a ``file`` name and a finite number as ``ilp_optimum``.
     """
     record = folder / RECORD
     if not record.is_file():
@@ -51,11 +57,25 @@ def load_corpus(folder: Path) -> dict[str, list[dict]]:
         raise InputError(f"{record}: not JSON ({error})") from None
     if not isinstance(corpora, dict) or not all(isinstance(v, list) for v in corpora.values()):
         raise InputError(f"{record}: expected an object of corpus name -> list of window records")
+    if not corpora:
+        raise InputError(f"{record}: lists no corpus; give each corpus name a list of window records")
     for name, records in corpora.items():
+        if not records:
+            raise InputError(f"{record}: {name} lists no window; give it at least one window record")
         for k, entry in enumerate(records):
             if not isinstance(entry, dict) or not {"file", "ilp_optimum"} <= set(entry):
                 raise InputError(f"{record}: {name}[{k}] needs 'file' and 'ilp_optimum'")
+            file, optimum = entry["file"], entry["ilp_optimum"]
+            if not isinstance(file, str):
+                raise InputError(f"{record}: {name}[{k}] 'file' must be a path in the corpus folder, not {json.dumps(file)}")
+            if not _is_number(optimum):
+                raise InputError(f"{record}: {name}[{k}] 'ilp_optimum' must be a finite number, not {json.dumps(optimum)}")
     return corpora
+
+
+def _is_number(value: object) -> bool:
+    """JSON's numbers, not true/false (Python's bools are ints) nor NaN/Infinity (json reads them)."""
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def solve_corpus(folder: Path, name: str, formulation: Formulation,

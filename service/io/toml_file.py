@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from service.errors import InputError
-from service.io.utf8 import utf8_text
+from service.io.utf8 import utf8_file
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
@@ -20,14 +20,7 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         InputError: ``<path>: cannot read (...)``, ``<path>: not UTF-8 text (...)`` or
             ``<path>: not valid TOML (...)``.
     """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    try:
-        text = utf8_text(data)
-    except InputError as error:
-        raise InputError(f"{path}: {error}") from None
+    text = utf8_file(path)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

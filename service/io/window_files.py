@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +28,15 @@ def save_window(path: str | Path, problem: WindowProblem) -> None:
 
 
 def load_window(path: str | Path) -> WindowProblem:
-    """Read a window written by ``save_window``."""
+    """Read a window written by ``save_window``.
+
+    An empty, truncated or damaged file is a user's file, not a bug: numpy lets zipfile's
+    and zlib's errors through, and its EOFError on an empty file reached the CLI's handler
+    for end of input at a prompt, which printed a bare "aborted".
+
+    Raises:
+        InputError: ``<path>: not a markerflow window file (...)``, one line.
+    """
     try:
         with np.load(path) as data:
             resources = sp.csr_matrix(
@@ -37,5 +47,6 @@ def load_window(path: str | Path) -> WindowProblem:
                 n_objects=int(data["n_objects"]), n_frames=int(data["n_frames"]), resources=resources,
                 **{name: data[name] for name in _ARRAYS},
             )
-    except (OSError, KeyError, ValueError) as error:
-        raise InputError(f"{path}: not a markerflow window file ({error})") from None
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile, zlib.error, NotImplementedError) as error:
+        # NotImplementedError: zipfile on a compression method or zip version it cannot read
+        raise InputError(f"{path}: not a markerflow window file ({error or 'the file ends early'})") from None

@@ -99,15 +99,18 @@ def is_copy(path: str | Path, source: SourceFile | None) -> bool:
     return Path(path).suffix.lower() == ".c3d" and source is not None and source.c3d is not None
 
 
-def check_output(path: str | Path) -> None:
-    """Fail early, before long work, if ``path`` cannot take labeled output.
+def check_output(path: str | Path, labeled: bool = True) -> None:
+    """Fail early, before long work, if ``path`` cannot take labeled output; with ``labeled``
+    False, any output file: a command writing a format of its own (a model's JSON, a MOT
+    result, CHOICES.csv) checks its suffix itself, and the rest is the same.
 
     Raises:
         InputError: unsupported suffix, a folder that does not exist, or a folder as the path.
     """
     if Path(path).is_dir():  # first: a folder given with its trailing slash has no suffix either
         raise InputError(f"{path}: is a folder; name the output file")
-    _by_suffix(_WRITERS, path, "write")
+    if labeled:
+        _by_suffix(_WRITERS, path, "write")
     folder = Path(path).parent
     if not folder.is_dir():
         raise InputError(f"{path}: cannot write there, folder {folder} does not exist")
