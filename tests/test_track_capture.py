@@ -47,3 +47,14 @@ def test_track_reports_a_bad_capture_in_one_line(tmp_path):
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
     assert f"detections.{camera}.1." in done.stderr and "is outside the" in done.stderr
     assert not (tmp_path / "out.c3d").exists()
+
+
+def test_a_first_frame_off_every_camera_is_refused_naming_the_file(tmp_path):
+    """Every other error of a capture JSON starts with its file name; this one did not."""
+    document = json.loads(CaptureDocument.of(camera_capture(frames=4, markers=12)).model_dump_json())
+    document["first_frame"] = [[x + 400.0, y, z] for x, y, z in document["first_frame"]]  # 400 mm off
+    source = tmp_path / "capture.json"
+    source.write_text(json.dumps(document))
+    done = run_cli("track", source, "--out", tmp_path / "out.c3d")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert done.stderr.startswith(f"error: {source}: the labeled first frame does not land on frame 0's detections")

@@ -260,7 +260,11 @@ def _read_input(
     except OSError as error:
         raise InputError(f"{input}: cannot read ({error.strerror})") from None
     document = read_capture_document(text, str(input))
-    return _until(document.capture(), end), document.options(), None, []
+    try:  # the checks of the capture itself (frame 0 against the calibration) name the file as the document's do
+        capture = document.capture()
+    except InputError as error:
+        raise InputError(f"{input}: {error}") from None
+    return _until(capture, end), document.options(), None, []
 
 
 def _until(capture: Capture, end: int | None) -> Capture:
