@@ -80,3 +80,16 @@ def test_cli_fits_the_rajagopal_static_trial(tmp_path: Path) -> None:
     assert len(model.segments) == 12 and len(model.joints) == 11
     take = read_labeled(STATIC)
     assert {m for s in model.segments for m in s.markers} <= set(take.names)
+
+
+@pytest.mark.skipif(not STATIC.exists(), reason="needs ../shared/data")
+def test_cli_names_the_template_segments_the_take_does_not_show(tmp_path: Path) -> None:
+    """CMU 85_02 under plug-in-gait (its pelvis markers named otherwise) lost pelvis, thighs,
+    shanks and feet to singles with exit code 0 and no word; its own template loses none."""
+    cmu = STATIC.parents[1] / "c3d_mocaprecovery_cmu_hdm05_numediart" / "85_02.c3d"
+    warned = CliRunner().invoke(app, ["model", str(cmu), "--out", str(tmp_path / "a.json"), "--markerset", "plug-in-gait"])
+    assert warned.exit_code == 0, warned.output
+    assert ("warning: template 'plug-in-gait': 7 of its 13 segments not found in the take (pelvis, l_thigh, r_thigh, "
+            "l_shank, r_shank, l_foot, r_foot)") in warned.output
+    own = CliRunner().invoke(app, ["model", str(STATIC), "--out", str(tmp_path / "b.json"), "--markerset", "rajagopal"])
+    assert own.exit_code == 0 and "segments not found" not in own.output

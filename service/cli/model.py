@@ -53,7 +53,9 @@ def run_model(inputs: list[Path], output: Path, centres: Path | None, markerset:
     names, positions, rate = _pool(takes)
     try:
         if markerset is not None:
-            fit = SubjectFit(fit_template(load_template(markerset), names, positions), Grouping([], [], []), {})
+            template = load_template(markerset)
+            fit = SubjectFit(fit_template(template, names, positions), Grouping([], [], []), {})
+            warn(missing_segments_warning(list(template.segments), [s.name for s in fit.model.segments], template.name))
         else:
             fit = fit_subject(names, positions)
     except FormulationError as error:
@@ -122,6 +124,19 @@ def unseen_warning(names: list[str], positions: np.ndarray) -> str | None:
         return None
     return (f"warning: {len(unseen)} marker{'s' * (len(unseen) > 1)} never seen in the frames learned from, not in "
             f"the model: {', '.join(unseen[:12])}{' ...' if len(unseen) > 12 else ''}")
+
+
+def missing_segments_warning(template: list[str], fitted: list[str], name: str) -> str | None:
+    """A line naming the template's segments the take did not show (fewer than three of their
+    markers, or two with no kept segment to hang from): their markers are singles, joined to
+    nothing. CMU 85_02 under plug-in-gait (its pelvis markers named otherwise) lost pelvis,
+    thighs, shanks and feet without a word."""
+    missing = [segment for segment in template if segment not in fitted]
+    if not missing:
+        return None
+    return (f"warning: template {name!r}: {len(missing)} of its {len(template)} segments not found in the take "
+            f"({', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''}): their markers are singles, joined to "
+            "nothing; does the take use the template's marker names?")
 
 
 def far_joint_warning(far: list[FarJoint]) -> str | None:
