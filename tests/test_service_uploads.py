@@ -70,15 +70,22 @@ def test_a_table_result_keeps_the_uploads_frame_numbers_and_times(client, tmp_pa
 
 def test_a_done_job_says_what_the_cli_warns_of(client, tmp_path):
     """A TRC in mm whose header says m: the job was "done", 100 % windows integral and 0 %
-    doubtful, with 99 % of the labels missing; the CLI warned, the job said nothing."""
+    doubtful, with 99 % of the labels missing; the CLI warned, the job said nothing. Such a
+    take is now refused before labeling (markers 100 m apart), on both paths; a body in cm
+    whose header says mm is labeled, and the job says what the CLI warns of."""
     lines = (DATA / "mocap_opensim" / "gait2354_subject01_walk1.trc").read_text().splitlines()
     header = lines[2].split("\t")
     header[4] = "m"
     (tmp_path / "metres.trc").write_text("\n".join([*lines[:2], "\t".join(header), *lines[3:]]) + "\n")
-    job = _uploaded(client, tmp_path / "metres.trc")
+    with (tmp_path / "metres.trc").open("rb") as upload:
+        refused = client.post("/v1/jobs", files={"file": ("metres.trc", upload)})
+    assert refused.status_code == 422 and "the take's length unit is wrong" in refused.json()["message"], refused.text
+    rows = [row.split("\t") for row in lines[5:]]
+    shrunk = ["\t".join(row[:2] + [f"{float(v) / 10:.6f}" if v.strip() else v for v in row[2:]]) for row in rows]
+    (tmp_path / "cm.trc").write_text("\n".join([*lines[:5], *shrunk]) + "\n")
+    job = _uploaded(client, tmp_path / "cm.trc")
     warnings = client.get(f"/v1/jobs/{job}").json()["warnings"]
     assert any("not look human-sized" in line for line in warnings), warnings
-    assert any("no marker is labeled" in line for line in warnings), warnings
 
 
 def test_start_relabels_a_take_whose_first_frame_lacks_markers(client, tmp_path):
