@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import matplotlib
@@ -19,10 +19,12 @@ PANELS = 4
 
 
 def write_overlay(path: Path, camera: Camera, model: BodyModel, positions: np.ndarray, title: str,
-                  detections: np.ndarray | None = None, image: Callable[[int], np.ndarray] | None = None) -> None:
+                  detections: np.ndarray | None = None, image: Callable[[int], np.ndarray] | None = None,
+                  numbers: Sequence[int] | None = None) -> None:
     """``PANELS`` frames spread over the take: the model's segments ``positions`` ``(F, J, 3)`` as lines
     in ``camera``'s view, over its detections ``(F, 25, 3)`` as dots (confidence > 0) or its frame
-    ``image(f)``."""
+    ``image(f)``; each panel titled by the frame's number in the input's file names (``numbers[f]``, else
+    ``f``), so a take that starts at file 5 or skips a frame shows which file each panel is."""
     frames = np.unique(np.linspace(0, len(positions) - 1, PANELS).round().astype(int))
     figure, axes = plt.subplots(1, len(frames), figsize=(3.2 * len(frames), 5.2), squeeze=False)
     width, height = camera.image_size  # each panel is cropped to the body, 60 px around it
@@ -39,7 +41,8 @@ def write_overlay(path: Path, camera: Camera, model: BodyModel, positions: np.nd
         if image is not None:
             axis.imshow(image(f), cmap="gray")
         low, high = np.maximum(shown.min(axis=0) - 60, 0), np.minimum(shown.max(axis=0) + 60, (width, height))
-        axis.set(xlim=(low[0], high[0]), ylim=(high[1], low[1]), title=f"frame {f}", aspect="equal")
+        number = numbers[f] if numbers is not None else f
+        axis.set(xlim=(low[0], high[0]), ylim=(high[1], low[1]), title=f"frame {number}", aspect="equal")
         axis.set_xticks([])
         axis.set_yticks([])
     over = "keypoints (red)" if detections is not None else "images"
