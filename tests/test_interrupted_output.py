@@ -21,7 +21,7 @@ from test_cli import REPO
 from service.errors import InputError
 from service.io.formats import c3d as c3d_format
 from service.io.formats import csv as csv_format
-from service.io.formats import write_labeled
+from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories
 
 CMU_135 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
@@ -142,4 +142,25 @@ def test_an_interrupted_picture_or_capture_leaves_the_earlier_file_and_no_debris
     with pytest.raises(KeyboardInterrupt):
         writer(out)
     assert out.read_bytes() == b"the earlier, good file" and os.listdir(tmp_path) == [name]
+
+
+def test_a_demo_interrupted_after_its_first_output_names_it_and_leaves_the_others(tmp_path: Path, monkeypatch,
+                                                                                 capsys) -> None:
+    """Ctrl-C while the demo drew its PNG, after its C3D was written: the message said "no output
+    written" of a folder holding the new C3D beside a cut PNG."""
+    from matplotlib.figure import Figure
+
+    from service.cli.entry import main
+
+    names = ("demo_labeled.c3d", "demo_trajectories.png", "demo_capture.json")
+    for name in names:
+        (tmp_path / name).write_text("the earlier, good file")
+    monkeypatch.setattr(Figure, "savefig", _cut_picture)
+    assert main(["-q", "demo", "--out", str(tmp_path), "--frames", "5"]) == 130
+    said = capsys.readouterr().err.strip().splitlines()[-1]
+    assert said == (f"interrupted: stopped before the end, after writing {tmp_path / names[0]} whole; no other output "
+                    "written (an earlier file at their paths is untouched)")
+    assert read_labeled(tmp_path / names[0]).n_frames == 5  # the new C3D, whole
+    assert [(tmp_path / name).read_text() for name in names[1:]] == ["the earlier, good file"] * 2
+    assert sorted(os.listdir(tmp_path)) == sorted(names)
 
