@@ -21,7 +21,7 @@ from test_cli import REPO
 from service.errors import InputError
 from service.io.formats import c3d as c3d_format
 from service.io.formats import csv as csv_format
-from service.io.formats import write_labeled
+from service.io.formats import read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories
 
 CMU_135 = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
@@ -81,3 +81,86 @@ def test_ctrl_c_or_sigterm_mid_take_says_so_and_keeps_the_earlier_output(tmp_pat
     assert run.returncode == code
     assert rest.strip().splitlines()[-1].startswith("interrupted: stopped before the end, no output written")
     assert out.read_text() == "the earlier, good file"
+
+
+def _cut_picture(self: object, fname: object, *args: object, **kwargs: object) -> None:
+    """savefig stopped by a Ctrl-C after part of the PNG: what a signal mid-write leaves."""
+    Path(str(fname)).write_bytes(b"\x89PNG\r\n\x1a\n cut short")
+    raise KeyboardInterrupt
+
+
+def _write_trajectory_plot(path: Path) -> None:
+    from service.evaluation.plot import plot_trajectories
+
+    plot_trajectories(_labels(20), path)
+
+
+def _write_pose_overlay(path: Path) -> None:
+    from pose_scenes import walking
+    from test_pose_cli import CALIBRATION
+
+    from formulations.pose.human import human_model
+    from formulations.pose.kinematics import forward_kinematics
+    from service.io.calibration import load_calibration
+    from service.pose.overlay import write_overlay
+
+    if not CALIBRATION.exists():
+        pytest.skip("Pose2Sim demo calibration not present")
+    model = human_model()
+    positions = forward_kinematics(model, walking(model, 4)).positions
+    write_overlay(path, load_calibration(CALIBRATION)[0], model, positions, "take")
+
+
+def _write_demo_capture(path: Path) -> None:
+    from service.cli.demo import _write_capture
+    from service.evaluation.scenario import Scenario
+    from service.evaluation.scene import generate_scene
+    from service.evaluation.simulate_cloud import simulate_cloud
+
+    _write_capture(path, simulate_cloud(generate_scene(n_frames=5), Scenario()))
+
+
+@pytest.mark.parametrize(("writer", "name"), [(_write_trajectory_plot, "demo_trajectories.png"),
+                                              (_write_pose_overlay, "pose.png"),
+                                              (_write_demo_capture, "demo_capture.json")])
+def test_an_interrupted_picture_or_capture_leaves_the_earlier_file_and_no_debris(tmp_path: Path, monkeypatch,
+                                                                                writer, name: str) -> None:
+    """The demo's PNG and capture JSON and pose's PNG were written straight to their paths: a
+    Ctrl-C mid-write left a cut file where the earlier one was."""
+    from matplotlib.figure import Figure
+
+    out = tmp_path / name
+    out.write_text("the earlier, good file")
+    write_text = Path.write_text
+
+    def cut_text(self: Path, data: str, *args: object, **kwargs: object) -> int:
+        write_text(self, data[:20], *args, **kwargs)  # type: ignore[arg-type]
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(Figure, "savefig", _cut_picture)
+    monkeypatch.setattr(Path, "write_text", cut_text)
+    with pytest.raises(KeyboardInterrupt):
+        writer(out)
+    assert out.read_bytes() == b"the earlier, good file" and os.listdir(tmp_path) == [name]
+
+
+def test_a_demo_interrupted_after_its_first_output_names_it_and_leaves_the_others(tmp_path: Path, monkeypatch,
+                                                                                 capsys) -> None:
+    """Ctrl-C while the demo drew its PNG, after its C3D was written: the message said "no output
+    written" of a folder holding the new C3D beside a cut PNG."""
+    from matplotlib.figure import Figure
+
+    from service.cli.entry import main
+
+    names = ("demo_labeled.c3d", "demo_trajectories.png", "demo_capture.json")
+    for name in names:
+        (tmp_path / name).write_text("the earlier, good file")
+    monkeypatch.setattr(Figure, "savefig", _cut_picture)
+    assert main(["-q", "demo", "--out", str(tmp_path), "--frames", "5"]) == 130
+    said = capsys.readouterr().err.strip().splitlines()[-1]
+    assert said == (f"interrupted: stopped before the end, after writing {tmp_path / names[0]} whole; no other output "
+                    "written (an earlier file at their paths is untouched)")
+    assert read_labeled(tmp_path / names[0]).n_frames == 5  # the new C3D, whole
+    assert [(tmp_path / name).read_text() for name in names[1:]] == ["the earlier, good file"] * 2
+    assert sorted(os.listdir(tmp_path)) == sorted(names)
+

@@ -17,6 +17,7 @@ from service.evaluation.scenario import Scenario
 from service.evaluation.scene import generate_scene
 from service.evaluation.simulated import SimulatedCapture
 from service.io.formats import write_labeled
+from service.io.formats.replace_file import replacing
 from service.labeling.leftover_points import leftover_summary
 
 DEMO_SCENARIO = Scenario(noise_mm=1.0, drop_rate=0.1, drop_burst_frames=10, ghosts_per_frame=2.0)
@@ -60,8 +61,10 @@ def _command() -> str:
 
 
 def _write_capture(path: Path, simulated: SimulatedCapture) -> None:
-    """The demo's input as a capture JSON: what a user would hand ``track`` or the service."""
-    path.write_text(CaptureDocument.of(simulated.capture()).model_dump_json())
+    """The demo's input as a capture JSON: what a user would hand ``track`` or the service.
+    Written whole or not at all, as the other outputs: a Ctrl-C left a cut JSON."""
+    with replacing(path) as temp:
+        temp.write_text(CaptureDocument.of(simulated.capture()).model_dump_json(), encoding="utf-8")
 
 
 def _make_folder(folder: Path) -> None:

@@ -29,10 +29,12 @@ from service.io.calibration import METRES_PER_UNIT, load_calibration
 from service.io.formats import write_labeled
 from service.io.recording import LabeledTrajectories, SourceFile
 from service.pose.images import fit_images, image_folders, read_frame
-from service.pose.openpose import camera_folders, match_cameras, read_keypoint_frames
+from service.pose.openpose import camera_folders, match_cameras, missing_frames_warning, read_keypoint_frames
 from service.pose.overlay import write_overlay
 from service.pose.participant import choose_participant
 from service.pose.run import PoseFit, fit_keypoints
+
+EMPTY_ROWS = 10  # frame_rows: empty TRC rows allowed per fitted frame before the numbering is refused
 
 
 def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | None, particles: int, layers: int,
@@ -57,24 +59,31 @@ def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | No
     if camera_folders(input):
         frames = read_keypoint_frames(input)
         cameras = match_cameras(frames.cameras, load_calibration(calibration), calibration)
+        numbers = frames.numbers
+        rows = frame_rows(numbers, input)
+        report.warn(missing_frames_warning(frames))
+        report.warn(empty_rows_warning(numbers, rows))
         detections = choose_participant(Rig.of(cameras), frames.people)
         with frame_progress(f"fitting {input.name}") as progress:
             fit = fit_keypoints(cameras, detections, metres, model, schedule, seed, progress, refine)
         if model is not None:
             report.warn(unused_keypoints_warning(model, detections))
         best = int(np.argmax((detections[..., 2] > 0).sum(axis=(0, 2))))
-        write_overlay(picture, cameras[best], fit.model, fit.positions, input.name, detections=detections[:, best])
+        write_overlay(picture, cameras[best], fit.model, fit.positions, input.name, detections=detections[:, best],
+                      numbers=numbers)
     else:
         folders = image_folders(input)
         if not folders:
             raise InputError(f"{input}: neither per-camera OpenPose folders (camNN_json) nor per-camera image folders")
         cameras = match_cameras(list(folders), load_calibration(calibration), calibration)
         files = list(folders.values())
+        numbers = list(range(len(files[0])))
+        rows = frame_rows(numbers, input)
         with frame_progress(f"fitting {input.name}") as progress:
             fit = fit_images(cameras, files, model or human_model().scaled(1.0 / metres), metres, schedule, seed, progress)
         write_overlay(picture, cameras[0], fit.model, fit.positions, input.name,
                       image=lambda f: read_frame(files[0][f], cameras[0]))
-    write_labeled(output, _trajectories(fit, metres, rate), SourceFile(unit=unit))
+    write_labeled(output, _trajectories(fit, metres, rate, numbers, rows), _numbering(unit, rows, rate))
     _print(fit, output, picture)
 
 
@@ -120,14 +129,57 @@ def _subject_body(path: Path, metres_per_unit: float) -> BodyModel:
         raise InputError(f"{path}: {error}") from None
 
 
-def _trajectories(fit: PoseFit, metres_per_unit: float, rate: float) -> LabeledTrajectories:
+def _trajectories(fit: PoseFit, metres_per_unit: float, rate: float, numbers: list[int],
+                  rows: np.ndarray) -> LabeledTrajectories:
     """The joints that are points of their own (not a second set of DOF at an earlier joint's place, as the
-    spine at the pelvis or a clavicle at the neck), in mm."""
+    spine at the pelvis or a clavicle at the neck), in mm, one row per ``rows`` number: the fitted frames
+    ``numbers`` in theirs, empty cells in the others. The rows step ``rate / step`` per second."""
     rest = forward_kinematics(fit.model, np.zeros((1, fit.model.dof))).positions[0]
     kept = [i for i in range(len(rest)) if not any(np.allclose(rest[i], rest[j]) for j in range(i))]
-    positions = fit.positions[:, kept] * metres_per_unit * 1000.0
-    occluded = np.zeros(positions.shape[:2], dtype=bool)
-    return LabeledTrajectories([fit.names[i] for i in kept], positions, occluded, rate)
+    positions = np.full((len(rows), len(kept), 3), np.nan)
+    fitted = np.searchsorted(rows, numbers)
+    positions[fitted] = fit.positions[:, kept] * metres_per_unit * 1000.0
+    occluded = np.isnan(positions).any(axis=2)
+    step = int(rows[1] - rows[0]) if len(rows) > 1 else 1
+    return LabeledTrajectories([fit.names[i] for i in kept], positions, occluded, rate / step)
+
+
+def frame_rows(numbers: list[int], input: Path) -> np.ndarray:
+    """The TRC's rows: every frame number from the input's first to its last, in the step all its numbers
+    share (a take OpenPose ran on every other frame keeps its step). A row per number, not per file: a
+    TRC's rows are evenly spaced in time (markerflow's reader refuses a jump, ``check_rows``), so a frame
+    no camera has a file for is a row of empty cells, as in any take.
+
+    Raises:
+        InputError: mostly empty rows (more than ``EMPTY_ROWS`` per fitted frame): a file of another
+            take or numbered otherwise, which would have filled the table with empty rows.
+    """
+    step = int(np.gcd.reduce(np.diff(numbers))) if len(numbers) > 1 else 1
+    count = (numbers[-1] - numbers[0]) // step + 1
+    if count - len(numbers) > EMPTY_ROWS * len(numbers):
+        jump = int(np.argmax(np.diff(numbers)))
+        raise InputError(f"{input}: no camera has a file between frames {numbers[jump]} and {numbers[jump + 1]}, "
+                         f"so the TRC would be {count - len(numbers)} empty rows for {len(numbers)} frames: is a "
+                         "file from another take or numbered otherwise? Move it out, or fit the parts apart")
+    return np.arange(numbers[0], numbers[-1] + 1, step)
+
+
+def empty_rows_warning(numbers: list[int], rows: np.ndarray) -> str | None:
+    """A line naming the frames no camera has a file for, written as rows of empty cells."""
+    empty = np.setdiff1d(rows, numbers)
+    if not len(empty):
+        return None
+    listed = ", ".join(map(str, empty[:8].tolist())) + (" ..." if len(empty) > 8 else "")
+    return (f"warning: no camera has a file for {report.counted(len(empty), 'frame')} between {numbers[0]} and "
+            f"{numbers[-1]} ({listed}): written as rows of empty cells")
+
+
+def _numbering(unit: str, rows: np.ndarray, rate: float) -> SourceFile:
+    """The TRC's ``Frame#`` and ``Time`` of the input's frame numbers: ``Frame#`` is the number + 1, as a TRC
+    counts from 1 (Pose2Sim's TRC of ``cam01.0000.json`` … numbers its rows from 1 too), and ``Time`` the
+    number / rate, so a take whose files start at 5 starts at 5 / rate."""
+    frame = rows.astype(float)
+    return SourceFile.of_table(unit, frame + 1, frame / rate)
 
 
 def _print(fit: PoseFit, output: Path, picture: Path) -> None:

@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.typing import ColorType
 
+from service.io.formats.replace_file import replacing
 from service.io.recording import LabeledTrajectories, Recording
 from service.io.runs import runs
 
@@ -45,6 +46,8 @@ def plot_trajectories(
 
     Raises:
         ValueError: If a requested marker is not in ``traj`` or nothing would be drawn.
+        InputError: The PNG cannot be written (an earlier file there is left as it was: it is
+            written beside it and renamed onto it whole, so a Ctrl-C cannot leave it cut).
     """
     columns = _choose_columns(traj, markers, max_markers)
     fig = Figure(figsize=(11.0, 8.5), layout="constrained")
@@ -65,7 +68,8 @@ def plot_trajectories(
     fig.suptitle(_title(traj))
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, format="png", dpi=100)
+    with replacing(out, ".png") as temp:
+        fig.savefig(temp, format="png", dpi=100)
     return out
 
 

@@ -2,7 +2,10 @@
 
 Each file is ``{"people": [{"pose_keypoints_2d": [x0, y0, c0, x1, ...]}, ...]}`` with 25 BODY_25B
 keypoints; confidence 0 means not detected. INPUT is the folder holding the camera folders, or a
-trial folder whose ``pose*`` subfolder does.
+trial folder whose ``pose*`` subfolder does. A file's frame is the last number in its name
+(``cam01.0005.json``, OpenPose's ``..._000000000005_keypoints.json``): cameras are joined on it,
+not on the files' order, which put a camera that started or dropped a frame later out of step
+with the others without a word.
 """
 
 from __future__ import annotations
@@ -24,10 +27,15 @@ MAX_PIXEL = 1e9  # as a capture's coordinates (``service.capture.checks``): larg
 
 @dataclass(frozen=True)
 class KeypointFrames:
-    """Per camera (folder name) and frame, the ``(P, 25, 3)`` keypoints of the P people detected."""
+    """Per camera (folder name) and frame, the ``(P, 25, 3)`` keypoints of the P people detected
+    (none where the camera has no file for the frame), and each frame's number in the file names
+    (increasing; numbers no camera has are left out, not filled in), and per camera the numbers it
+    has no file for."""
 
     cameras: list[str]
     people: list[list[np.ndarray]]
+    numbers: list[int]
+    absent: list[list[int]]
 
     @property
     def frames(self) -> int:
@@ -86,16 +94,52 @@ def write_openpose_file(path: Path, people: np.ndarray) -> None:
 
 
 def read_keypoint_frames(input: Path) -> KeypointFrames:
-    """Every camera folder's frames; the cameras must have as many frames each."""
+    """Every camera folder's frames, joined on the frame number in the file names: the frames are
+    every number any camera has, and a camera without a file for one sees no one in it."""
     folders = camera_folders(input)
     if not folders:
         raise InputError(f"{input}: no per-camera OpenPose folders (camNN_json) found")
-    people = [[read_openpose_file(path) for path in sorted(folder.glob("*.json"))] for folder in folders]
-    counts = {folder.name: len(frames) for folder, frames in zip(folders, people)}
-    if len(set(counts.values())) != 1 or not min(counts.values()):
-        listed = ", ".join(f"{name} {count}" for name, count in counts.items())
-        raise InputError(f"{input}: the cameras have different (or zero) frame counts: {listed}")
-    return KeypointFrames([folder.name for folder in folders], people)
+    numbered = [numbered_files(folder) for folder in folders]
+    numbers = sorted(set().union(*numbered))
+    none = np.empty((0, len(BODY_25B), 3))  # as a file with no one in it
+    people = [[read_openpose_file(files[n]) if n in files else none for n in numbers] for files in numbered]
+    absent = [[n for n in numbers if n not in files] for files in numbered]
+    return KeypointFrames([folder.name for folder in folders], people, numbers, absent)
+
+
+def numbered_files(folder: Path) -> dict[int, Path]:
+    """A camera folder's JSON files by frame number, the last run of digits in the name.
+
+    Raises:
+        InputError: no JSON file, a file whose name has no number, or two files of one number
+            (their order would have to be guessed).
+    """
+    files: dict[int, Path] = {}
+    for path in sorted(folder.glob("*.json")):
+        number = _number(path.stem)
+        if number is None:
+            raise InputError(f"{path}: no frame number in the file name (OpenPose numbers them: "
+                             f"cam01.0005.json, or ..._000000000005_keypoints.json)")
+        if number in files:
+            raise InputError(f"{folder}: {files[number].name} and {path.name} are both frame {number}")
+        files[number] = path
+    if not files:
+        raise InputError(f"{folder}: no OpenPose .json file")
+    return files
+
+
+def missing_frames_warning(frames: KeypointFrames) -> str | None:
+    """A line naming the cameras without a file for some of the frames: they are fitted without
+    that camera there, which reads differently from a camera that saw no one."""
+    lacking = []
+    for camera, absent in zip(frames.cameras, frames.absent):
+        if absent:
+            listed = ", ".join(map(str, absent[:8])) + (" ..." if len(absent) > 8 else "")
+            lacking.append(f"{camera} has no file for {len(absent)} ({listed})")
+    if not lacking:
+        return None
+    return (f"warning: of the {len(frames.numbers)} frames numbered in the file names, {'; '.join(lacking)}: "
+            "fitted without that camera there")
 
 
 def _number(name: str) -> int | None:

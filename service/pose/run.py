@@ -58,7 +58,13 @@ class PoseFit:
 def fit_keypoints(cameras: list[Camera], detections: np.ndarray, metres_per_unit: float, model: BodyModel | None,
                   schedule: AnnealingSchedule, seed: int = 0, progress: Progress | None = None,
                   refine: bool = True) -> PoseFit:
-    """Track the participant's ``(F, C, 25, 3)`` keypoints (``participant.choose_participant``)."""
+    """Track the participant's ``(F, C, 25, 3)`` keypoints (``participant.choose_participant``).
+
+    The F frames are searched one after another however far apart their numbers are: a gap in the
+    input's numbering (a frame no camera has a file for) is crossed as a frame nobody was seen in
+    is, by searching from the last estimate, since the default search has no motion model to
+    stretch over it (``PoseTracker(damping=...)`` would need the gap's length, a change to the
+    tracker). The caller keeps the frames' numbers for the output."""
     rig = Rig.of(cameras)
     points = np.stack([triangulate(rig, frame) for frame in detections])  # (F, 25, 3)
     named = {name: points[:, k] for k, name in enumerate(BODY_25B)}
