@@ -58,8 +58,15 @@ def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | 
     units = list(c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])) or [""]
     positions = to_millimetres(points.transpose(2, 1, 0), units[0], path)
     require_samples(names, positions, path)
-    source = SourceFile(units[0].strip().lower(), int(c3d["header"]["points"]["first_frame"]), c3d)
+    source = SourceFile(units[0].strip().lower(), int(c3d["header"]["points"]["first_frame"]), _detached(c3d))
     return Recording(names, zero_gaps_to_nan(positions), rate, source)
+
+
+def _detached(c3d: ezc3d.c3d) -> ezc3d.c3d:
+    """``c3d`` without the C++ file it was read into (ezc3d's objects per point and frame: 65 of
+    the 86 MB a 10,000-frame, 41-point file takes), which nothing reads: ezc3d's ``write``
+    builds from the arrays and parameters, and ``write_c3d`` has always written such a copy."""
+    return copy.deepcopy(c3d)
 
 
 def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | None = None, start: int = 0) -> None:
