@@ -82,3 +82,37 @@ def test_past_255_channels_the_inputs_own_analog_channels_keep_their_parameters(
     assert written["LABELS2"]["value"][-1] == f"M{markers - 1}_confidence"
     np.testing.assert_allclose(out["data"]["analogs"][0, :emg], samples[0], atol=1e-4)
     np.testing.assert_allclose(out["data"]["analogs"][0, emg:], 0.7, atol=1e-6)
+
+
+def test_a_c3d_output_shares_the_inputs_analog_samples_and_leaves_the_input_as_read(tmp_path: Path) -> None:
+    """The copy written into shares the input's analog array (``c3d_copy.writable``: it is most
+    of a file with EMG or force plates) and changes nothing of the input: written twice, the
+    same file, and the input's points, residuals, analogs and labels as read."""
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = np.array([100.0])
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = ["A", "B", "C"]
+    c3d["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    points = np.ones((4, 3, 8))
+    points[:3] = np.random.default_rng(1).normal(0.0, 500.0, (3, 3, 8))
+    c3d["data"]["points"] = points
+    c3d["parameters"]["ANALOG"]["LABELS"]["value"] = ["EMG"]
+    c3d["parameters"]["ANALOG"]["RATE"]["value"] = np.array([1000.0])
+    c3d["data"]["analogs"] = np.arange(80, dtype=float).reshape((1, 1, 80))
+    c3d.write(str(tmp_path / "in.c3d"))
+    rec = read_labeled(tmp_path / "in.c3d")
+    source = rec.source.c3d
+    before = {key: np.copy(source["data"][key]) for key in ("points", "analogs")}
+    residuals = np.copy(source["data"]["meta_points"]["residuals"])
+    labels = list(source["parameters"]["POINT"]["LABELS"]["value"])
+    occluded = np.zeros((8, 3), bool)
+    occluded[2:4, 1] = True
+    traj = LabeledTrajectories(rec.names, rec.positions, occluded, rec.rate, confidence=np.full((8, 3), 0.9),
+                               unlabeled=np.where(occluded[..., None], rec.positions, np.nan))
+    write_labeled(tmp_path / "one.c3d", traj, rec.source)
+    write_labeled(tmp_path / "two.c3d", traj, rec.source)
+    assert (tmp_path / "one.c3d").read_bytes() == (tmp_path / "two.c3d").read_bytes()
+    for key, value in before.items():
+        np.testing.assert_array_equal(source["data"][key], value)
+    np.testing.assert_array_equal(source["data"]["meta_points"]["residuals"], residuals)
+    assert list(source["parameters"]["POINT"]["LABELS"]["value"]) == labels
+    np.testing.assert_allclose(ezc3d.c3d(str(tmp_path / "one.c3d"))["data"]["analogs"][0, 0], np.arange(80), atol=1e-4)

@@ -7,7 +7,6 @@ other parameter group, the frame numbering, the point rate and the length unit a
 
 from __future__ import annotations
 
-import copy
 import re
 from pathlib import Path
 
@@ -16,6 +15,7 @@ import numpy as np
 
 from service.errors import InputError
 from service.io.formats.c3d_analog import ChannelParameters, fix_channels, joined_values, with_confidence
+from service.io.formats.c3d_copy import detached, writable
 from service.io.formats.c3d_layout import PREFIX_BYTES, c3d_layout, match_header_scale
 from service.io.formats.c3d_parameters import append_entries, check_frame_numbers, float_scale
 from service.io.formats.c3d_quality import SAME_SAMPLE, SampleQuality
@@ -58,7 +58,7 @@ def read_c3d(path: str | Path, max_points: int | None = None, max_frames: int | 
     units = list(c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])) or [""]
     positions = to_millimetres(points.transpose(2, 1, 0), units[0], path)
     require_samples(names, positions, path)
-    source = SourceFile(units[0].strip().lower(), int(c3d["header"]["points"]["first_frame"]), c3d)
+    source = SourceFile(units[0].strip().lower(), int(c3d["header"]["points"]["first_frame"]), detached(c3d))
     return Recording(names, zero_gaps_to_nan(positions), rate, source)
 
 
@@ -82,7 +82,7 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
     at = 0 if source.c3d is None else start
     # a copy: ezc3d's write extends the LABELS list it is given
     try:
-        c3d = _new_c3d(traj, source, start) if source.c3d is None else copy.deepcopy(source.c3d)
+        c3d = _new_c3d(traj, source, start) if source.c3d is None else writable(source.c3d)
     except InputError as error:
         raise InputError(f"{path}: {error}") from None
     quality = SampleQuality.of(c3d["data"]["points"], c3d["data"]["meta_points"])  # before labels replace points

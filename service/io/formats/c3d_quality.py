@@ -16,7 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 SAME_SAMPLE = 1e-6  # in the file's unit: one input sample written back through mm (round off ~1e-12)
-CHUNK_SAMPLES = 2_000_000  # (labels, points, frames) distances matched at a time: ~50 MB however many points
+# (labels, points, frames) distances matched at a time. The (3, labels, points, frames)
+# differences and the norm's temporaries take ~50 bytes per distance: 2,000,000 made a C3D
+# output's peak (555 MB at 135_02 tiled to 10,000 frames, 125 MB of it here); 250,000 is ~12 MB.
+CHUNK_SAMPLES = 250_000
 
 
 @dataclass(frozen=True)
