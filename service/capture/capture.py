@@ -135,8 +135,8 @@ class Capture:
             raise InputError(f"camera mode needs at least 2 calibrated cameras (Camera), got {len(cameras)}")
         names = [camera.name for camera in cameras]
         if len(set(names)) < len(names):  # outputs name the best view by camera name
-            twice = sorted({name for name in names if names.count(name) > 1})
-            raise InputError(f"camera names must be unique (outputs name views by them): {', '.join(map(repr, twice))} "
+            named_twice = sorted({name for name in names if names.count(name) > 1})
+            raise InputError(f"camera names must be unique (outputs name views by them): {', '.join(map(repr, named_twice))} "
                              "given more than once")
         self.detections = checked_detections(self.detections, len(cameras))
         for c, camera in enumerate(cameras):
