@@ -135,15 +135,20 @@ def test_the_pages_fit_a_400_px_window(done_job):
         page.set_viewport_size({"width": 1280, "height": 800})
 
 
+def _slow_job(page, base_url: str) -> str:
+    """Bob's job that runs for a while (the ILP without its LP shortcut on 200-frame windows)."""
+    slow = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=200)
+    body = document_json(generated_capture(frames=402, seed=3, ghosts_per_frame=15.0), slow)
+    answer = page.request.post(f"{base_url}/v1/jobs", data=body,
+                               headers={"Authorization": f"Bearer {BOB}", "Content-Type": "application/json"})
+    return str(answer.json()["id"])
+
+
 def test_a_running_job_page_says_when_its_stream_is_lost(browser, base_url):
     """With the server down the page kept saying "running" with no sign the stream was gone."""
-    slow = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=200)
     context, page = _signed_in(browser, base_url, BOB)
     try:
-        body = document_json(generated_capture(frames=402, seed=3, ghosts_per_frame=15.0), slow)
-        answer = page.request.post(f"{base_url}/v1/jobs", data=body,
-                                   headers={"Authorization": f"Bearer {BOB}", "Content-Type": "application/json"})
-        job_id = answer.json()["id"]
+        job_id = _slow_job(page, base_url)
         page.route("**/events", lambda route: route.abort())  # the server gone: the stream cannot connect
         page.goto(f"{base_url}/jobs/{job_id}")
         page.wait_for_function("document.getElementById('progress-text').textContent.includes('connection')")
@@ -156,13 +161,9 @@ def test_a_running_job_page_says_when_its_stream_is_lost(browser, base_url):
 def test_a_job_page_whose_stream_is_refused_says_so_and_reloads(browser, base_url):
     """Refused with 429 (the token's streams all open elsewhere), the stream was closed for good
     and the page said "running" while the job finished."""
-    slow = LabelingOptions(formulation={"name": "ilp", "lp_first": False}, window=200)
     context, page = _signed_in(browser, base_url, BOB)
     try:
-        body = document_json(generated_capture(frames=402, seed=3, ghosts_per_frame=15.0), slow)
-        answer = page.request.post(f"{base_url}/v1/jobs", data=body,
-                                   headers={"Authorization": f"Bearer {BOB}", "Content-Type": "application/json"})
-        job_id = answer.json()["id"]
+        job_id = _slow_job(page, base_url)
         page.route("**/events", lambda route: route.fulfill(status=429, body='{"message": "20 event streams are open"}'))
         page.goto(f"{base_url}/jobs/{job_id}")
         page.wait_for_function("document.getElementById('progress-text').textContent.includes('refused')")
