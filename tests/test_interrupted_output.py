@@ -164,3 +164,33 @@ def test_a_demo_interrupted_after_its_first_output_names_it_and_leaves_the_other
     assert [(tmp_path / name).read_text() for name in names[1:]] == ["the earlier, good file"] * 2
     assert sorted(os.listdir(tmp_path)) == sorted(names)
 
+
+
+def test_an_interrupted_mot_result_or_choices_file_leaves_the_earlier_one(tmp_path: Path, monkeypatch) -> None:
+    """``boxes`` and ``best-view`` wrote straight over their output: a Ctrl-C mid-write left a
+    cut file while the message said the earlier one was untouched."""
+    from service.best_view.tables import ObjectCosts, write_choices
+    from service.boxes.detections import BoxTracks
+    from service.boxes.mot_files import write_tracks
+
+    tracks = BoxTracks(frame=np.array([1, 2]), track_id=np.array([1, 1]), box=np.ones((2, 4)),
+                       confidence=np.ones(2), n_frames=2, occluded=np.zeros(2, bool))
+    objects = [ObjectCosts("a", np.array([1, 2]), np.zeros((2, 2)))]
+    writes = {"result.txt": lambda out: write_tracks(out, tracks),
+              "choices.csv": lambda out: write_choices(out, ["c1", "c2"], objects, [np.array([0, 1])])}
+    real_write = Path.write_text
+
+    def cut(self: Path, text: str, *args: object, **kwargs: object) -> None:
+        real_write(self, text[: len(text) // 2])
+        raise KeyboardInterrupt
+
+    for name, write in writes.items():
+        out = tmp_path / name
+        out.write_text("the earlier, good file")
+        with monkeypatch.context() as patched:
+            patched.setattr(Path, "write_text", cut)
+            patched.setattr("csv.writer", lambda f: (_ for _ in ()).throw(KeyboardInterrupt()))
+            with pytest.raises(KeyboardInterrupt):
+                write(out)
+        assert out.read_text() == "the earlier, good file", name
+    assert sorted(os.listdir(tmp_path)) == ["choices.csv", "result.txt"]

@@ -19,6 +19,7 @@ import numpy as np
 
 from formulations.best_view.selection import MAX_COST
 from service.errors import InputError
+from service.io.formats.replace_file import replacing
 
 COSTS_HEADER = ["frame", "object", "camera", "cost"]
 CHOICES_HEADER = ["frame", "object", "camera"]
@@ -81,13 +82,10 @@ def write_choices(path: Path, cameras: list[str], objects: list[ObjectCosts], ch
     rows = [(int(frame), i, cameras[camera]) for i, (obj, views) in enumerate(zip(objects, chosen))
             for frame, camera in zip(obj.frames, views)]
     rows.sort(key=lambda row: (row[0], row[1]))
-    try:
-        with path.open("w", newline="", encoding="utf-8") as f:
-            writer = csv.writer(f)
-            writer.writerow(CHOICES_HEADER)
-            writer.writerows((frame, objects[i].name, camera) for frame, i, camera in rows)
-    except OSError as error:
-        raise InputError(f"{path}: cannot write ({error.strerror})") from None
+    with replacing(path) as temp, temp.open("w", newline="", encoding="utf-8") as f:  # whole or not at all
+        writer = csv.writer(f)
+        writer.writerow(CHOICES_HEADER)
+        writer.writerows((frame, objects[i].name, camera) for frame, i, camera in rows)
 
 
 def _rows(path: Path) -> list[tuple[int, list[str]]]:

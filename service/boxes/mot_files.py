@@ -21,6 +21,7 @@ import numpy as np
 
 from service.boxes.detections import BoxDetections, BoxTracks
 from service.errors import InputError
+from service.io.formats.replace_file import replacing
 from service.io.utf8 import utf8_file
 
 MIN_COLUMNS, MAX_COLUMNS = 7, 10
@@ -157,10 +158,8 @@ def write_tracks(path: Path, tracks: BoxTracks) -> None:
         f"{f},{i},{b[0]:.10g},{b[1]:.10g},{b[2]:.10g},{b[3]:.10g},{c:.10g},-1,-1,-1"
         for f, i, b, c in zip(tracks.frame[order], tracks.track_id[order], tracks.box[order], tracks.confidence[order])
     ]
-    try:
-        path.write_text("".join(line + "\n" for line in lines))
-    except OSError as error:
-        raise InputError(f"{path}: cannot write ({error.strerror})") from None
+    with replacing(path) as temp:  # a Ctrl-C or a full disk leaves an earlier result whole, not cut
+        temp.write_text("".join(line + "\n" for line in lines))
 
 
 def read_seqinfo(path: Path) -> SequenceInfo:
