@@ -47,3 +47,29 @@ def test_both_participants_are_found_in_nearly_every_camera_frame_and_never_shar
     quality = views.quality()
     dp, greedy = views.choose(1.0, 30), np.argmax(quality, axis=2)
     assert np.count_nonzero(np.diff(dp, axis=0)) <= np.count_nonzero(np.diff(greedy, axis=0))
+
+
+def test_frames_follow_the_numbers_in_the_file_names_not_their_sorted_order(tmp_path):
+    """Sorted names put cam.10.json before cam.9.json: frames out of order without a word."""
+    for number in (8, 9, 10):
+        (tmp_path / f"cam.{number}.json").write_text(
+            json.dumps({"people": [{"pose_keypoints_2d": [float(number), 0.0, 1.0]}]}))
+    numbers, frames = read_openpose_folder(tmp_path)
+    assert numbers == [8, 9, 10] and [f[0][0, 0] for f in frames] == [8.0, 9.0, 10.0]
+
+
+@needs_data
+def test_cameras_whose_files_are_numbered_differently_are_refused(tmp_path):
+    """Paired by position, a camera starting five frames later was boxed out of step."""
+    cameras = load_pose2sim_toml(DEMO / "calibration" / "Calib_qualisys.toml", units="mm")
+    folders = sorted((TRIAL / "pose_openpose_body25b").glob("cam*_json"))
+    copies = []
+    for k, folder in enumerate(folders):
+        copy = tmp_path / folder.name
+        copy.mkdir()
+        for path in sorted(folder.glob("*.json"))[5 * (k == 1):][:10]:
+            (copy / path.name).write_bytes(path.read_bytes())
+        copies.append(copy)
+    people = {"P1": np.zeros((10, 3, 3))}
+    with pytest.raises(InputError, match=r"the cameras' OpenPose files are numbered differently \(cam01_json 0-9"):
+        people_views(copies, cameras, people)

@@ -60,11 +60,17 @@ def people_views(keypoint_folders: list[Path], cameras: list[Camera], participan
         participants: Name -> ``(F, J, 3)`` world keypoints, NaN where unknown.
 
     Raises:
-        InputError: folders and cameras that do not pair, or cameras whose frame counts differ.
+        InputError: folders and cameras that do not pair, cameras whose files are numbered
+            differently, or frame counts that differ.
     """
     if len(keypoint_folders) != len(cameras):
         raise InputError(f"{len(keypoint_folders)} keypoint folders for {len(cameras)} cameras")
-    frames = [read_openpose_folder(folder) for folder in keypoint_folders]
+    read = [read_openpose_folder(folder) for folder in keypoint_folders]
+    numbers = [numbered for numbered, _ in read]
+    if any(n != numbers[0] for n in numbers):  # paired by position, the cameras would be out of step
+        shown = ", ".join(f"{folder.name} {n[0]}-{n[-1]} ({len(n)} files)" for folder, n in zip(keypoint_folders, numbers))
+        raise InputError(f"the cameras' OpenPose files are numbered differently ({shown}): give each camera the same frames")
+    frames = [people for _, people in read]
     counts = {len(f) for f in frames} | {len(points) for points in participants.values()}
     if len(counts) != 1:
         raise InputError(f"cameras and participants cover different frame counts: {sorted(counts)}")
