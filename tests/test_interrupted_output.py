@@ -194,3 +194,20 @@ def test_an_interrupted_mot_result_or_choices_file_leaves_the_earlier_one(tmp_pa
                 write(out)
         assert out.read_text() == "the earlier, good file", name
     assert sorted(os.listdir(tmp_path)) == ["choices.csv", "result.txt"]
+
+
+def test_ctrl_c_while_the_command_line_is_imported_is_one_line(monkeypatch, capsys) -> None:
+    """The first second of a run imports numpy, scipy and the rest: a Ctrl-C there printed a traceback."""
+    import types
+
+    from service.cli import launch
+
+    class Importing(types.ModuleType):
+        def __getattr__(self, name: str) -> object:
+            raise KeyboardInterrupt
+
+    monkeypatch.setitem(sys.modules, "service.cli.entry", Importing("service.cli.entry"))
+    with pytest.raises(SystemExit) as stopped:
+        launch.run()
+    assert stopped.value.code == 130
+    assert capsys.readouterr().err == "interrupted: stopped before the end, no output written\n"

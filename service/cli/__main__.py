@@ -1,5 +1,5 @@
 """``python -m service.cli``: the same command line as ``markerflow``."""
 
-from service.cli.entry import run
+from service.cli.launch import run
 
 run()
