@@ -201,3 +201,20 @@ def test_joints_off_the_bodys_tree_are_named(tmp_path) -> None:
     data["joints"].append({**data["joints"][0], "name": "LAnkle", "segments": ["far0", "far1"]})
     result = _pose_with(tmp_path, data)
     assert "1 joint on segments not joined to the rest of the body, not fitted or written: LAnkle" in result.stderr
+
+
+def test_image_folders_are_ordered_and_paired_by_the_numbers_in_their_names(tmp_path) -> None:
+    """Sorted names put f10.png before f9.png, and cameras were paired by position."""
+    from service.errors import InputError
+    from service.pose.images import image_folders
+
+    for camera, numbers in (("cam1", (8, 9, 10)), ("cam2", (8, 9, 10))):
+        (tmp_path / camera).mkdir()
+        for n in numbers:
+            cv2.imwrite(str(tmp_path / camera / f"f{n}.png"), np.zeros((4, 4), np.uint8))
+    folders = image_folders(tmp_path)
+    assert {name: [f.name for f in files] for name, files in folders.items()} == {
+        "cam1": ["f8.png", "f9.png", "f10.png"], "cam2": ["f8.png", "f9.png", "f10.png"]}
+    (tmp_path / "cam2" / "f8.png").rename(tmp_path / "cam2" / "f11.png")
+    with pytest.raises(InputError, match=r"the cameras' images are numbered differently: cam1 8-10 \(3\), cam2 9-11 \(3\)"):
+        image_folders(tmp_path)

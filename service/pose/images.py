@@ -28,6 +28,7 @@ from formulations.pose.kinematics import forward_kinematics
 from formulations.pose.silhouette import SilhouetteMeasurement
 from formulations.pose.tracker import PoseTracker, dispersion
 from service.errors import InputError
+from service.pose.openpose import numbered_paths
 from service.pose.run import FIRST_FRAME_LAYERS, STEP_METRES, PoseFit, Progress
 
 SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp"}
@@ -36,18 +37,23 @@ BACKGROUND_FRAMES = 25
 HEADINGS = 4
 
 
-def _images(folder: Path) -> list[Path]:
-    return sorted(f for f in folder.iterdir() if f.suffix.lower() in SUFFIXES and f.stem != BACKGROUND)
+def _images(folder: Path) -> dict[int, Path]:
+    """The folder's frames by the number in their names (``numbered_paths``): sorted names put
+    ``f10.png`` before ``f9.png``."""
+    return numbered_paths(sorted(f for f in folder.iterdir() if f.suffix.lower() in SUFFIXES and f.stem != BACKGROUND),
+                          folder)
 
 
 def image_folders(input: Path) -> dict[str, list[Path]]:
-    """Each subfolder of ``input`` that holds images, with its frames sorted; equal counts required."""
+    """Each subfolder of ``input`` that holds images, with its frames in the order of their
+    numbers; every camera must number the same frames (paired by position, a camera starting
+    later would be fitted out of step)."""
     folders = {p.name: _images(p) for p in sorted(input.iterdir()) if p.is_dir()} if input.is_dir() else {}
     folders = {name: files for name, files in folders.items() if files}
-    if len({len(files) for files in folders.values()}) > 1:
-        listed = ", ".join(f"{name} {len(files)}" for name, files in folders.items())
-        raise InputError(f"{input}: the cameras have different frame counts: {listed}")
-    return folders
+    if len({tuple(sorted(files)) for files in folders.values()}) > 1:
+        listed = ", ".join(f"{name} {min(files)}-{max(files)} ({len(files)})" for name, files in folders.items())
+        raise InputError(f"{input}: the cameras' images are numbered differently: {listed}")
+    return {name: [files[n] for n in sorted(files)] for name, files in folders.items()}
 
 
 def read_frame(path: Path, camera: Camera) -> np.ndarray:

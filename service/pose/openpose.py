@@ -114,8 +114,20 @@ def numbered_files(folder: Path) -> dict[int, Path]:
         InputError: no JSON file, a file whose name has no number, or two files of one number
             (their order would have to be guessed).
     """
+    files = numbered_paths(sorted(folder.glob("*.json")), folder)
+    if not files:
+        raise InputError(f"{folder}: no OpenPose .json file")
+    return files
+
+
+def numbered_paths(paths: list[Path], folder: Path) -> dict[int, Path]:
+    """``paths`` (one camera's frames, in ``folder``) by the frame number in their names.
+
+    Raises:
+        InputError: a name without a number, or two of one number.
+    """
     files: dict[int, Path] = {}
-    for path in sorted(folder.glob("*.json")):
+    for path in paths:
         number = _number(path.stem)
         if number is None:
             raise InputError(f"{path}: no frame number in the file name (OpenPose numbers them: "
@@ -123,8 +135,6 @@ def numbered_files(folder: Path) -> dict[int, Path]:
         if number in files:
             raise InputError(f"{folder}: {files[number].name} and {path.name} are both frame {number}")
         files[number] = path
-    if not files:
-        raise InputError(f"{folder}: no OpenPose .json file")
     return files
 
 
