@@ -211,3 +211,15 @@ def test_ctrl_c_while_the_command_line_is_imported_is_one_line(monkeypatch, caps
         launch.run()
     assert stopped.value.code == 130
     assert capsys.readouterr().err == "interrupted: stopped before the end, no output written\n"
+
+
+def test_a_reader_meeting_a_files_end_early_is_an_error_line_not_aborted(monkeypatch, capsys) -> None:
+    """Typer turns any EOFError into Abort, printed as a bare "aborted" (exit 1); no command prompts."""
+    from service.cli import entry
+
+    def cut_short(*args: object, **kwargs: object) -> None:
+        raise entry.typer.Abort  # what click raises from a command's EOFError (numpy.load of an empty .npz)
+
+    monkeypatch.setattr(entry, "app", cut_short)
+    assert entry.main(["demo"]) == 2
+    assert "error: a file ended before its reader expected (cut short?)" in capsys.readouterr().err

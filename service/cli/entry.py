@@ -28,9 +28,9 @@ def main(argv: list[str] | None = None) -> int:
             code = app(args=argv, prog_name="markerflow", standalone_mode=False)
         except TyperException as error:  # a usage mistake (click's UsageError, as Typer vendors it)
             return _usage(error)
-        except typer.Abort:  # end of input at a prompt
-            err.print("aborted")
-            return 1
+        except typer.Abort:  # Typer's name for an EOFError: no command prompts, so a reader met a file's end early
+            err.print("[red]error:[/red] a file ended before its reader expected (cut short?)", highlight=False)
+            return 2
         except Terminated:
             return _interrupted(143, replaced())
         if code == CTRL_C:
