@@ -56,6 +56,26 @@ class _FailsAtWindow2(CaptureLabeling):
                 raise RuntimeError("the solver blew up")
 
 
+def test_a_resumed_job_drops_the_note_its_dead_runner_left(tmp_path, monkeypatch):
+    """After a restart mid second pass the job read "second pass: 58 of 58 windows" until the
+    new runner's pass counted again from 0."""
+    capture, options = generated_capture(frames=30, seed=5), LabelingOptions(window=10, second_pass=False)
+    db = f"sqlite:///{tmp_path / 'jobs.db'}"
+    store = store_for(db)
+    job, _ = store.add("local", "json", document_json(capture, options).encode(), CaptureLabeling(capture, options).n_windows)
+    store.note(job.id, "second pass: 3 of 3 windows")  # what the runner that died had written
+    seen: list[list[str]] = []
+
+    class Watching(CaptureLabeling):
+        def windows(self, *args, **kwargs):
+            seen.append(store.warnings(job.id))  # what a client reads while this runner labels
+            return super().windows(*args, **kwargs)
+
+    monkeypatch.setattr(runner, "CaptureLabeling", Watching)
+    assert run_job(db, job.id) == "done"
+    assert seen == [[]]
+
+
 def test_a_window_that_raises_fails_the_job_and_keeps_the_windows_before_it(tmp_path, monkeypatch):
     capture, options = generated_capture(frames=60, seed=5), LabelingOptions(formulation="ilp", window=10)
     db = f"sqlite:///{tmp_path / 'jobs.db'}"

@@ -243,11 +243,15 @@ class JobStore:
                 session.add(WarningsRow(job_id=job_id, lines=json.dumps(warnings)))
             return True
 
-    def note(self, job_id: str, line: str) -> None:
+    def note(self, job_id: str, line: str | None) -> None:
         """What a running job is doing past its windows (its second pass), shown as its warning
-        until it is done: the progress stood at N/N for as long as the first pass took."""
+        until it is done: the progress stood at N/N for as long as the first pass took. None
+        drops the note (one left by a runner that died)."""
         with self.session.begin() as session:
-            session.merge(WarningsRow(job_id=job_id, lines=json.dumps([line])))
+            if line is None:
+                session.execute(delete(WarningsRow).where(WarningsRow.job_id == job_id))
+            else:
+                session.merge(WarningsRow(job_id=job_id, lines=json.dumps([line])))
 
     def warnings(self, job_id: str) -> list[str]:
         """What the finished labeling warns of; while it runs, its ``note`` if any."""
