@@ -168,8 +168,7 @@ def test_a_job_page_whose_stream_is_refused_says_so_and_reloads(browser, base_ur
         page.goto(f"{base_url}/jobs/{job_id}")
         page.wait_for_function("document.getElementById('progress-text').textContent.includes('refused')")
         assert "live progress refused by the server; reloading every 10 s" in page.locator("#progress-text").inner_text()
-        with page.expect_event("load", timeout=20_000):
-            pass  # the page reloads by itself
+        page.wait_for_event("load", timeout=20_000)  # the page reloads by itself
         page.request.delete(f"{base_url}/v1/jobs/{job_id}", headers={"Authorization": f"Bearer {BOB}"})
     finally:
         context.close()
