@@ -49,7 +49,6 @@ def run_job(db_url: str, job_id: str, stop: Callable[[], bool] = lambda: False) 
     worker = f"{socket.gethostname()}:{os.getpid()}"  # which process computed each window
     if not store.start(job_id):
         return store.known(job_id).state
-    store.note(job_id, None)  # a dead runner's "second pass: 58 of 58" read on until this one's pass counted again
     where = ""  # "window k: " once the windows are being computed
     try:
         document = read_capture_document(store.input(job_id), "input")  # stored before a check was added: InputError

@@ -195,8 +195,14 @@ class JobStore:
             return [StoredWindow(i, json.loads(stats), worker) for i, stats, worker in session.execute(query)]
 
     def start(self, job_id: str) -> bool:
-        """Mark the job running; False if it is no longer queued or running (cancelled, finished)."""
-        return self._move(job_id, ACTIVE, state="running")
+        """Mark the job running; False if it is no longer queued or running (cancelled, finished).
+        A running note (``note``) left by a runner that died goes: the job read "second pass: 58
+        of 58 windows" until this runner's pass counted again from 0."""
+        started = self._move(job_id, ACTIVE, state="running")
+        if started:
+            with self.session.begin() as session:
+                session.execute(delete(WarningsRow).where(WarningsRow.job_id == job_id))
+        return started
 
     def save_window(self, job_id: str, outcome: WindowOutcome, worker: str) -> bool:
         """Store one finished window and count it, in one transaction; False (nothing stored)
@@ -243,15 +249,11 @@ class JobStore:
                 session.add(WarningsRow(job_id=job_id, lines=json.dumps(warnings)))
             return True
 
-    def note(self, job_id: str, line: str | None) -> None:
+    def note(self, job_id: str, line: str) -> None:
         """What a running job is doing past its windows (its second pass), shown as its warning
-        until it is done: the progress stood at N/N for as long as the first pass took. None
-        drops the note (one left by a runner that died)."""
+        until it is done: the progress stood at N/N for as long as the first pass took."""
         with self.session.begin() as session:
-            if line is None:
-                session.execute(delete(WarningsRow).where(WarningsRow.job_id == job_id))
-            else:
-                session.merge(WarningsRow(job_id=job_id, lines=json.dumps([line])))
+            session.merge(WarningsRow(job_id=job_id, lines=json.dumps([line])))
 
     def warnings(self, job_id: str) -> list[str]:
         """What the finished labeling warns of; while it runs, its ``note`` if any."""
