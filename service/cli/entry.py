@@ -59,10 +59,9 @@ class Terminated(Exception):
 
 
 def _interrupted(code: int, written: list[Path]) -> int:
-    """The outputs written through ``replacing`` (every one of ``track``, ``model``, ``demo`` and
-    ``pose``) are each whole, new or as they were; a command with several (``demo``, ``pose``,
-    ``model --centres``) may have replaced some before the interrupt, so those are named rather
-    than "no output written" said of them."""
+    """The outputs written through ``replacing`` (every command's) are each whole, new or as
+    they were; a command with several (``demo``, ``pose``, ``model --centres``) may have replaced
+    some before the interrupt, so those are named rather than "no output written" said of them."""
     if written:
         done = ", ".join(str(path) for path in written)
         told = (f"interrupted: stopped before the end, after writing {done} whole; no other output written "
