@@ -35,25 +35,22 @@ def back_tracks(points: np.ndarray, earlier: list[np.ndarray], reach: float, lin
     either only where no other point is within ``link_radius`` more (``_unambiguous``).
     """
     track = np.full((len(points), len(earlier), 3), np.nan)
-    last, step = np.array(points, float).reshape(-1, 3), np.full((len(points), 3), np.nan)  # a copy: it moves
-    alive = np.ones(len(points), bool)
+    rows = np.arange(len(points))  # the tracks still followed, and where each one is
+    last = np.array(points, float).reshape(-1, 3)
+    step, radius = np.zeros_like(last), reach  # no velocity yet: the first step is predicted where the track is
     for k, frame in enumerate(earlier):
-        if not alive.any() or not len(frame):
+        if not len(rows) or not len(frame):
             break
-        stepped = np.isfinite(step).all(axis=1)
-        predicted = np.where(stepped[:, None], last + np.nan_to_num(step), last)
-        rows = np.flatnonzero(alive)
-        nearest, found = _unambiguous(cdist(predicted[rows], frame), np.where(stepped[rows], link_radius, reach), link_radius)
-        alive[rows[~found]] = False
+        nearest, found = _unambiguous(cdist(last + step, frame), radius, link_radius)
         rows, point = rows[found], frame[nearest[found]]
-        step[rows], last[rows] = point - last[rows], point
+        step, last, radius = point - last[found], point, link_radius
         track[rows, k] = point
     return track
 
 
-def _unambiguous(distance: np.ndarray, radius: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+def _unambiguous(distance: np.ndarray, radius: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
     """Per row of ``distance`` (tracks x points), the nearest point, and whether it links: within
-    the row's ``radius``, and no other point within ``margin`` more. Where two points could
+    ``radius``, and no other point within ``margin`` more. Where two points could
     continue a track, following either may jump to another marker's track (fast gloves 30 mm
     apart), and the test would then bar a marker from its own point."""
     if distance.shape[1] == 0:
