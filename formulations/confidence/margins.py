@@ -59,9 +59,7 @@ def reading_margins(
         grid = replace(grid, step=own)
     holder: NDArray[np.intp] = np.where(grid.valid, foreign_holder(problem, path)[grid.nodes(problem)], FREE)
     cost = grid.path_cost(grid.step)[:, None, None]
-    relaxed = min_marginals(grid.step, grid.valid) - cost
-    margin = relaxed.copy()  # an object no held path gets in the way of moves freely
-    hindered = np.flatnonzero((holder != FREE).any(axis=(1, 2)))
-    margin[hindered] = min_marginals(grid.step[hindered], grid.valid[hindered] & (holder[hindered] == FREE)) - cost[hindered]
+    # each object alone: conflicts ignored, and kept off the held paths' resources
+    relaxed, margin = min_marginals(grid.step, np.stack([grid.valid, grid.valid & (holder == FREE)])) - cost
     lower_pair_margins(problem, grid, holder, relaxed, location, horizon, margin)
     return margin, grid
