@@ -9,8 +9,10 @@ steps
 term between a and b, absent when they are no layout pair), and ``allowed`` states: both
 slots usable with the others fixed, and not holding one resource together. Its forward and
 backward distances give, as for one object (``single``), the cheapest pair of paths
-through every joint state. Without J a step separates: min over i, then over j, K^3 work
-per frame instead of K^4. All pairs advance together, one frame at a time.
+through every joint state. Without J a step separates: min over j, then over i, K^3 work
+per frame instead of K^4. The backward distances are the forward ones of the reversed
+network (frames in reverse, A, B and J with their ends swapped), so both directions and
+all pairs advance together, one frame at a time.
 """
 
 from __future__ import annotations
@@ -29,42 +31,36 @@ def pair_min_marginals(
         allowed: ``(P, M + 2, K, K)`` joint states the paths may use.
         joint: ``(P, M + 1, K, K, K, K)`` the steps' term in both objects (J), or None.
     """
-    pairs, steps, width, _ = a.shape
-    alpha = np.full((pairs, steps + 1, width, width), np.inf)
-    beta = np.full((pairs, steps + 1, width, width), np.inf)
-    alpha[:, 0, 0, 0] = 0.0
-    beta[:, steps, 0, 0] = 0.0
+    steps = a.shape[1]
+    first, second = _both_ways(a, 3), _both_ways(b, 3)
+    both = None if joint is None else _both_ways(joint, 4, 5)
+    usable = np.stack([allowed, allowed[:, ::-1]])
+    distance = np.full(usable.shape, np.inf)  # alpha, then beta with frames reversed
+    distance[:, :, 0, 0, 0] = 0.0
     for f in range(steps):
-        reached = _forward(alpha[:, f], a[:, f], b[:, f], None if joint is None else joint[:, f])
-        alpha[:, f + 1] = np.where(allowed[:, f + 1], reached, np.inf)
-    for f in range(steps - 1, -1, -1):
-        onward = _backward(beta[:, f + 1], a[:, f], b[:, f], None if joint is None else joint[:, f])
-        beta[:, f] = np.where(allowed[:, f], onward, np.inf)
-    marginal: NDArray[np.float64] = (alpha + beta)[:, 1:-1]
+        reached = _forward(distance[:, :, f], first[:, :, f], second[:, :, f], None if both is None else both[:, :, f])
+        distance[:, :, f + 1] = np.where(usable[:, :, f + 1], reached, np.inf)
+    marginal: NDArray[np.float64] = (distance[0] + distance[1, :, ::-1])[:, 1:-1]
     return marginal
+
+
+def _both_ways(step: NDArray[np.float64], *heads: int) -> NDArray[np.float64]:
+    """``(2, P, M + 1, ...)`` the steps, then the reversed network's: frames in reverse,
+    each step's ends swapped (``heads``: the axes of the step's end, put first)."""
+    tails = (axis for axis in range(2, step.ndim) if axis not in heads)
+    reverse = step[:, ::-1].transpose(0, 1, *heads, *tails)
+    stacked: NDArray[np.float64] = np.stack([step, reverse])
+    return stacked
 
 
 def _forward(
     alpha: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64], joint: NDArray[np.float64] | None,
 ) -> NDArray[np.float64]:
-    """min over (i, j) of alpha(i, j) + A(i, i') + B(j, j') [+ J(i, j, i', j')], as (P, i', j')."""
+    """min over (i, j) of alpha(i, j) + A(i, i') + B(j, j') [+ J(i, j, i', j')], as (..., i', j')."""
     if joint is not None:
-        total = alpha[:, :, :, None, None] + a[:, :, None, :, None] + b[:, None, :, None, :] + joint
-        full: NDArray[np.float64] = total.min(axis=(1, 2))
+        total = alpha[..., :, :, None, None] + a[..., :, None, :, None] + b[..., None, :, None, :] + joint
+        full: NDArray[np.float64] = total.min(axis=(-4, -3))
         return full
-    over_j = (alpha[:, :, :, None] + b[:, None, :, :]).min(axis=2)  # (P, i, j')
-    separable: NDArray[np.float64] = (over_j[:, :, None, :] + a[:, :, :, None]).min(axis=1)  # (P, i', j')
-    return separable
-
-
-def _backward(
-    beta: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64], joint: NDArray[np.float64] | None,
-) -> NDArray[np.float64]:
-    """min over (i', j') of A(i, i') + B(j, j') [+ J] + beta(i', j'), as (P, i, j)."""
-    if joint is not None:
-        total = beta[:, None, None, :, :] + a[:, :, None, :, None] + b[:, None, :, None, :] + joint
-        full: NDArray[np.float64] = total.min(axis=(3, 4))
-        return full
-    over_j = (b[:, None, :, :] + beta[:, :, None, :]).min(axis=3)  # (P, i', j)
-    separable: NDArray[np.float64] = (a[:, :, :, None] + over_j[:, None, :, :]).min(axis=2)  # (P, i, j)
+    over_j = (alpha[..., :, :, None] + b[..., None, :, :]).min(axis=-2)  # (..., i, j')
+    separable: NDArray[np.float64] = (over_j[..., :, None, :] + a[..., :, :, None]).min(axis=-3)  # (..., i', j')
     return separable
