@@ -63,14 +63,14 @@ def _worthwhile(
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
     """Pairs (first < second): a slot of one held by the other, or a layout pair; and the
     total mu of the layout pairs joining them (0 for none)."""
-    owner = np.broadcast_to(np.arange(holder.shape[0])[:, None, None], holder.shape)
     contest = holder >= 0
-    ends = np.concatenate([np.column_stack([owner[contest], holder[contest]]), lay.reshape(-1, 2)])
-    ends = np.unique(np.sort(ends, axis=1), axis=0)
-    key = ends[:, 0] * n + ends[:, 1]
+    owner, other = np.nonzero(contest)[0], holder[contest]
+    laid = lay.min(axis=1) * n + lay.max(axis=1)
+    key = np.unique(np.concatenate([np.minimum(owner, other) * n + np.maximum(owner, other), laid]))  # sorted (first, second)
     weight = np.zeros(len(key))
-    np.add.at(weight, np.searchsorted(key, lay.min(axis=1) * n + lay.max(axis=1)), mu)
-    return ends[:, 0], ends[:, 1], weight
+    np.add.at(weight, np.searchsorted(key, laid), mu)
+    first, second = np.divmod(key, n)
+    return first, second, weight
 
 
 def _usable(
