@@ -17,8 +17,12 @@ all pairs advance together, one frame at a time.
 
 from __future__ import annotations
 
+from typing import TypeVar
+
 import numpy as np
 from numpy.typing import NDArray
+
+Kind = TypeVar("Kind", np.float64, np.bool_)
 
 
 def pair_min_marginals(
@@ -34,33 +38,38 @@ def pair_min_marginals(
     steps = a.shape[1]
     first, second = _both_ways(a, 3), _both_ways(b, 3)
     both = None if joint is None else _both_ways(joint, 4, 5)
-    usable = np.stack([allowed, allowed[:, ::-1]])
-    distance = np.full(usable.shape, np.inf)  # alpha, then beta with frames reversed
-    distance[:, :, 0, 0, 0] = 0.0
+    usable = _pairs_last(np.stack([allowed, allowed[:, ::-1]]))
+    distance = np.full(usable.shape, np.inf)  # (2, M + 2, K, K, P): alpha, then beta with frames reversed
+    distance[:, 0, 0, 0] = 0.0
     for f in range(steps):
-        reached = _forward(distance[:, :, f], first[:, :, f], second[:, :, f], None if both is None else both[:, :, f])
-        distance[:, :, f + 1] = np.where(usable[:, :, f + 1], reached, np.inf)
-    marginal: NDArray[np.float64] = (distance[0] + distance[1, :, ::-1])[:, 1:-1]
+        reached = _forward(distance[:, f], first[:, f], second[:, f], None if both is None else both[:, f])
+        distance[:, f + 1] = np.where(usable[:, f + 1], reached, np.inf)
+    marginal: NDArray[np.float64] = np.moveaxis(distance[0] + distance[1, ::-1], -1, 0)[:, 1:-1]
     return marginal
 
 
 def _both_ways(step: NDArray[np.float64], *heads: int) -> NDArray[np.float64]:
-    """``(2, P, M + 1, ...)`` the steps, then the reversed network's: frames in reverse,
+    """``(2, M + 1, ..., P)`` the steps, then the reversed network's: frames in reverse,
     each step's ends swapped (``heads``: the axes of the step's end, put first)."""
     tails = (axis for axis in range(2, step.ndim) if axis not in heads)
     reverse = step[:, ::-1].transpose(0, 1, *heads, *tails)
-    stacked: NDArray[np.float64] = np.stack([step, reverse])
-    return stacked
+    return _pairs_last(np.stack([step, reverse]))
+
+
+def _pairs_last(values: NDArray[Kind]) -> NDArray[Kind]:
+    """``values`` ``(2, P, ...)`` as ``(2, ..., P)``: a min over a few slots then runs over
+    whole rows of pairs, not over rows of K slots (numpy pays per row)."""
+    return np.ascontiguousarray(np.moveaxis(values, 1, -1))
 
 
 def _forward(
     alpha: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64], joint: NDArray[np.float64] | None,
 ) -> NDArray[np.float64]:
-    """min over (i, j) of alpha(i, j) + A(i, i') + B(j, j') [+ J(i, j, i', j')], as (..., i', j')."""
+    """min over (i, j) of alpha(i, j) + A(i, i') + B(j, j') [+ J(i, j, i', j')], as (2, i', j', P)."""
     if joint is not None:
-        total = alpha[..., :, :, None, None] + a[..., :, None, :, None] + b[..., None, :, None, :] + joint
-        full: NDArray[np.float64] = total.min(axis=(-4, -3))
+        total = alpha[:, :, :, None, None] + a[:, :, None, :, None] + b[:, None, :, None, :] + joint
+        full: NDArray[np.float64] = total.min(axis=(1, 2))
         return full
-    over_j = (alpha[..., :, :, None] + b[..., None, :, :]).min(axis=-2)  # (..., i, j')
-    separable: NDArray[np.float64] = (over_j[..., :, None, :] + a[..., :, :, None]).min(axis=-3)  # (..., i', j')
+    over_j = (alpha[:, :, :, None] + b[:, None, :, :]).min(axis=2)  # (2, i, j', P)
+    separable: NDArray[np.float64] = (over_j[:, :, None, :] + a[:, :, :, None]).min(axis=1)  # (2, i', j', P)
     return separable
