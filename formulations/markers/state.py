@@ -108,9 +108,9 @@ class MarkerState:
             plate_position=np.full((n, 3), np.nan), plate_age=np.full(n, -1), plate_rate=np.full(n, np.nan),
         )
 
-    @property
+    @cached_property
     def visible(self) -> np.ndarray:
-        """``(N,)`` seen at the template frame."""
+        """``(N,)`` seen at the template frame (computed once per state: not to be written into)."""
         return np.asarray(self.unseen == 0)
 
     def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
