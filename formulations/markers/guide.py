@@ -84,6 +84,10 @@ class GuideTrack:
     unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
     burst_var: np.ndarray  # (M, N) the guide's burst variance before frame m (``MarkerState.burst_var``)
     point: np.ndarray | None = None  # (M, N) the point it took in frame m, -1 none
+    # The states it advanced through: held here while the window is solved, so that the
+    # labels' advances with the same points reuse them (``MarkerState.advance`` keeps its
+    # advanced states only weakly).
+    states: tuple[MarkerState, ...] = ()
 
     def continued(self, f: int, n_points: int) -> np.ndarray:
         """``(K,)`` the points of window frame f (1..M) the guide gave a marker seen the frame
@@ -112,6 +116,7 @@ def guide_track(
     unseen = np.empty((m, n), dtype=int)
     burst_var = np.empty((m, n))
     point = np.full((m, n), -1)
+    states: list[MarkerState] = []
     state = _moving_start(state, frames, gate)
     for f, points in enumerate(frames):
         lost = state.stranded(reacquisition.lost_after)
@@ -137,9 +142,10 @@ def guide_track(
         taken = np.zeros((n, 3))
         taken[seen] = points[assigned[seen]]
         state = state.advance(taken, seen)
+        states.append(state)
     return GuideTrack(
         predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen, burst_var=burst_var,
-        point=point,
+        point=point, states=tuple(states),
     )
 
 

@@ -35,7 +35,7 @@ matrix, seed 0, 600 frames, five conditions, lp-l1: 96.23 -> 96.26 % mean, swaps
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache, partial
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -156,9 +156,9 @@ class _Judges:
 
 def _judges(state: MarkerState, markers: np.ndarray, settings: ShapeReacquisition) -> _Judges:
     """The ``rigid`` most rigid neighbours of each marker among those seen now with sd <= ``max_sd_mm``."""
-    neighbours, var = state.neighbours[markers], state.distance_var[markers]
-    usable = state.visible[neighbours] & (var <= settings.max_sd_mm**2)
+    var = state.distance_var[markers]
+    usable = state.visible[state.neighbours[markers]] & (var <= settings.max_sd_mm**2)
     order = np.argsort(np.where(usable, var, np.inf), axis=1)[:, : settings.rigid]
-    pick = partial(np.take_along_axis, indices=order, axis=1)
-    return _Judges(pick(neighbours), pick(usable), pick(state.distance_mean[markers]), pick(var) + settings.noise_var_mm2)
-
+    rows, picked = np.arange(len(markers))[:, None], (markers[:, None], order)
+    return _Judges(state.neighbours[picked], usable[rows, order], state.distance_mean[picked],
+                   var[rows, order] + settings.noise_var_mm2)
