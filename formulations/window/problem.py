@@ -107,5 +107,7 @@ def _distinct_objects_per_row(matrix: sp.csr_matrix, node_object: np.ndarray) ->
     rows = np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))
     if len(rows) == 0:
         return np.zeros(matrix.shape[0], dtype=int)
-    pairs = np.unique(np.stack([rows, node_object[matrix.indices]]), axis=1)
-    return np.bincount(pairs[0], minlength=matrix.shape[0])
+    # Each distinct (row, object) pair once, as one integer: a flat unique, not a 2-D one (4x slower).
+    n = int(node_object.max()) + 1
+    pairs = np.unique(rows * n + node_object[matrix.indices])
+    return np.bincount(pairs // n, minlength=matrix.shape[0])
