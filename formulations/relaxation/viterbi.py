@@ -45,23 +45,27 @@ class ArcLayers:
 
     Attributes:
         order: ``(A,)`` arc indices in that order.
-        tail: ``(A,)`` tails in that order.
+        tail, head: ``(A,)`` tails and heads in that order.
         layers: The non-empty layers, frame 0 first.
         sources, sinks: ``(N,)`` source and sink node of each object.
     """
 
     order: np.ndarray
     tail: np.ndarray
+    head: np.ndarray
     layers: list[Layer]
     sources: np.ndarray
     sinks: np.ndarray
 
     @classmethod
     def of(cls, problem: WindowProblem) -> ArcLayers:
-        layer = problem.node_frame[problem.arc_tail]
-        order = np.lexsort((problem.arc_head, layer))
-        head, layer = problem.arc_head[order], layer[order]
-        new_group = np.r_[True, (head[1:] != head[:-1]) | (layer[1:] != layer[:-1])] if len(order) else np.zeros(0, bool)
+        # Arcs join consecutive frames, so (frame of the tail, head) orders as the head's rank
+        # among the nodes by (frame, index): one stable sort on a key small enough for a radix sort.
+        rank = np.empty(problem.n_nodes, np.min_scalar_type(max(problem.n_nodes - 1, 0)))
+        rank[np.argsort(problem.node_frame, kind="stable")] = np.arange(problem.n_nodes)
+        order = np.argsort(rank[problem.arc_head], kind="stable")
+        head, layer = problem.arc_head[order], problem.node_frame[problem.arc_tail[order]]
+        new_group = np.r_[True, head[1:] != head[:-1]] if len(order) else np.zeros(0, bool)
         group_start = np.flatnonzero(new_group)
         layer_groups = np.searchsorted(layer[group_start], np.arange(problem.n_frames + 2))
         starts, group_of = np.r_[group_start, len(order)], np.cumsum(new_group) - 1
@@ -70,7 +74,35 @@ class ArcLayers:
             if g0 < g1:
                 lo, hi = starts[g0], starts[g1]
                 layers.append(Layer(slice(lo, hi), group_start[g0:g1] - lo, group_of[lo:hi] - g0, head[group_start[g0:g1]]))
-        return cls(order, problem.arc_tail[order], layers, problem.source_nodes(), problem.sink_nodes())
+        return cls(order, problem.arc_tail[order], head, layers, problem.source_nodes(), problem.sink_nodes())
+
+    def shortest_path_arcs(self, problem: WindowProblem, cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``shortest_path_arcs`` with the arc costs given in this order (``cost[i]`` of arc ``order[i]``)."""
+        distance = np.full(problem.n_nodes, np.inf)
+        distance[self.sources] = 0.0
+        into = np.full(problem.n_nodes, -1)  # position in self.order of the best arc into each node
+        for layer in self.layers:
+            candidate = distance[self.tail[layer.arcs]] + cost[layer.arcs]
+            best = np.minimum.reduceat(candidate, layer.group_start)
+            # The first arc attaining each group's minimum: the first hit at or after its start
+            # (every group has one, its minimum).
+            hits = np.flatnonzero(candidate <= best[layer.group_of])
+            distance[layer.head] = best
+            into[layer.head] = layer.arcs.start + hits[np.searchsorted(hits, layer.group_start)]
+        return self._backtrack(problem, into), distance[self.sinks]
+
+    def _backtrack(self, problem: WindowProblem, into: np.ndarray) -> np.ndarray:
+        # Per node its best arc in and the tail of that arc, -1 where none; index -1 (no arc, or
+        # the node before a missing one) reads the -1 after the last node.
+        arc_into, previous = np.full(problem.n_nodes + 1, -1), np.full(problem.n_nodes + 1, -1)
+        reached = np.flatnonzero(into >= 0)
+        arc_into[reached], previous[reached] = self.order[into[reached]], self.tail[into[reached]]
+        arcs = np.empty((problem.n_objects, problem.n_frames + 1), dtype=int)
+        node = self.sinks
+        for m in range(problem.n_frames, -1, -1):
+            arcs[:, m] = arc_into[node]
+            node = previous[node]
+        return arcs
 
 
 def shortest_paths(
@@ -98,29 +130,4 @@ def shortest_path_arcs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Like ``shortest_paths``, but each path as its ``(N, M+1)`` arcs, source arc first (-1: no path)."""
     layers = ArcLayers.of(problem) if layers is None else layers
-    cost = (problem.arc_cost if arc_cost is None else arc_cost)[layers.order]
-    distance = np.full(problem.n_nodes, np.inf)
-    distance[layers.sources] = 0.0
-    into = np.full(problem.n_nodes, -1)  # position in layers.order of the best arc into each node
-    position = np.arange(len(layers.order))
-    for layer in layers.layers:
-        candidate = distance[layers.tail[layer.arcs]] + cost[layer.arcs]
-        best = np.minimum.reduceat(candidate, layer.group_start)
-        # The first arc attaining each group's minimum: the least position among those that do.
-        attains = np.where(candidate <= best[layer.group_of], position[layer.arcs], len(position))
-        distance[layer.head] = best
-        into[layer.head] = np.minimum.reduceat(attains, layer.group_start)
-    return _backtrack(problem, layers, into), distance[layers.sinks]
-
-
-def _backtrack(problem: WindowProblem, layers: ArcLayers, into: np.ndarray) -> np.ndarray:
-    # Per node its best arc in and the tail of that arc, -1 where none; index -1 (no arc, or
-    # the node before a missing one) reads the -1 appended to each.
-    arc_into = np.append(np.append(layers.order, -1)[into], -1)
-    previous = np.append(np.append(layers.tail, -1)[into], -1)
-    arcs = np.empty((problem.n_objects, problem.n_frames + 1), dtype=int)
-    node = layers.sinks
-    for m in range(problem.n_frames, -1, -1):
-        arcs[:, m] = arc_into[node]
-        node = previous[node]
-    return arcs
+    return layers.shortest_path_arcs(problem, (problem.arc_cost if arc_cost is None else arc_cost)[layers.order])
