@@ -17,15 +17,15 @@ from formulations.window.problem import WindowProblem
 def coupled_components(problem: WindowProblem) -> np.ndarray:
     """``(N,)`` component label of each object."""
     n = problem.n_objects
-    membership = sp.csr_matrix(
-        (np.ones(problem.n_nodes), (np.arange(problem.n_nodes), problem.node_object)), shape=(problem.n_nodes, n)
-    )
-    shares = problem.conflict_groups @ membership  # (G, N)
-    shares.data[:] = 1.0
-    adjacency = (shares.T @ shares).tocoo()
+    groups = problem.conflict_groups
+    # The objects of a group are linked as a chain in its node order: fewer edges than every
+    # pair of them (G^T G), the same components.
+    objects = problem.node_object[groups.indices]
+    row = np.repeat(np.arange(groups.shape[0]), np.diff(groups.indptr))
+    chained = row[1:] == row[:-1]
     pairs = problem.layout_pairs[problem.layout_weight > 0]
-    rows = np.concatenate([adjacency.row, pairs[:, 0]])
-    cols = np.concatenate([adjacency.col, pairs[:, 1]])
+    rows = np.concatenate([objects[:-1][chained], pairs[:, 0]])
+    cols = np.concatenate([objects[1:][chained], pairs[:, 1]])
     graph = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
     labels: np.ndarray = connected_components(graph, directed=False)[1]
     return labels

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from formulations.relaxation.viterbi import ArcLayers, shortest_path_arcs
+from formulations.relaxation.viterbi import ArcLayers
 from formulations.solvers import LinearModel, SolveResult, create_backend
 from formulations.window.objective import arc_index
 from formulations.window.problem import WindowProblem
@@ -87,7 +87,9 @@ def solve_path_lp(
     node_groups = groups.tocsc()
     starts, sizes = problem.blocks()
     occluded = (starts + sizes - 1)[:, 1:-1]  # occlusion is the last node of each block
-    first, _ = shortest_path_arcs(problem, layers=layers)
+    # Priced in the layers' order: G^T pi and the arc costs are gathered there once per window.
+    cost, node_groups_t = problem.arc_cost[layers.order], groups.T
+    first, _ = layers.shortest_path_arcs(problem, cost)
     paths = np.vstack([first, _arcs_through(problem, np.arange(n), occluded)])
     objects = np.r_[np.arange(n), np.arange(n)]
     backend = interior = create_backend(INTERIOR_POINT)
@@ -107,8 +109,8 @@ def solve_path_lp(
         entering: list[int] = []
         if result.optimal:
             sigma, pi = result.row_dual[:n], rows.group_duals(np.minimum(result.row_dual[n:], 0.0))
-            priced = problem.arc_cost - (groups.T @ pi)[problem.arc_head] if len(pi) else problem.arc_cost
-            best, distance = shortest_path_arcs(problem, priced, layers)
+            priced = cost - (node_groups_t @ pi)[layers.head] if len(pi) else cost
+            best, distance = layers.shortest_path_arcs(problem, priced)
             bound = max(bound, float(distance.sum() + pi.sum()))
             if not _proven(result.objective, bound):
                 entering = [int(o) for o in np.flatnonzero(distance - sigma < 0) if (o, best[o].tobytes()) not in seen]

@@ -9,7 +9,8 @@ step per frame, never a loop over objects or arcs. Conflicts and the layout term
 ignored: this is exact for an object coupled to nobody, and a lower bound otherwise.
 
 The arcs' order (by layer, then head) depends on the window only, not on the costs, so a
-caller that prices the same window many times (``path_lp``) sorts it once (``ArcLayers``).
+caller that prices the same window many times (``path_lp``) sorts it once (``ArcLayers``),
+and with it each layer's slice, head groups and heads.
 """
 
 from __future__ import annotations
@@ -22,34 +23,86 @@ from formulations.window.problem import WindowProblem
 
 
 @dataclass(frozen=True)
+class Layer:
+    """The arcs out of one frame, a slice of the sorted order.
+
+    Attributes:
+        arcs: Their slice of ``ArcLayers.order``.
+        group_start: Position within the slice of the first arc into each head.
+        group_of: Head group (within the layer) of each arc of the slice.
+        head: Head node of each group.
+    """
+
+    arcs: slice
+    group_start: np.ndarray
+    group_of: np.ndarray
+    head: np.ndarray
+
+
+@dataclass(frozen=True)
 class ArcLayers:
-    """The window's arcs sorted by (frame of the tail, head), with the head groups of each layer.
+    """The window's arcs sorted by (frame of the tail, head), cut into layers.
 
     Attributes:
         order: ``(A,)`` arc indices in that order.
-        tail: ``(A,)`` tails in that order.
-        group_start: Position in ``order`` of the first arc into each head.
-        group_of: ``(A,)`` head group of each sorted arc.
-        head: Head node of each group.
-        layer_groups: ``(M+2,)`` first group of each layer (frames 0..M), then the group count.
+        tail, head: ``(A,)`` tails and heads in that order.
+        layers: The non-empty layers, frame 0 first.
+        sources, sinks: ``(N,)`` source and sink node of each object.
     """
 
     order: np.ndarray
     tail: np.ndarray
-    group_start: np.ndarray
-    group_of: np.ndarray
     head: np.ndarray
-    layer_groups: np.ndarray
+    layers: list[Layer]
+    sources: np.ndarray
+    sinks: np.ndarray
 
     @classmethod
     def of(cls, problem: WindowProblem) -> ArcLayers:
-        layer = problem.node_frame[problem.arc_tail]
-        order = np.lexsort((problem.arc_head, layer))
-        head, layer = problem.arc_head[order], layer[order]
-        new_group = np.r_[True, (head[1:] != head[:-1]) | (layer[1:] != layer[:-1])] if len(order) else np.zeros(0, bool)
+        # Arcs join consecutive frames, so (frame of the tail, head) orders as the head's rank
+        # among the nodes by (frame, index): one stable sort on a key small enough for a radix sort.
+        rank = np.empty(problem.n_nodes, np.min_scalar_type(max(problem.n_nodes - 1, 0)))
+        rank[np.argsort(problem.node_frame, kind="stable")] = np.arange(problem.n_nodes)
+        order = np.argsort(rank[problem.arc_head], kind="stable")
+        head, layer = problem.arc_head[order], problem.node_frame[problem.arc_tail[order]]
+        new_group = np.r_[True, head[1:] != head[:-1]] if len(order) else np.zeros(0, bool)
         group_start = np.flatnonzero(new_group)
         layer_groups = np.searchsorted(layer[group_start], np.arange(problem.n_frames + 2))
-        return cls(order, problem.arc_tail[order], group_start, np.cumsum(new_group) - 1, head[group_start], layer_groups)
+        starts, group_of = np.r_[group_start, len(order)], np.cumsum(new_group) - 1
+        layers = []
+        for g0, g1 in zip(layer_groups[:-1], layer_groups[1:]):
+            if g0 < g1:
+                lo, hi = starts[g0], starts[g1]
+                layers.append(Layer(slice(lo, hi), group_start[g0:g1] - lo, group_of[lo:hi] - g0, head[group_start[g0:g1]]))
+        return cls(order, problem.arc_tail[order], head, layers, problem.source_nodes(), problem.sink_nodes())
+
+    def shortest_path_arcs(self, problem: WindowProblem, cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``shortest_path_arcs`` with the arc costs given in this order (``cost[i]`` of arc ``order[i]``)."""
+        distance = np.full(problem.n_nodes, np.inf)
+        distance[self.sources] = 0.0
+        into = np.full(problem.n_nodes, -1)  # position in self.order of the best arc into each node
+        for layer in self.layers:
+            candidate = distance[self.tail[layer.arcs]] + cost[layer.arcs]
+            best = np.minimum.reduceat(candidate, layer.group_start)
+            # The first arc attaining each group's minimum: the first hit at or after its start
+            # (every group has one, its minimum).
+            hits = np.flatnonzero(candidate <= best[layer.group_of])
+            distance[layer.head] = best
+            into[layer.head] = layer.arcs.start + hits[np.searchsorted(hits, layer.group_start)]
+        return self._backtrack(problem, into), distance[self.sinks]
+
+    def _backtrack(self, problem: WindowProblem, into: np.ndarray) -> np.ndarray:
+        # Per node its best arc in and the tail of that arc, -1 where none; index -1 (no arc, or
+        # the node before a missing one) reads the -1 after the last node.
+        arc_into, previous = np.full(problem.n_nodes + 1, -1), np.full(problem.n_nodes + 1, -1)
+        reached = np.flatnonzero(into >= 0)
+        arc_into[reached], previous[reached] = self.order[into[reached]], self.tail[into[reached]]
+        arcs = np.empty((problem.n_objects, problem.n_frames + 1), dtype=int)
+        node = self.sinks
+        for m in range(problem.n_frames, -1, -1):
+            arcs[:, m] = arc_into[node]
+            node = previous[node]
+        return arcs
 
 
 def shortest_paths(
@@ -77,35 +130,4 @@ def shortest_path_arcs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Like ``shortest_paths``, but each path as its ``(N, M+1)`` arcs, source arc first (-1: no path)."""
     layers = ArcLayers.of(problem) if layers is None else layers
-    cost = (problem.arc_cost if arc_cost is None else arc_cost)[layers.order]
-    distance = np.full(problem.n_nodes, np.inf)
-    distance[problem.source_nodes()] = 0.0
-    into = np.full(problem.n_nodes, -1)  # position in layers.order of the best arc into each node
-    starts = np.r_[layers.group_start, len(layers.order)]
-    for f in range(problem.n_frames + 1):
-        g0, g1 = layers.layer_groups[f], layers.layer_groups[f + 1]
-        if g0 == g1:
-            continue
-        lo, hi = starts[g0], starts[g1]
-        candidate = distance[layers.tail[lo:hi]] + cost[lo:hi]
-        best = np.minimum.reduceat(candidate, starts[g0:g1] - lo)
-        group = layers.group_of[lo:hi] - g0
-        hits = np.flatnonzero(candidate <= best[group])  # first arc attaining each group's minimum
-        first = hits[np.r_[True, group[hits][1:] != group[hits][:-1]]]
-        heads = layers.head[g0:g1]
-        distance[heads] = best
-        into[heads] = lo + first
-    sinks = problem.sink_nodes()
-    return _backtrack(problem, layers, into, sinks), distance[sinks]
-
-
-def _backtrack(problem: WindowProblem, layers: ArcLayers, into: np.ndarray, sinks: np.ndarray) -> np.ndarray:
-    arcs = np.full((problem.n_objects, problem.n_frames + 1), -1)
-    node = sinks
-    for m in range(problem.n_frames, -1, -1):
-        reached = node >= 0
-        position = np.where(reached, into[np.maximum(node, 0)], -1)
-        found = position >= 0
-        arcs[found, m] = layers.order[position[found]]
-        node = np.where(found, layers.tail[np.maximum(position, 0)], -1)
-    return arcs
+    return layers.shortest_path_arcs(problem, (problem.arc_cost if arc_cost is None else arc_cost)[layers.order])

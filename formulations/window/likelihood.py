@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from formulations.window.problem import OBSERVATION, OCCLUSION, SINK, SOURCE
+from formulations.window.problem import OBSERVATION, OCCLUSION, SOURCE
 
 # A share of steps are bursts ten times wider than the learned sd (an impact, a spike in a
 # gap-filled export): a Gaussian alone would call them impossible and drop the marker.
@@ -80,20 +80,22 @@ def likelihood_arc_costs(
             observation nodes) and ``miss_cost`` (read at occlusion nodes).
         Others: as ``costs.arc_costs``.
     """
-    tail_kind, head_kind = kind[tail], kind[head]
-    from_gap = (tail_kind == OCCLUSION) | ((tail_kind == SOURCE) & source_occluded[tail])
-    cost = np.zeros(len(tail))
-    into_occlusion = head_kind == OCCLUSION
-    cost[into_occlusion] = node_likelihood["miss_cost"][head[into_occlusion]]
-    into_observation = head_kind == OBSERVATION
-    cost[into_observation] = node_likelihood["reappear_cost"][head[into_observation]]
-    observed = into_observation & ~from_gap
-    t, h = tail[observed], head[observed]
-    step = location[h] - location[t] - motion[h]
+    # What depends on one node only is worked out per node and gathered once per arc.
+    gap = (kind == OCCLUSION) | ((kind == SOURCE) & source_occluded)  # a path out of it re-enters after a gap
+    is_observation = kind == OBSERVATION
+    # Cost of entering a node: the whole of an occlusion's, an observation's after a gap (a
+    # step replaces it below), nothing for a sink.
+    entry = np.zeros(len(kind))
+    entry[kind == OCCLUSION] = node_likelihood["miss_cost"][kind == OCCLUSION]
+    entry[is_observation] = node_likelihood["reappear_cost"][is_observation]
+    cost: np.ndarray = entry[head]
+    into_observation = np.flatnonzero(is_observation[head])
+    observed = ~gap[tail[into_observation]]
+    t, h = tail[into_observation[observed]], head[into_observation[observed]]
+    # np.take gathers the same rows several times faster than fancy indexing of (V, D) arrays
+    step = np.take(location, h, axis=0) - np.take(location, t, axis=0) - np.take(motion, h, axis=0)
     z = np.sqrt(np.einsum("ad,ad->a", step, step)) / node_likelihood["step_sigma"][h]
     known = np.isfinite(z)
-    stepped = np.flatnonzero(observed)[known]
-    cost[stepped] = step_loss(z[known]) + node_likelihood["step_offset"][h[known]]
-    cost[into_observation] += np.where(observed, template_on_track, 1.0)[into_observation] * template_cost[head[into_observation]]
-    cost[head_kind == SINK] = 0.0
+    cost[into_observation[observed][known]] = step_loss(z[known]) + node_likelihood["step_offset"][h[known]]
+    cost[into_observation] += np.where(observed, template_on_track, 1.0) * template_cost[head[into_observation]]
     return cost
