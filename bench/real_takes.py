@@ -24,7 +24,9 @@ marker the model lacks counts as missing where present):
   many of those are right (what ``SHAPE_BREAK_CONFIDENCE`` stands for).
 
 Accuracy = correct / (marker-frames present in the file), over the labeled frames, frame
-`start` included; "off jumps" the same without the marker-frames where the file's own labels
+`start` included; "reachable" the accuracy a route could reach at most: the share of those
+marker-frames whose marker it can name at all (not one absent at the start without a model,
+nor one the model lacks); "off jumps" the same without the marker-frames where the file's own labels
 jump to another marker after a gap (``service/evaluation/label_jumps.py``), where the file is
 no truth. The recordings are those of ``service.evaluation.matrix.RECORDINGS`` (the
 Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); their
@@ -78,6 +80,7 @@ class Row:
     extra: int = 0
     on_jumps: int = 0  # present marker-frames where the file's label jumped
     correct_on_jumps: int = 0
+    out_of_reach: int = 0  # present marker-frames of markers the route cannot name (absent at the start, no model)
     in_breaks: int = 0  # labels inside the summary's shape breaks
     right_in_breaks: int = 0
     wall: float = float("nan")
@@ -87,11 +90,11 @@ class Row:
     def cells(self) -> str:
         present = self.correct + self.wrong + self.missing
         if self.failure:
-            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | | | | |"
+            return f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.failure} | | | | | | | | | | |"
         off_jumps = (self.correct - self.correct_on_jumps) / (present - self.on_jumps)
         right_there = f"{self.right_in_breaks / self.in_breaks:.0%}" if self.in_breaks else "-"
         return (f"| {self.name} | {self.route} | {self.frames} | {self.markers} | {self.correct / present:.2%} | "
-                f"{off_jumps:.2%} | "
+                f"{1 - self.out_of_reach / present:.2%} | {off_jumps:.2%} | "
                 f"{self.wrong} | {self.missing} | {self.extra} | {present} | {self.in_breaks} | {right_there} | "
                 f"{self.wall:.1f} | {self.frames / self.seconds:.0f} |")
 
@@ -104,11 +107,15 @@ def score(truth: Recording, output: Recording, rows: slice, row: Row, labeled: l
     theirs, missing_out = _aligned(truth, output, rows)
     jumped = label_jumps(truth)[rows]
     for i, name in enumerate(truth.names):
+        own = ~truth.missing()[rows, i]
         if name not in output.names or (labeled is not None and name not in labeled):
-            row.missing += int((~truth.missing()[rows, i]).sum())
+            row.missing += int(own.sum())
+            row.out_of_reach += int(own.sum())
             continue
+        if labeled is None and not own[0]:  # absent at the start: track leaves it unlabeled
+            row.out_of_reach += int(own.sum())
         j = output.names.index(name)
-        own, took = ~truth.missing()[rows, i], ~missing_out[rows, j]
+        took = ~missing_out[rows, j]
         same = np.linalg.norm(theirs[rows, j] - truth.positions[rows, i], axis=1) <= SAME_POINT_MM
         row.correct += int((own & took & same).sum())
         row.wrong += int((own & took & ~same).sum())
@@ -223,9 +230,9 @@ def main() -> None:
     args = parser.parse_args()
     fractions = [(k + 1) / (args.starts + 1) for k in range(args.starts)] if args.starts else [0.5 if args.half else None]
     cap = args.cap or (600 if args.starts else 0)
-    print("| take | start | frames | markers | correct | off jumps | wrong | missing | extra | present | in breaks | "
-          "right there | wall s | frames/s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| take | start | frames | markers | correct | reachable | off jumps | wrong | missing | extra | present | "
+          "in breaks | right there | wall s | frames/s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     means = []
     with tempfile.TemporaryDirectory() as folder:
         for recording in RECORDINGS:

@@ -32,6 +32,19 @@ def test_a_folder_that_is_not_openpose_is_one_line(tmp_path):
         read_openpose_folder(tmp_path / "missing")
 
 
+def test_a_keypoint_that_is_not_a_pixel_is_refused_and_a_hand_only_person_left_out(tmp_path):
+    """A NaN keypoint was read as a person's point (pose refused it, people did not)."""
+    values = [10.0, 20.0, 0.9] * 3
+    people = [{"pose_keypoints_2d": values}, {"pose_keypoints_2d": [], "hand_left_keypoints_2d": [1, 2, 3]}]
+    (tmp_path / "f.0000.json").write_text(json.dumps({"people": people}))
+    numbers, frames = read_openpose_folder(tmp_path)
+    assert numbers == [0] and [p.shape for p in frames[0]] == [(3, 3)]
+    values[4] = float("nan")
+    (tmp_path / "f.0000.json").write_text(json.dumps({"people": [{"pose_keypoints_2d": values}]}))
+    with pytest.raises(InputError, match="person 0's keypoint 1 is .*must be finite pixels"):
+        read_openpose_folder(tmp_path)
+
+
 @needs_data
 def test_both_participants_are_found_in_nearly_every_camera_frame_and_never_share_a_box():
     cameras = load_pose2sim_toml(DEMO / "calibration" / "Calib_qualisys.toml", units="mm")

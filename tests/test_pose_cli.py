@@ -212,7 +212,8 @@ def test_image_folders_are_ordered_and_paired_by_the_numbers_in_their_names(tmp_
         (tmp_path / camera).mkdir()
         for n in numbers:
             cv2.imwrite(str(tmp_path / camera / f"f{n}.png"), np.zeros((4, 4), np.uint8))
-    folders = image_folders(tmp_path)
+    numbers, folders = image_folders(tmp_path)
+    assert numbers == [8, 9, 10]
     assert {name: [f.name for f in files] for name, files in folders.items()} == {
         "cam1": ["f8.png", "f9.png", "f10.png"], "cam2": ["f8.png", "f9.png", "f10.png"]}
     (tmp_path / "cam2" / "f8.png").rename(tmp_path / "cam2" / "f11.png")

@@ -130,3 +130,27 @@ def test_a_stray_far_numbered_file_is_refused_not_written_as_empty_rows(tmp_path
     take = demo_take(tmp_path / "take", {c: range(4) for c in CAMERAS})
     (take / "cam01_json" / "cam01.0003.json").rename(take / "cam01_json" / "cam01.99999.json")
     refused(tmp_path, take, "no camera has a file between frames 3 and 99999")
+
+
+def test_image_folders_keep_the_numbers_in_their_names(tmp_path: Path) -> None:
+    """Image input was written from row 0 whatever its files were numbered (f0005.png -> Frame# 1)."""
+    import cv2
+    from pose_scenes import background, walking
+
+    from formulations.pose.human import human_model
+    from formulations.pose.render import render_silhouette
+    from service.io.calibration import load_calibration
+
+    model, rng = human_model(), np.random.default_rng(0)
+    X = walking(model, 3)
+    for c, camera in enumerate(load_calibration(CALIBRATION)):
+        folder = tmp_path / "take" / f"cam{c + 1:02d}"
+        folder.mkdir(parents=True)
+        back = background(camera, rng)
+        cv2.imwrite(str(folder / "background.png"), back)
+        for number, pose in zip((5, 6, 8), X, strict=True):
+            cv2.imwrite(str(folder / f"f{number:04d}.png"), render_silhouette(model, pose, camera, back).astype(np.uint8))
+    result = run_inline(tmp_path / "take", "--calibration", CALIBRATION, "--out", tmp_path / "p.trc", *QUICK, "--rate", "50")
+    assert result.returncode == 0, result.stderr
+    assert "no camera has a file for 1 frame between 5 and 8 (7)" in result.stderr
+    assert trc_rows(tmp_path / "p.trc") == [(str(n + 1), repr(n / 50)) for n in range(5, 9)]

@@ -108,7 +108,7 @@ def test_the_forms_parameters_alone_keep_the_documents_formulation(client):
     assert answer.status_code == 303
     page = browser.get(answer.headers["location"]).text
     options = page.split("<dt>Options</dt>")[1].split("</dd>")[0]
-    assert "ilp" in options and "time_limit" in options and "lp-l1" not in options
+    assert "ilp (time_limit 5)" in options and "lp-l1" not in options
 
 
 def test_the_forms_options_for_a_document_are_read_as_for_an_upload(client):

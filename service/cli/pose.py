@@ -72,13 +72,13 @@ def run_pose(input: Path, calibration: Path, output: Path, model_path: Path | No
         write_overlay(picture, cameras[best], fit.model, fit.positions, input.name, detections=detections[:, best],
                       numbers=numbers)
     else:
-        folders = image_folders(input)
+        numbers, folders = image_folders(input)
         if not folders:
             raise InputError(f"{input}: neither per-camera OpenPose folders (camNN_json) nor per-camera image folders")
         cameras = match_cameras(list(folders), load_calibration(calibration), calibration)
         files = list(folders.values())
-        numbers = list(range(len(files[0])))
         rows = frame_rows(numbers, input)
+        report.warn(empty_rows_warning(numbers, rows))
         with frame_progress(f"fitting {input.name}") as progress:
             fit = fit_images(cameras, files, model or human_model().scaled(1.0 / metres), metres, schedule, seed, progress)
         write_overlay(picture, cameras[0], fit.model, fit.positions, input.name,

@@ -22,6 +22,7 @@ from service.labeling.lost_subject import away_span, away_warning, unnamed_span,
 from service.labeling.shape_doubt import shape_break_warning
 from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
 from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning, spacing_frame
+from service.labeling.triangulated_scale import triangulated_scale_warning
 
 # Named from a model alone, a take is mostly doubtful when the model is of someone else: CMU
 # 85_02's subject's model on 135_02 gave 40 % doubtful labels, 77 % of them wrong (its own: 0 %).
@@ -91,7 +92,7 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
         counts = np.array([len(p) for p in capture.points])
         lines.append(unnamed_warning(unnamed_span(result.occluded, counts, capture.rate), capture.rate, start))
         lines.append(away_warning(away_span(result.occluded, counts, capture.rate), capture.rate, start))
-    else:  # camera mode: a camera whose calibration or detections are off at frame 0
+    else:  # camera mode: a camera whose calibration or detections are off at frame 0, or every camera's focal length
         problem = frame0_problem(capture.camera_frames()[0], frame0_offsets(capture.frame0_distances()))
-        lines.append(problem[1] if problem is not None else None)
+        lines += [problem[1] if problem is not None else None, triangulated_scale_warning(result.positions)]
     return [line for line in lines if line is not None]

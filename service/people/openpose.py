@@ -8,13 +8,12 @@ keypoint layout (BODY_25B has 25 keypoints; a confidence of 0 means not detected
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from service.errors import InputError
-from service.pose.openpose import numbered_files
+from service.pose.openpose import numbered_files, read_people
 
 
 def read_openpose_folder(folder: Path) -> tuple[list[int], list[list[np.ndarray]]]:
@@ -23,22 +22,11 @@ def read_openpose_folder(folder: Path) -> tuple[list[int], list[list[np.ndarray]
 
     Raises:
         InputError: a missing folder, no JSON file in it, a file name without a frame number
-            or two of one number, a file that is not OpenPose JSON, or keypoints not in triples.
+            or two of one number, a file that is not OpenPose JSON, or keypoints not finite
+            (x, y, confidence) triples (``read_people``).
     """
     if not folder.is_dir():
         raise InputError(f"{folder}: no such folder of OpenPose JSON files")
     files = numbered_files(folder)
     numbers = sorted(files)
-    return numbers, [_people(files[number]) for number in numbers]
-
-
-def _people(path: Path) -> list[np.ndarray]:
-    try:
-        people = json.loads(path.read_bytes())["people"]
-        flat = [np.asarray(person["pose_keypoints_2d"], dtype=float) for person in people]
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise InputError(f"{path}: not an OpenPose keypoint file ({error})") from None
-    for i, values in enumerate(flat):
-        if values.ndim != 1 or values.size % 3:
-            raise InputError(f"{path}: people.{i}.pose_keypoints_2d has {values.size} values, not (x, y, confidence) triples")
-    return [values.reshape(-1, 3) for values in flat]
+    return numbers, [read_people(files[number]) for number in numbers]

@@ -44,16 +44,17 @@ def _images(folder: Path) -> dict[int, Path]:
                           folder)
 
 
-def image_folders(input: Path) -> dict[str, list[Path]]:
-    """Each subfolder of ``input`` that holds images, with its frames in the order of their
-    numbers; every camera must number the same frames (paired by position, a camera starting
-    later would be fitted out of step)."""
+def image_folders(input: Path) -> tuple[list[int], dict[str, list[Path]]]:
+    """The frame numbers in the images' names, and each subfolder of ``input`` that holds images
+    with its frames in the order of those numbers; every camera must number the same frames
+    (paired by position, a camera starting later would be fitted out of step)."""
     folders = {p.name: _images(p) for p in sorted(input.iterdir()) if p.is_dir()} if input.is_dir() else {}
     folders = {name: files for name, files in folders.items() if files}
     if len({tuple(sorted(files)) for files in folders.values()}) > 1:
         listed = ", ".join(f"{name} {min(files)}-{max(files)} ({len(files)})" for name, files in folders.items())
         raise InputError(f"{input}: the cameras' images are numbered differently: {listed}")
-    return {name: [files[n] for n in sorted(files)] for name, files in folders.items()}
+    numbers = sorted(next(iter(folders.values()))) if folders else []
+    return numbers, {name: [files[n] for n in numbers] for name, files in folders.items()}
 
 
 def read_frame(path: Path, camera: Camera) -> np.ndarray:

@@ -54,6 +54,19 @@ def camera_folders(input: Path) -> list[Path]:
 
 def read_openpose_file(path: Path) -> np.ndarray:
     """``(P, 25, 3)`` keypoints of one frame; a file that is not OpenPose BODY_25B is an InputError."""
+    return np.array(read_people(path, BODY_25B)).reshape(-1, len(BODY_25B), 3)
+
+
+def read_people(path: Path, layout: tuple[str, ...] | None = None) -> list[np.ndarray]:
+    """Each person's ``(J, 3)`` keypoints (x, y, confidence) in one OpenPose JSON, J the length
+    of ``layout`` (the keypoints' names: BODY_25B's, the one layout ``pose`` fits) when given,
+    else any; a person with no pose keypoints (OpenPose writes hand- or face-only people so) is
+    left out.
+
+    Raises:
+        InputError: not JSON, no ``people`` list, values not numeric (x, y, confidence) triples
+            (or not ``layout``'s count), or a keypoint not finite pixels with a confidence >= 0.
+    """
     try:
         data = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as error:
@@ -63,27 +76,28 @@ def read_openpose_file(path: Path) -> np.ndarray:
     people = []
     for number, person in enumerate(data["people"]):
         values = person.get("pose_keypoints_2d") if isinstance(person, dict) else None
-        if values == []:  # OpenPose writes a person with hand or face keypoints only like this
+        if values == []:
             continue
-        if not isinstance(values, list) or len(values) != VALUES:
+        if not isinstance(values, list) or len(values) % 3 or (layout is not None and len(values) != 3 * len(layout)):
             found = len(values) if isinstance(values, list) else "no"
-            raise InputError(f"{path}: person {number} has {found} pose_keypoints_2d values, BODY_25B has {VALUES}")
+            expected = "not (x, y, confidence) triples" if layout is None else f"BODY_25B has {3 * len(layout)}"
+            raise InputError(f"{path}: person {number} has {found} pose_keypoints_2d values, {expected}")
         try:
-            keypoints = np.array(values, dtype=float).reshape(len(BODY_25B), 3)
+            keypoints = np.array(values, dtype=float).reshape(-1, 3)
         except (TypeError, ValueError):
             raise InputError(f"{path}: person {number} has non-numeric keypoints") from None
-        people.append(_checked(keypoints, path, number))
-    return np.array(people).reshape(-1, len(BODY_25B), 3)
+        people.append(_checked(keypoints, path, number, layout))
+    return people
 
 
-def _checked(keypoints: np.ndarray, path: Path, number: int) -> np.ndarray:
-    """A null (read as NaN), infinite or absurd value would reach the particle filter's
-    energy as NaN; OpenPose writes an undetected keypoint as 0, 0, 0, so say so."""
+def _checked(keypoints: np.ndarray, path: Path, number: int, layout: tuple[str, ...] | None) -> np.ndarray:
+    """A null (read as NaN), infinite or absurd value would reach the geometry as NaN; OpenPose
+    writes an undetected keypoint as 0, 0, 0, so say so."""
     bad = np.flatnonzero(~(np.abs(keypoints[:, :2]) <= MAX_PIXEL).all(axis=1) | ~(keypoints[:, 2] >= 0))
     if len(bad):
-        name, value = BODY_25B[bad[0]], keypoints[bad[0]].tolist()
-        raise InputError(f"{path}: person {number}'s {name} keypoint is {value}: coordinates must be finite pixels "
-                         f"and the confidence a number >= 0 (an undetected keypoint is 0, 0, 0)")
+        name = f"{layout[bad[0]]} keypoint" if layout is not None else f"keypoint {bad[0]}"
+        raise InputError(f"{path}: person {number}'s {name} is {keypoints[bad[0]].tolist()}: coordinates must "
+                         f"be finite pixels and the confidence a number >= 0 (an undetected keypoint is 0, 0, 0)")
     return keypoints
 
 

@@ -66,10 +66,19 @@ def options_of(document: bytes) -> JobOptions:
     formulation = fields["formulation"]
     cameras = fields.get("detections") is not None
     frames = next(iter(fields["detections"].values()), []) if cameras else fields["points"]
-    return JobOptions(formulation=formulation if isinstance(formulation, str) else json.dumps(formulation),
+    return JobOptions(formulation=formulation_text(formulation),
                       window=fields["window"], association=fields["association"] if cameras else None,
                       markers=len(fields["markers"]) if fields.get("markers") is not None else None, frames=len(frames),
                       model=fields.get("model") is not None, warnings=_model_warnings(fields))
+
+
+def formulation_text(formulation: str | dict) -> str:
+    """A document's formulation as a user reads it: ``ilp (time_limit 5)`` for
+    ``{"name": "ilp", "time_limit": 5}`` (the page showed that JSON, quotes escaped)."""
+    if isinstance(formulation, str):
+        return formulation
+    parameters = ", ".join(f"{key} {json.dumps(value)}" for key, value in formulation.items() if key != "name")
+    return f"{formulation['name']}{f' ({parameters})' if parameters else ''}"
 
 
 def _model_warnings(fields: dict) -> tuple[str, ...]:
