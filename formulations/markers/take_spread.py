@@ -26,6 +26,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.lengths import lengths
 from formulations.markers.state import MarkerState
 
 Array = NDArray[np.float64]
@@ -47,7 +48,7 @@ def take_spread(positions: Array, neighbours: NDArray[np.int64]) -> Array:
     # marker by marker: (F, K) at a time, where (F, N, K, 3) at once took 200 MB for 5,200
     # frames of 41 markers, and gigabytes for a long take assembled by the service
     for m in range(len(neighbours)):
-        distance = np.linalg.norm(positions[:, m, None] - positions[:, neighbours[m]], axis=2)  # (F, K)
+        distance = lengths(positions[:, m, None] - positions[:, neighbours[m]])  # (F, K)
         enough = np.isfinite(distance).sum(axis=0) >= MIN_FRAMES
         if enough.any():
             low, high = np.nanpercentile(distance[:, enough], [10, 90], axis=0)

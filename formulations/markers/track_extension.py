@@ -26,6 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from formulations.markers.lengths import lengths
+
 Array = NDArray[np.float64]
 Index = NDArray[np.int64]
 GATE_MEDIANS = 3.0  # the 99.9th percentile of a 3D Gaussian's norm is 2.6 times its median
@@ -103,7 +105,7 @@ def _gates(flat: Array, offsets: Index, taken: Index) -> Array:
     position = np.full(taken.shape + (3,), np.nan)
     held = taken >= 0
     position[held] = flat[(offsets[:-1, None] + taken)[held]]
-    residual = np.linalg.norm(position[2:] - 2 * position[1:-1] + position[:-2], axis=2)
+    residual = lengths(position[2:] - 2 * position[1:-1] + position[:-2])
     enough = np.isfinite(residual).sum(axis=0) >= MIN_TRIPLES
     gate[enough] = GATE_MEDIANS * np.nanmedian(residual[:, enough], axis=0)
     return gate
