@@ -51,3 +51,15 @@ def test_a_rigid_pair_mislabeled_in_a_few_frames_stays_rigid() -> None:
     spread = take_spread(positions, np.array([[1, 2], [0, 2], [0, 1]]))
     plain = np.var(np.linalg.norm(positions[:, 0] - positions[:, 1], axis=1))
     assert spread[0, 0] < 4.0 < 1000.0 < plain
+
+
+def test_the_deciles_are_numpys_percentiles_for_every_count_of_labeled_frames() -> None:
+    """``_deciles`` writes out numpy's linear percentile for all rows at once: pinned to it."""
+    from formulations.markers.take_spread import _deciles
+
+    rng = np.random.default_rng(2)
+    distance = rng.gamma(2.0, 50.0, (120, 61))
+    for row, n in enumerate(range(2, 62)):  # n finite values: (n - 1) q whole or not
+        distance[row, rng.permutation(61)[n:]] = np.nan
+    distance[60:] = np.round(distance[60:], 0)  # ties
+    assert np.array_equal(_deciles(distance), np.nanpercentile(distance, [10, 90], axis=1), equal_nan=True)

@@ -37,6 +37,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from formulations.markers.guide import Gate, GuideTrack, guide_track
+from formulations.markers.lengths import lengths
 from formulations.markers.likelihood import marker_likelihood
 from formulations.markers.state import MarkerState
 from formulations.markers.step_motion import HALF_WIDTH, expected_steps
@@ -135,7 +136,7 @@ def cloud_candidates(
     likelihood = (marker_likelihood(state, guide, frames, obj[:named], frame[:named], location[:named], unnamed)
                   if gating.likelihood else None)
     if likelihood is None:
-        off_prediction = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1)
+        off_prediction = lengths(location - guide.predicted[frame - 1, obj])
         sigma = gating.prediction_sigma_mm + gating.prediction_sigma_growth_mm * guide.unseen[frame - 1, obj]
         template_cost += gating.prediction_weight * np.minimum(off_prediction / sigma, gating.prediction_cap_sigmas)
     candidates = WindowCandidates(
@@ -173,10 +174,11 @@ def _shape_deviation(
     state: MarkerState, guide: GuideTrack, obj: np.ndarray, frame: np.ndarray, location: np.ndarray
 ) -> np.ndarray:
     """Shape term per candidate: deviation from learned neighbour distances (see module doc)."""
-    neighbours = state.neighbours[obj]  # (C, K)
-    predicted = guide.predicted[frame[:, None] - 1, neighbours]  # (C, K, 3)
-    distance = np.linalg.norm(location[:, None] - predicted, axis=2)
-    weight = guide.tracked[frame[:, None] - 1, neighbours] / (state.distance_var[obj] + 1.0)
+    # (frame, neighbour) as one flat index, taken twice: a gather by two index arrays costs more
+    at = (frame[:, None] - 1) * guide.predicted.shape[1] + state.neighbours[obj]  # (C, K)
+    predicted = np.take(guide.predicted.reshape(-1, 3), at, axis=0)  # (C, K, 3)
+    distance = lengths(location[:, None] - predicted)
+    weight = guide.tracked.ravel()[at] / (state.distance_var[obj] + 1.0)
     deviation = np.minimum(np.abs(distance - state.distance_mean[obj]), SHAPE_CAP_MM)
     mean_deviation: np.ndarray = (weight * deviation).sum(axis=1) / np.maximum(weight.sum(axis=1), SHAPE_WEIGHT_FLOOR)
     return mean_deviation

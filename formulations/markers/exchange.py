@@ -71,6 +71,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial.distance import cdist
 
+from formulations.markers.lengths import lengths
 from formulations.markers.state import MarkerState
 
 SHAPE_CAP_MM = 50.0  # c, as the shape term of ``cloud_candidates``
@@ -86,7 +87,11 @@ _TRACK_FIELDS = (
 def shape_deviations(state: MarkerState, positions: np.ndarray) -> np.ndarray:
     """``(N, P)`` D[m, p] (module doc) for candidate positions ``(P, 3)``; inf for markers with
     no visible neighbour (nothing to judge them by)."""
-    distance = np.linalg.norm(positions[None, :, None] - state.position[state.neighbours][:, None], axis=3)  # (N, P, K)
+    return _deviations_at(state, lengths(positions[None, :, None] - state.position[state.neighbours][:, None]))
+
+
+def _deviations_at(state: MarkerState, distance: np.ndarray) -> np.ndarray:
+    """``(N, P)`` D[m, p] from ``distance`` ``(N, P, K)``, ||r_p - r_j|| to each of m's neighbours j."""
     # A neighbour that holds the position itself says nothing of it: in an exchange it is the
     # partner, which moves too (their mutual distance is the same either way).
     weight = (state.visible[state.neighbours] / (state.distance_var + 1.0))[:, None] * (distance > 1e-6)  # (N, P, K)
@@ -190,7 +195,8 @@ def _whole_change_fits(state: MarkerState, repaired: MarkerState, change: np.nda
 
 def _own_deviations(state: MarkerState) -> np.ndarray:
     """``(N,)`` each seen marker's shape deviation at its own position; ``NONE_MM`` for the others."""
-    own = np.diag(shape_deviations(state, state.position))
+    # D[m, m] alone: the whole (N, N) of ``shape_deviations`` for its diagonal cost N times as much
+    own = _deviations_at(state, lengths(state.position[:, None] - state.position[state.neighbours])[:, None])[:, 0]
     return np.where(state.visible & np.isfinite(own), own, NONE_MM)
 
 

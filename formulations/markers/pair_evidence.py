@@ -68,6 +68,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from formulations.markers.lengths import lengths
 from formulations.markers.mirror import RIGID_SD_MM, LearnedPairs
 from formulations.markers.state import MarkerState
 from formulations.markers.turns import taken_positions
@@ -136,10 +137,10 @@ def _exchange_ratio(
     a, b = pairs[:, 0], pairs[:, 1]
     together = np.isfinite(where[:, a, 0]) & np.isfinite(where[:, b, 0])  # (M, P)
     xa, xb = where[:, a], where[:, b]
-    a_at_b, a_terms = _log_shape(state, witnesses, a, xb, b)
-    b_at_a, b_terms = _log_shape(state, witnesses, b, xa, a)
-    side_a = a_at_b - _log_shape(state, witnesses, a, xa, b)[0]
-    side_b = b_at_a - _log_shape(state, witnesses, b, xb, a)[0]
+    # each marker judged at the other's point and at its own, its witnesses gathered once
+    (a_at_b, a_at_a), (a_terms, _) = _log_shape(state, witnesses, a, np.stack([xb, xa]), b)
+    (b_at_a, b_at_b), (b_terms, _) = _log_shape(state, witnesses, b, np.stack([xa, xb]), a)
+    side_a, side_b = a_at_b - a_at_a, b_at_a - b_at_b
 
     def from_frame(per_frame: np.ndarray) -> np.ndarray:  # (M, P): sum over f >= f0
         summed: np.ndarray = np.cumsum(np.where(together, per_frame, 0.0)[::-1], axis=0)[::-1]
@@ -160,8 +161,8 @@ def _may_begin(xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
     inherited), one after either was unseen (it came back on the other's track), or where
     the labels step farther than the exchanged ones would (the window made it there).
     Elsewhere an exchange would put a jump into two smooth tracks."""
-    steps = np.linalg.norm(xa[1:] - xa[:-1], axis=2) + np.linalg.norm(xb[1:] - xb[:-1], axis=2)
-    crossed = np.linalg.norm(xb[1:] - xa[:-1], axis=2) + np.linalg.norm(xa[1:] - xb[:-1], axis=2)
+    steps = lengths(xa[1:] - xa[:-1]) + lengths(xb[1:] - xb[:-1])
+    crossed = lengths(xb[1:] - xa[:-1]) + lengths(xa[1:] - xb[:-1])
     smooth = np.isfinite(steps) & (steps < crossed)
     first = np.ones((1,) + steps.shape[1:], bool)
     may: np.ndarray = np.concatenate([first, ~smooth])
@@ -171,15 +172,15 @@ def _may_begin(xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
 def _log_shape(
     state: MarkerState, witnesses: np.ndarray, m: np.ndarray, x: np.ndarray, partner: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(M, P)`` l_m(x, f) of the module doc for ``x`` ``(M, P, 3)``, the partner's distance
-    left out, and ``(M, P)`` how many neighbours testified."""
+    """``(..., M, P)`` l_m(x, f) of the module doc for ``x`` ``(..., M, P, 3)``, the partner's
+    distance left out, and ``(..., M, P)`` how many neighbours testified."""
     neighbours = state.neighbours[m]  # (P, K)
-    distance = np.linalg.norm(x[:, :, None] - witnesses[:, neighbours], axis=3)  # (M, P, K)
+    distance = lengths(x[..., None, :] - witnesses[:, neighbours])  # (..., M, P, K)
     z = (distance - state.distance_mean[m]) / np.sqrt(np.maximum(state.distance_var[m], 1.0))
     rigid = _rigid(state, m[:, None], neighbours, state.distance_var[m])  # (P, K)
     counted = np.isfinite(z) & (neighbours != partner[:, None]) & rigid
-    log_f: np.ndarray = -0.5 * np.where(counted, np.minimum(z**2, CAP**2), 0.0).sum(axis=2)
-    return log_f, counted.sum(axis=2)
+    log_f: np.ndarray = -0.5 * np.where(counted, np.minimum(z**2, CAP**2), 0.0).sum(axis=-1)
+    return log_f, counted.sum(axis=-1)
 
 
 def _rigid(state: MarkerState, m: np.ndarray, j: np.ndarray, var: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
+from scipy.spatial.distance import cdist
 
 from formulations.markers.rigid import rigid_transform
 
@@ -133,6 +134,6 @@ def free_points(points: np.ndarray, trusted: np.ndarray, claim_mm: float) -> np.
     """The points no trusted prediction lies within ``claim_mm`` of."""
     if len(trusted) == 0 or len(points) == 0:
         return points
-    near, _ = cKDTree(trusted).query(points)
-    free: np.ndarray = points[near > claim_mm]
+    # every distance at once: a search tree built for one query per frame costs three times as much
+    free: np.ndarray = points[cdist(points, trusted).min(axis=1) > claim_mm]
     return free

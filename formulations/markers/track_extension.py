@@ -21,10 +21,13 @@ which is right), so the result does not depend on the markers' order.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import chain
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
+
+from formulations.markers.lengths import lengths
 
 Array = NDArray[np.float64]
 Index = NDArray[np.int64]
@@ -47,15 +50,20 @@ def extend_tracks(points: Sequence[Array], point_index: Index) -> Index:
     held = taken >= 0
     claimed[(offsets[:-1, None] + taken)[held]] = True
     gate = _gates(flat, offsets, taken)
-    while _extend_once(tree, flat, offsets, claimed, taken, gate):
+    gated: dict[int, dict[int, list[int]]] = {1: {}, -1: {}}
+    while _extend_once(tree, flat, offsets, claimed, taken, gate, gated):
         pass
     return taken
 
 
-def _extend_once(tree: cKDTree, flat: Array, offsets: Index, claimed: NDArray[np.bool_], taken: Index, gate: Array) -> bool:
-    """Move every gap end one frame inwards; True if any marker took a point."""
+def _extend_once(
+    tree: cKDTree, flat: Array, offsets: Index, claimed: NDArray[np.bool_], taken: Index, gate: Array,
+    gated: dict[int, dict[int, list[int]]],
+) -> bool:
+    """Move every gap end one frame inwards; True if any marker took a point. ``gated``: per
+    direction, the points in each end's gate (``_wanted``)."""
     frame, marker, want = (np.concatenate(a) for a in zip(*(
-        _wanted(tree, flat, offsets, claimed, taken, gate, step) for step in (1, -1))))
+        _wanted(tree, flat, offsets, claimed, taken, gate, step, gated[step]) for step in (1, -1))))
     ok = want >= 0
     frame, marker, want = np.unique(np.column_stack([frame[ok], marker[ok], want[ok]]), axis=0).T
     # a point two ends want, or a frame one marker's two ends read differently: nothing here can say which is right
@@ -69,21 +77,37 @@ def _extend_once(tree: cKDTree, flat: Array, offsets: Index, claimed: NDArray[np
 
 def _wanted(
     tree: cKDTree, flat: Array, offsets: Index, claimed: NDArray[np.bool_], taken: Index, gate: Array, step: int,
+    gated: dict[int, list[int]],
 ) -> tuple[Index, Index, Index]:
-    """Gap ends entered in direction ``step``: frame, marker and the one free point in the gate (-1 none)."""
+    """Gap ends entered in direction ``step``: frame, marker and the one free point in the gate (-1 none).
+
+    ``gated`` keeps the points in each end's gate by slot (frame * N + marker) from round to
+    round: x^ reads two labeled frames, which no round changes, and most ends wait many
+    rounds (two free points in the gate) while another end moves.
+    """
     labeled = taken >= 0
     ends = ~labeled & _shifted(labeled, step) & _shifted(labeled, 2 * step) & np.isfinite(gate)[None]
     frame, marker = np.nonzero(ends)
     want = np.full(len(frame), -1, dtype=np.int64)
     if not len(frame):
         return frame, marker, want
-    last = flat[offsets[frame - step] + taken[frame - step, marker]]
-    prior = flat[offsets[frame - 2 * step] + taken[frame - 2 * step, marker]]
-    guess = np.column_stack([2 * last - prior, frame * _FRAME_APART])
-    for k, found in enumerate(tree.query_ball_point(guess, gate[marker])):
-        free = [p for p in found if not claimed[p]]
-        if len(free) == 1:
-            want[k] = free[0]
+    slots = (frame * taken.shape[1] + marker).tolist()
+    new = np.array([k for k, slot in enumerate(slots) if slot not in gated], dtype=np.int64)
+    if len(new):
+        f, m = frame[new], marker[new]
+        last = flat[offsets[f - step] + taken[f - step, m]]
+        prior = flat[offsets[f - 2 * step] + taken[f - 2 * step, m]]
+        guess = np.column_stack([2 * last - prior, f * _FRAME_APART])
+        for k, points in zip(new.tolist(), tree.query_ball_point(guess, gate[m])):
+            gated[slots[k]] = points
+    found = [gated[slot] for slot in slots]
+    # every end's points as one flat array: no Python loop over the ends' points
+    count = np.fromiter(map(len, found), np.int64, len(found))
+    point = np.fromiter(chain.from_iterable(found), np.int64, count.sum())
+    free = ~claimed[point]
+    end = np.repeat(np.arange(len(found)), count)[free]
+    alone = np.bincount(end, minlength=len(found))[end] == 1
+    want[end[alone]] = point[free][alone]
     return frame, marker, want
 
 
@@ -103,7 +127,7 @@ def _gates(flat: Array, offsets: Index, taken: Index) -> Array:
     position = np.full(taken.shape + (3,), np.nan)
     held = taken >= 0
     position[held] = flat[(offsets[:-1, None] + taken)[held]]
-    residual = np.linalg.norm(position[2:] - 2 * position[1:-1] + position[:-2], axis=2)
+    residual = lengths(position[2:] - 2 * position[1:-1] + position[:-2])
     enough = np.isfinite(residual).sum(axis=0) >= MIN_TRIPLES
     gate[enough] = GATE_MEDIANS * np.nanmedian(residual[:, enough], axis=0)
     return gate
