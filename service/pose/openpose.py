@@ -54,18 +54,17 @@ def camera_folders(input: Path) -> list[Path]:
 
 def read_openpose_file(path: Path) -> np.ndarray:
     """``(P, 25, 3)`` keypoints of one frame; a file that is not OpenPose BODY_25B is an InputError."""
-    return np.array(read_people(path, BODY_25B)).reshape(-1, len(BODY_25B), 3)
+    return np.array(read_people(path, body_25b=True)).reshape(-1, len(BODY_25B), 3)
 
 
-def read_people(path: Path, layout: tuple[str, ...] | None = None) -> list[np.ndarray]:
-    """Each person's ``(J, 3)`` keypoints (x, y, confidence) in one OpenPose JSON, J the length
-    of ``layout`` (the keypoints' names: BODY_25B's, the one layout ``pose`` fits) when given,
-    else any; a person with no pose keypoints (OpenPose writes hand- or face-only people so) is
-    left out.
+def read_people(path: Path, body_25b: bool = False) -> list[np.ndarray]:
+    """Each person's ``(J, 3)`` keypoints (x, y, confidence) in one OpenPose JSON: BODY_25B's 25
+    (the layout ``pose`` fits) with ``body_25b``, else any J; a person with no pose keypoints
+    (OpenPose writes hand- or face-only people so) is left out.
 
     Raises:
         InputError: not JSON, no ``people`` list, values not numeric (x, y, confidence) triples
-            (or not ``layout``'s count), or a keypoint not finite pixels with a confidence >= 0.
+            (or not BODY_25B's count), or a keypoint not finite pixels with a confidence >= 0.
     """
     try:
         data = json.loads(path.read_text())
@@ -78,24 +77,24 @@ def read_people(path: Path, layout: tuple[str, ...] | None = None) -> list[np.nd
         values = person.get("pose_keypoints_2d") if isinstance(person, dict) else None
         if values == []:
             continue
-        if not isinstance(values, list) or len(values) % 3 or (layout is not None and len(values) != 3 * len(layout)):
+        if not isinstance(values, list) or len(values) % 3 or (body_25b and len(values) != VALUES):
             found = len(values) if isinstance(values, list) else "no"
-            expected = "not (x, y, confidence) triples" if layout is None else f"BODY_25B has {3 * len(layout)}"
+            expected = f"BODY_25B has {VALUES}" if body_25b else "not (x, y, confidence) triples"
             raise InputError(f"{path}: person {number} has {found} pose_keypoints_2d values, {expected}")
         try:
             keypoints = np.array(values, dtype=float).reshape(-1, 3)
         except (TypeError, ValueError):
             raise InputError(f"{path}: person {number} has non-numeric keypoints") from None
-        people.append(_checked(keypoints, path, number, layout))
+        people.append(_checked(keypoints, path, number, body_25b))
     return people
 
 
-def _checked(keypoints: np.ndarray, path: Path, number: int, layout: tuple[str, ...] | None) -> np.ndarray:
+def _checked(keypoints: np.ndarray, path: Path, number: int, body_25b: bool) -> np.ndarray:
     """A null (read as NaN), infinite or absurd value would reach the geometry as NaN; OpenPose
     writes an undetected keypoint as 0, 0, 0, so say so."""
     bad = np.flatnonzero(~(np.abs(keypoints[:, :2]) <= MAX_PIXEL).all(axis=1) | ~(keypoints[:, 2] >= 0))
     if len(bad):
-        name = f"{layout[bad[0]]} keypoint" if layout is not None else f"keypoint {bad[0]}"
+        name = f"{BODY_25B[bad[0]]} keypoint" if body_25b else f"keypoint {bad[0]}"
         raise InputError(f"{path}: person {number}'s {name} is {keypoints[bad[0]].tolist()}: coordinates must "
                          f"be finite pixels and the confidence a number >= 0 (an undetected keypoint is 0, 0, 0)")
     return keypoints
