@@ -82,8 +82,8 @@ class BackLinks:
             for stop in stopped:
                 walk(*stop)
         if followed:
-            row, k, point = zip(*followed)
-            track[list(row), list(k)] = point
+            rows, back, points_on = zip(*followed)
+            track[list(rows), list(back)] = points_on
         return track
 
     def _measure(self, frame: int, predicted: list[tuple[float, ...]]) -> None:
