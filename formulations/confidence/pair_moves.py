@@ -104,7 +104,7 @@ class _Narrowed:
             NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None]:
         """Both objects' narrowed steps; with a layout pair, its term moved from the held
         partner's steps into the joint ones."""
-        a, b = _narrow(grid.step, self.first, self.order_a), _narrow(grid.step, self.second, self.order_b)
+        a, b = _narrow(grid, self.first, self.order_a), _narrow(grid, self.second, self.order_b)
         if not (weight > 0).any():
             return a, b, None
         at_a, at_b = _slots(location[self.first], self.order_a), _slots(location[self.second], self.order_b)
@@ -139,11 +139,11 @@ def _position(order: NDArray[np.intp], slot: NDArray[np.intp]) -> NDArray[np.int
     return position
 
 
-def _narrow(step: NDArray[np.float64], objects: NDArray[np.intp], order: NDArray[np.intp]) -> NDArray[np.float64]:
+def _narrow(grid: Layers, objects: NDArray[np.intp], order: NDArray[np.intp]) -> NDArray[np.float64]:
     """``(P, M + 1, W, W)`` steps of ``objects[p]`` between the ordered slots of consecutive frames."""
     p = objects[:, None, None, None]
     f = np.arange(order.shape[1] - 1)[None, :, None, None]
-    narrowed: NDArray[np.float64] = step[p, f, order[:, :-1, :, None], order[:, 1:, None, :]]
+    narrowed: NDArray[np.float64] = grid.step[grid.at(p, f, order[:, :-1, :, None], order[:, 1:, None, :])]
     return narrowed
 
 
