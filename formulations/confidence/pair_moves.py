@@ -51,11 +51,22 @@ def lower_pair_margins(
         pair.exclude_shared(problem, grid, nodes, allowed)
         marginal = pair_min_marginals(a, b, allowed, joint)
         base = _path_cost(pair.chosen_a, pair.chosen_b, a, b, joint)
-        t = np.arange(grid.chosen.shape[1] - 2)[None, :, None]
-        np.minimum.at(margin, (first[batch, None, None], t, pair.order_a[:, 1:-1]),
-                      np.where(pair.valid_a[:, 1:-1], marginal.min(axis=3) - base[:, None, None], np.inf))
-        np.minimum.at(margin, (second[batch, None, None], t, pair.order_b[:, 1:-1]),
-                      np.where(pair.valid_b[:, 1:-1], marginal.min(axis=2) - base[:, None, None], np.inf))
+        _lower(margin, first[batch], pair.order_a[:, 1:-1],
+               np.where(pair.valid_a[:, 1:-1], marginal.min(axis=3) - base[:, None, None], np.inf))
+        _lower(margin, second[batch], pair.order_b[:, 1:-1],
+               np.where(pair.valid_b[:, 1:-1], marginal.min(axis=2) - base[:, None, None], np.inf))
+
+
+def _lower(margin: NDArray[np.float64], objects: NDArray[np.intp], slots: NDArray[np.intp],
+           value: NDArray[np.float64]) -> None:
+    """``margin[objects[p], t, slots[p, t, k]]`` lowered to ``value[p, t, k]`` where that is less (in place).
+
+    By flat index: ``np.minimum.at`` takes a tuple of index arrays 4-5x slower.
+    """
+    flat = np.reshape(margin, -1, copy=False)
+    frames, width = margin.shape[1:]
+    index = (objects[:, None, None] * frames + np.arange(frames)[None, :, None]) * width + slots
+    np.minimum.at(flat, index.ravel(), value.ravel())
 
 
 def _worthwhile(
