@@ -63,7 +63,8 @@ class BackLinks:
         def walk(row: int, k: int, last: tuple[float, ...], step: tuple[float, ...]) -> None:
             """Follow one track back from its k-th step while the links are known."""
             while k < depth and len(self.frames[template - 1 - k]):
-                link = self._links.get(template - 1 - k, {}).get(_plus(last, step))
+                at = (last[0] + step[0], last[1] + step[1], last[2] + step[2])  # as numpy adds them: the same floats
+                link = self._links.get(template - 1 - k, {}).get(at)
                 if link is None:
                     waiting.setdefault(k, []).append((row, k, last, step))
                     return
@@ -71,14 +72,14 @@ class BackLinks:
                 if not (first <= (reach if k == 0 else link_radius) and second > first + link_radius):
                     return
                 followed.append((row, k, point))
-                k, last, step = k + 1, point, _minus(point, last)
+                k, last, step = k + 1, point, (point[0] - last[0], point[1] - last[1], point[2] - last[2])
 
         for row, at in enumerate(np.asarray(points, float).reshape(-1, 3).tolist()):
             walk(row, 0, tuple(at), (0.0, 0.0, 0.0))  # no velocity yet: the first step is predicted where the track is
         while waiting:  # the links of the stopped walks' next step, one frame at a time, then on
             k = min(waiting)
             stopped = waiting.pop(k)
-            self._measure(template - 1 - k, [_plus(last, step) for _, _, last, step in stopped])
+            self._measure(template - 1 - k, [(x + dx, y + dy, z + dz) for _, _, (x, y, z), (dx, dy, dz) in stopped])
             for stop in stopped:
                 walk(*stop)
         if followed:
@@ -96,14 +97,6 @@ class BackLinks:
 
 
 _Walk = tuple[int, int, tuple[float, ...], tuple[float, ...]]  # (row, steps taken, where it is, its last step back)
-
-
-def _plus(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, ...]:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-
-def _minus(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, ...]:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
 def _two_nearest(distance: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
