@@ -19,6 +19,7 @@ to the end of the take.
 
 from __future__ import annotations
 
+from bisect import bisect_left
 from collections.abc import Sequence
 
 import numpy as np
@@ -42,6 +43,7 @@ class BackLinks:
 
     def __init__(self, frames: Sequence[np.ndarray]) -> None:
         self.frames = frames
+        self._empty = [frame for frame, points in enumerate(frames) if not len(points)]  # where every track breaks
         self._links: dict[int, dict[tuple[float, ...], tuple[tuple[float, ...], float, float]]] = {}
 
     def back_tracks(self, points: np.ndarray, template: int, depth: int, reach: float, link_radius: float,
@@ -59,16 +61,18 @@ class BackLinks:
         track = np.full((len(points), depth, 3), np.nan)
         followed: list[tuple[int, int, tuple[float, ...]]] = []  # (row, frames back - 1, point)
         waiting: dict[int, list[_Walk]] = {}  # walks stopped at a link not measured yet, by their step
+        empty = bisect_left(self._empty, template)  # the empty frames before the template: the last one stops all
+        steps = min(depth, template - 1 - self._empty[empty - 1]) if empty else depth
 
         def walk(row: int, k: int, last: tuple[float, ...], step: tuple[float, ...]) -> None:
             """Follow one track back from its k-th step while the links are known."""
-            while k < depth and len(self.frames[template - 1 - k]):
+            while k < steps:
                 at = (last[0] + step[0], last[1] + step[1], last[2] + step[2])  # as numpy adds them: the same floats
-                link = self._links.get(template - 1 - k, {}).get(at)
-                if link is None:
+                try:
+                    point, first, second = self._links[template - 1 - k][at]
+                except KeyError:  # not measured yet
                     waiting.setdefault(k, []).append((row, k, last, step))
                     return
-                point, first, second = link
                 if not (first <= (reach if k == 0 else link_radius) and second > first + link_radius):
                     return
                 followed.append((row, k, point))
