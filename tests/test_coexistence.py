@@ -6,7 +6,7 @@ from rigid_scenes import SwingingSegment
 
 import service.labeling.cloud as cloud_chain
 from formulations.markers.cloud_candidates import CloudGating, cloud_candidates
-from formulations.markers.coexistence import back_tracks, coexisted
+from formulations.markers.coexistence import BackLinks, coexisted
 from formulations.markers.exchange import repair_exchanges
 from formulations.markers.state import MarkerState
 from formulations.markers.unnamed import WindowSurround
@@ -18,6 +18,11 @@ STEP = np.array([4.0, 1.0, 0.0])
 def _walk(start: np.ndarray, frames: int) -> list[np.ndarray]:
     """Frames going back from the template: one point walking at STEP, a still one far off."""
     return [np.vstack([start - (k + 1) * STEP, [500.0, 0.0, 0.0]]) for k in range(frames)]
+
+
+def back_tracks(points: np.ndarray, earlier: list[np.ndarray], reach: float, link_radius: float) -> np.ndarray:
+    """The tracks of ``points`` (the template frame's) back through ``earlier``, the frame before the template first."""
+    return BackLinks(earlier[::-1] + [points]).back_tracks(points, len(earlier), len(earlier), reach, link_radius)
 
 
 def test_a_track_is_followed_back_at_its_own_velocity_until_it_ends():
@@ -33,6 +38,21 @@ def test_a_track_stops_where_two_points_could_continue_it():
     earlier[2] = np.vstack([earlier[2], earlier[2][0] + [1.0, 0.0, 0.0]])  # a second point 1 mm off
     track = back_tracks(np.zeros((1, 3)), earlier, reach=10.0, link_radius=2.0)
     assert np.isfinite(track[0, :2]).all() and np.isnan(track[0, 2:]).all()
+
+
+def test_links_kept_from_earlier_windows_give_the_tracks_measured_afresh():
+    rng = np.random.default_rng(3)
+    # points drifting apart at their own velocities, jittered, one missing now and then
+    start, velocity = rng.uniform(0, 200, (6, 3)), rng.uniform(-3, 3, (6, 3))
+    frames = [start + t * velocity + rng.normal(0, 0.2, (6, 3)) for t in range(80)]
+    frames = [f[rng.random(6) > 0.02] for f in frames]
+    kept = BackLinks(frames)
+    for template, depth, link_radius in [(40, 30, 2.0), (45, 45, 1.5), (60, 50, 2.5), (79, 30, 2.0), (50, 50, 2.0)]:
+        points = frames[template]
+        again = kept.back_tracks(points, template, depth, 8.0, link_radius)
+        afresh = BackLinks(frames).back_tracks(points, template, depth, 8.0, link_radius)
+        assert np.isfinite(afresh[:, 5:]).any()  # the setup: tracks are followed some way back
+        assert np.array_equal(again, afresh, equal_nan=True)
 
 
 def test_only_a_track_seen_elsewhere_in_the_frame_a_marker_was_last_seen_coexisted():

@@ -79,6 +79,16 @@ def test_three_objects_margins_are_the_two_object_moves_and_bound_the_rest(seed,
     assert (ours >= exact - 1e-9).all()
 
 
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("mu", [0.0, 0.4])
+def test_objects_of_different_widths_have_the_enumerated_margins(seed, mu):
+    # 1, 2 and 4 candidates a frame: each object's steps in a batch of its own width (``layers``)
+    problem = random_window(seed=seed, n_objects=3, n_frames=3, n_points=4, per_object=(1, 2, 4), mu=mu)
+    path = get_formulation("ilp").solve(problem).path
+    assert len(layers(problem, path).batches) == 3
+    assert np.allclose(margins_of(problem, path), exact_margins(problem, path, most_moved=2), atol=1e-9)
+
+
 def test_probability_is_the_max_marginal_formula_on_every_label():
     problem = random_window(seed=2, n_objects=2, n_frames=3, n_points=3, per_object=2)
     path = get_formulation("ilp").solve(problem).path

@@ -20,10 +20,11 @@ from formulations.window.problem import WindowProblem
 
 
 def random_window(
-    seed: int, n_objects: int = 3, n_frames: int = 3, n_points: int = 4, per_object: int = 2,
+    seed: int, n_objects: int = 3, n_frames: int = 3, n_points: int = 4, per_object: int | tuple[int, ...] = 2,
     mu: float = 0.0, dim: int = 2, likelihood: bool = False,
 ) -> WindowProblem:
-    """Objects drawing ``per_object`` candidates each frame from ``n_points`` shared points.
+    """Objects drawing ``per_object`` candidates each frame (or object n ``per_object[n]``) from
+    ``n_points`` shared points.
 
     ``likelihood``: price arcs by random negative log-likelihood terms
     (``formulations.window.likelihood``) instead of Jiang's weights.
@@ -31,11 +32,12 @@ def random_window(
     rng = np.random.default_rng(seed)
     points = rng.uniform(0, 10, size=(n_frames, n_points, dim))
     objects, frames, ids = [], [], []
+    drawn = (per_object,) * n_objects if isinstance(per_object, int) else per_object
     for n in range(n_objects):
         for m in range(n_frames):
-            chosen = rng.choice(n_points, size=per_object, replace=False)
-            objects += [n] * per_object
-            frames += [m + 1] * per_object
+            chosen = rng.choice(n_points, size=drawn[n], replace=False)
+            objects += [n] * drawn[n]
+            frames += [m + 1] * drawn[n]
             ids += list(m * n_points + chosen)
     objects, frames, ids = np.array(objects), np.array(frames), np.array(ids)
     location = points.reshape(-1, dim)[ids]

@@ -53,13 +53,19 @@ def reading_margins(
     if len(lay):  # each object's layout terms to its partners held on their paths
         mu = problem.layout_weight[problem.layout_weight > 0]
         held = chosen_locations(grid, location)
-        own = grid.step.copy()
-        np.add.at(own, lay[:, 0], partner_steps(location[lay[:, 0]], held[lay[:, 1]], mu))
-        np.add.at(own, lay[:, 1], partner_steps(location[lay[:, 1]], held[lay[:, 0]], mu))
+        own = grid.step.copy()  # a slot past an object's steps adds to the inf after them all
+        np.add.at(own, _steps_of(grid, lay[:, 0]), partner_steps(location[lay[:, 0]], held[lay[:, 1]], mu))
+        np.add.at(own, _steps_of(grid, lay[:, 1]), partner_steps(location[lay[:, 1]], held[lay[:, 0]], mu))
         grid = replace(grid, step=own)
     holder: NDArray[np.intp] = np.where(grid.valid, foreign_holder(problem, path)[grid.nodes(problem)], FREE)
     cost = grid.path_cost(grid.step)[:, None, None]
     # each object alone: conflicts ignored, and kept off the held paths' resources
-    relaxed, margin = min_marginals(grid.step, np.stack([grid.valid, grid.valid & (holder == FREE)])) - cost
+    relaxed, margin = min_marginals(grid, grid.step, np.stack([grid.valid, grid.valid & (holder == FREE)])) - cost
     lower_pair_margins(problem, grid, holder, relaxed, location, horizon, margin)
     return margin, grid
+
+
+def _steps_of(grid: Layers, objects: NDArray[np.intp]) -> NDArray[np.intp]:
+    """``(P, M + 1, K, K)`` index in ``grid.step`` of every step of each of ``objects``."""
+    frame, tail, head = np.indices((grid.chosen.shape[1] - 1, grid.width, grid.width))
+    return grid.at(objects[:, None, None, None], frame, tail, head)

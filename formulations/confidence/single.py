@@ -18,28 +18,24 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.confidence.layers import Layers
 
-def min_marginals(step: NDArray[np.float64], allowed: NDArray[np.bool_]) -> NDArray[np.float64]:
+
+def min_marginals(grid: Layers, step: NDArray[np.float64], allowed: NDArray[np.bool_]) -> NDArray[np.float64]:
     """``(..., N, M, K)`` cheapest path cost through each slot of frames 1..M.
 
-    Objects are batched by their widest block (powers of two), so that the few markers
-    with a wide gate do not widen everyone's K x K steps.
+    Run batch by batch of ``grid`` (objects of similar widest block, ``layers``).
 
     Args:
-        step: ``(N, M + 1, K, K)`` step costs (inf where no arc); slots past a block's
-            size have no arcs.
-        allowed: ``(..., N, M + 2, K)`` slots a path may use; leading axes give other
-            sets of allowed slots in the same networks.
+        grid: The window's layers.
+        step: Step costs laid out as ``grid.step`` (inf where no arc).
+        allowed: ``(..., N, M + 2, K)`` slots a path may use (only nodes); leading axes give
+            other sets of allowed slots in the same networks.
     """
-    n, steps, width, _ = step.shape
-    marginal = np.full(allowed.shape[:-2] + (steps - 1, width), np.inf)
-    anywhere = allowed.reshape(-1, n, steps + 1, width).any(axis=(0, 2))  # (N, K)
-    used = np.where(anywhere, np.arange(width) + 1, 0).max(axis=1)  # past the last usable slot
-    bucket = np.ceil(np.log2(np.maximum(used, 1)))
-    for value in np.unique(bucket):
-        objects = np.flatnonzero(bucket == value)
-        w = int(used[objects].max())
-        marginal[..., objects, :, :w] = _through(step[objects, :, :w, :w], allowed[..., objects, :, :w])
+    marginal = np.full(allowed.shape[:-2] + (allowed.shape[-2] - 2, allowed.shape[-1]), np.inf)
+    for objects in grid.batches:
+        w = int(grid.span[objects[0]])
+        marginal[..., objects, :, :w] = _through(grid.batch(step, objects), allowed[..., objects, :, :w])
     return marginal
 
 

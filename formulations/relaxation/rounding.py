@@ -25,24 +25,34 @@ def round_greedy(problem: WindowProblem, y: np.ndarray) -> np.ndarray:
     Returns:
         ``(N, M)`` chosen node per object and frame.
     """
-    groups = problem.conflict_groups
-    rivals = (groups.T @ groups).tocsr() if groups.shape[0] else sp.csr_matrix((problem.n_nodes,) * 2)
     path = np.full((problem.n_objects, problem.n_frames), -1)
     value = np.round(y, 9)
     inner = np.flatnonzero((problem.node_frame >= 1) & (problem.node_frame <= problem.n_frames))
     inner = inner[_takeable(problem, value, inner)]
     # Largest y first; on ties prefer the occlusion node (it blocks nobody).
     order = inner[np.lexsort((problem.node_kind[inner] != OCCLUSION, -value[inner], problem.node_frame[inner]))]
+    # An occlusion node blocks nobody and is never blocked: it takes its block unless a node
+    # before it did, and no node after it can. So the greedy runs over the nodes before their
+    # block's occlusion node (with ``_takeable``, every candidate), the occlusion nodes after.
+    block = problem.node_object * problem.n_frames + problem.node_frame - 1
+    occluded = problem.node_kind[order] == OCCLUSION
+    occlusion_at = np.full(problem.n_objects * problem.n_frames, len(order))
+    occlusion_at[block[order[occluded]]] = np.flatnonzero(occluded)
+    candidate = order[np.flatnonzero(~occluded & (np.arange(len(order)) < occlusion_at[block[order]]))]
+    groups = problem.conflict_groups  # the nodes a candidate takes from others: its groups' nodes
+    rivals = groups.T.tocsr()[candidate] @ groups if groups.shape[0] else sp.csr_matrix((len(candidate), problem.n_nodes))
     # The greedy is sequential; it reads Python ints and lists, numpy scalars cost 5x as much.
     visited = np.zeros(problem.n_nodes, dtype=bool)
     taken = path.ravel()  # block (n, m) at n * M + m
-    block = (problem.node_object[order] * problem.n_frames + problem.node_frame[order] - 1).tolist()
-    first, last = rivals.indptr[order].tolist(), rivals.indptr[order + 1].tolist()
-    for v, b, lo, hi in zip(order.tolist(), block, first, last):
+    first, last = rivals.indptr[:-1].tolist(), rivals.indptr[1:].tolist()
+    for v, b, lo, hi in zip(candidate.tolist(), block[candidate].tolist(), first, last):
         if visited[v] or taken[b] >= 0:
             continue
         taken[b] = v
         visited[rivals.indices[lo:hi]] = True
+    occlusion = order[occluded]
+    left = taken[block[occlusion]] < 0
+    taken[block[occlusion[left]]] = occlusion[left]
     return path
 
 

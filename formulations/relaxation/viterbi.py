@@ -29,13 +29,13 @@ class Layer:
     Attributes:
         arcs: Their slice of ``ArcLayers.order``.
         group_start: Position within the slice of the first arc into each head.
-        group_of: Head group (within the layer) of each arc of the slice.
+        group_size: Arcs into each head.
         head: Head node of each group.
     """
 
     arcs: slice
     group_start: np.ndarray
-    group_of: np.ndarray
+    group_size: np.ndarray
     head: np.ndarray
 
 
@@ -64,16 +64,17 @@ class ArcLayers:
         rank = np.empty(problem.n_nodes, np.min_scalar_type(max(problem.n_nodes - 1, 0)))
         rank[np.argsort(problem.node_frame, kind="stable")] = np.arange(problem.n_nodes)
         order = np.argsort(rank[problem.arc_head], kind="stable")
-        head, layer = problem.arc_head[order], problem.node_frame[problem.arc_tail[order]]
-        new_group = np.r_[True, head[1:] != head[:-1]] if len(order) else np.zeros(0, bool)
-        group_start = np.flatnonzero(new_group)
-        layer_groups = np.searchsorted(layer[group_start], np.arange(problem.n_frames + 2))
-        starts, group_of = np.r_[group_start, len(order)], np.cumsum(new_group) - 1
+        head = problem.arc_head[order]
+        group_start = np.flatnonzero(np.r_[True, head[1:] != head[:-1]]) if len(order) else np.zeros(0, np.intp)
+        # a group's layer is the frame of its tails, one before its head's
+        layer_groups = np.searchsorted(problem.node_frame[head[group_start]], np.arange(1, problem.n_frames + 3))
+        starts = np.r_[group_start, len(order)]
+        size = np.diff(starts)
         layers = []
         for g0, g1 in zip(layer_groups[:-1], layer_groups[1:]):
             if g0 < g1:
                 lo, hi = starts[g0], starts[g1]
-                layers.append(Layer(slice(lo, hi), group_start[g0:g1] - lo, group_of[lo:hi] - g0, head[group_start[g0:g1]]))
+                layers.append(Layer(slice(lo, hi), group_start[g0:g1] - lo, size[g0:g1], head[group_start[g0:g1]]))
         return cls(order, problem.arc_tail[order], head, layers, problem.source_nodes(), problem.sink_nodes())
 
     def shortest_path_arcs(self, problem: WindowProblem, cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -86,7 +87,7 @@ class ArcLayers:
             best = np.minimum.reduceat(candidate, layer.group_start)
             # The first arc attaining each group's minimum: the first hit at or after its start
             # (every group has one, its minimum).
-            hits = np.flatnonzero(candidate <= best[layer.group_of])
+            hits = np.flatnonzero(candidate <= np.repeat(best, layer.group_size))
             distance[layer.head] = best
             into[layer.head] = layer.arcs.start + hits[np.searchsorted(hits, layer.group_start)]
         return self._backtrack(problem, into), distance[self.sinks]

@@ -10,11 +10,12 @@ The per-window chain (run by ``service.labeling.loop``):
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
 from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
-from formulations.markers.coexistence import back_tracks, coexisted
+from formulations.markers.coexistence import BackLinks, coexisted
 from formulations.markers.exchange import continued_points, repair_exchanges
 from formulations.markers.guide import assign_nearest
 from formulations.markers.mirror import repair_mirrors
@@ -133,8 +134,13 @@ class CloudChain:
         if lost_for == 0 or not len(points):
             return np.zeros((len(state.position), len(points)), bool)
         reach, link_radius = chain_radii(state, self.gating.gate)
-        earlier = [self.cloud.points[f] for f in range(template - 1, max(template - 1 - lost_for, -1), -1)]
-        return coexisted(state.unseen, state.seen_at, back_tracks(points, earlier, reach, link_radius)) & judged[:, None]
+        tracks = self._back_links.back_tracks(points, template, min(lost_for, template), reach, link_radius)
+        return coexisted(state.unseen, state.seen_at, tracks) & judged[:, None]
+
+    @cached_property
+    def _back_links(self) -> BackLinks:
+        """The take's points followed back, kept from window to window (``_coexisting``)."""
+        return BackLinks(self.cloud.points)
 
     def _around(self, template: int, last: int) -> WindowSurround:
         """The points next to the window, for its unnamed tracks (``markers.unnamed``)."""
