@@ -20,13 +20,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import replace
-from typing import Any, Protocol
 
 import numpy as np
 
-from formulations.cameras.rig import Rig
 from formulations.confidence.calibration import LABEL_CALIBRATION
-from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.shape_breaks import ShapeBreak
@@ -41,34 +38,24 @@ from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.fingerprint import capture_fingerprint
 from service.capture.formulation_spec import resolve_formulation
-from service.capture.reprojection import frame0_pixel_sigma
 from service.errors import InputError
-from service.io.recording import LabeledTrajectories, UnlabeledCloud
+from service.io.recording import LabeledTrajectories
+from service.labeling.associations import Association, association_chain
 from service.labeling.camera_usage import detections_taken, unused_camera_warning
-from service.labeling.cloud import CloudChain
 from service.labeling.exchanged import exchanged_back, handed_back
 from service.labeling.extension import extended
-from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud, matcher_gates
+from service.labeling.joint_3d import Joint3dChain
 from service.labeling.leftover_points import with_leftover_points
-from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
+from service.labeling.loop import Observer, Progress, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
-from service.labeling.per_camera import PerCameraChain
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 from service.labeling.take_warnings import model_misfit_warning, refuse_wrong_scale, spacing_frame
-
-
-class Association(WindowChain[Any], Protocol):
-    """A per-window chain, and what its windows' outcomes assemble into."""
-
-    def assemble(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories: ...
-
-    def views(self, outcomes: list[WindowOutcome]) -> np.ndarray: ...
 
 
 class CaptureLabeling:
@@ -112,11 +99,11 @@ class CaptureLabeling:
                 model = learn_from_take(model, capture.points[: options.window])
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
-            inner = _association(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
+            inner = association_chain(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
             self._association: Association = ModelChain(inner, model, capture.points)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
-            self._association = _association(capture, options, self.formulation.look_ahead)
+            self._association = association_chain(capture, options, self.formulation.look_ahead)
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(
@@ -272,28 +259,3 @@ def _reported(labels: LabeledTrajectories) -> LabeledTrajectories:
         labels.confidence = LABEL_CALIBRATION(labels.confidence)
         labels.confidence[0] = 1.0
     return labels
-
-
-def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -> Association:
-    """The chain of the capture's input mode and the chosen association; ``look_ahead``
-    False (a frame-by-frame baseline) keeps later frames out of the expected steps."""
-    # A frame-by-frame baseline sees no later frame: no median step over them, no unnamed
-    # track told from them (a birth is followed three frames).
-    gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0, unnamed_tracks=False)
-    if capture.points is not None:
-        if options.association != "joint-3d":  # the default; a choice made for cameras must not pass unsaid
-            raise InputError(f"association {options.association!r} applies to camera captures; this capture is 3D points")
-        cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
-        return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight,
-                          unnamed_markers=capture.unnamed_markers)
-    cameras, detections = capture.camera_frames()
-    if options.association == "per-camera":
-        return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)
-    if options.association != "joint-3d":
-        raise InputError(f"association {options.association!r} is not available; use joint-3d or per-camera")
-    gates = matcher_gates(frame0_pixel_sigma(capture.frame0_distances()))
-    cloud, matched = cross_camera_cloud(cameras, detections, capture.rate, *gates)
-    return Joint3dChain(
-        cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight, matched=matched,
-        rig=Rig.of(cameras), detections=detections,
-    )
