@@ -51,6 +51,7 @@ from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
+from service.labeling.rival_reading import RivalChoice, RivalReading, with_rival
 from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
@@ -80,6 +81,9 @@ class CaptureLabeling:
         self._capture, self._window = capture, options.window
         self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
+        self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
+            "nn-hungarian")) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+        self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self.exchanges: list[TakeExchange] = []  # given back in the last labels assembled (``exchanged``)
@@ -127,8 +131,9 @@ class CaptureLabeling:
         self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
     ) -> list[WindowOutcome] | None:
         """The windows to keep once every window is labeled: ``outcomes``, or those of a
-        second pass (``second_pass``) when it is on and agrees better with the first frame; None when
-        ``stop`` abandoned the second pass. Sets ``choice``."""
+        second pass (``second_pass``) when it is on and agrees better with the first frame, with
+        the marker groups a frame-by-frame reading labels better taken from it when the second
+        pass ran (``rival_reading``); None when ``stop`` abandoned either. Sets ``choice`` and ``rival``."""
         if not self._second_pass:
             return outcomes
         kept = second_pass(
@@ -138,6 +143,12 @@ class CaptureLabeling:
         if kept is None:
             return None
         kept_outcomes, self.choice = kept
+        if self._rival is not None and self.choice.second_doubtful is not None:  # a doubtful take: read frame by frame too
+            read = with_rival(self._rival, self._first, self._capture.n_frames, self._window, kept_outcomes,
+                              self._labeled, _after(progress, self.n_windows), stop)
+            if read is None:
+                return None
+            kept_outcomes, self.rival = read
         return outcomes if kept_outcomes is outcomes else list(stamped(kept_outcomes, self.fingerprint))  # ``is``: kept as stored
 
     def result(self, outcomes: list[WindowOutcome], calibrated: bool = True) -> LabeledTrajectories:
