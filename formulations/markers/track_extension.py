@@ -34,6 +34,7 @@ Index = NDArray[np.int64]
 GATE_MEDIANS = 3.0  # the 99.9th percentile of a 3D Gaussian's norm is 2.6 times its median
 MIN_TRIPLES = 10  # fewer labeled triples say nothing of how the marker moves
 _FRAME_APART = 1e9  # mm between frames in the search tree: a query finds its own frame only
+_CHUNK_FRAMES = 4096  # residuals at a time in ``_gates``: over the whole take, 3 kB a frame at 41 markers
 
 
 def extend_tracks(points: Sequence[Array], point_index: Index) -> Index:
@@ -43,9 +44,13 @@ def extend_tracks(points: Sequence[Array], point_index: Index) -> Index:
     if not counts.sum():
         return taken
     offsets = np.concatenate([[0], np.cumsum(counts)])
-    flat = np.concatenate([np.asarray(p, float).reshape(-1, 3) for p in points])
-    frame_of = np.repeat(np.arange(len(points)), counts)
-    tree = cKDTree(np.column_stack([flat, frame_of * _FRAME_APART]))
+    # the tree's (x, y, z, frame * _FRAME_APART), built in place: its first three columns are
+    # the points themselves, not a copy of them beside it (the tree keeps the array it is given)
+    searched = np.empty((offsets[-1], 4))
+    np.concatenate([np.asarray(p, float).reshape(-1, 3) for p in points], out=searched[:, :3])
+    searched[:, 3] = np.repeat(np.arange(len(points)) * _FRAME_APART, counts)
+    flat = searched[:, :3]
+    tree = cKDTree(searched)
     claimed = np.zeros(len(flat), bool)
     held = taken >= 0
     claimed[(offsets[:-1, None] + taken)[held]] = True
@@ -127,7 +132,10 @@ def _gates(flat: Array, offsets: Index, taken: Index) -> Array:
     position = np.full(taken.shape + (3,), np.nan)
     held = taken >= 0
     position[held] = flat[(offsets[:-1, None] + taken)[held]]
-    residual = lengths(position[2:] - 2 * position[1:-1] + position[:-2])
+    residual = np.empty((max(len(position) - 2, 0), taken.shape[1]))
+    for start in range(0, len(residual), _CHUNK_FRAMES):  # its (F, N, 3) temporaries a chunk at a time
+        near = position[start : start + _CHUNK_FRAMES + 2]
+        residual[start : start + len(near) - 2] = lengths(near[2:] - 2 * near[1:-1] + near[:-2])
     enough = np.isfinite(residual).sum(axis=0) >= MIN_TRIPLES
     gate[enough] = GATE_MEDIANS * np.nanmedian(residual[:, enough], axis=0)
     return gate

@@ -48,7 +48,7 @@ from service.labeling.joint_3d import Joint3dChain
 from service.labeling.leftover_points import with_leftover_points
 from service.labeling.loop import Observer, Progress, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
-from service.labeling.outcome import WindowOutcome
+from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.rival_reading import RivalChoice, RivalReading, with_rival
@@ -165,7 +165,10 @@ class CaptureLabeling:
             InputError: ``outcomes`` are not this labeling's windows 0, 1, ... in order.
         """
         check_outcomes(outcomes, self._spans, len(self._first.position), self.fingerprint)
-        labels = self._labeled(outcomes)
+        return self._finished(self._labeled(outcomes), outcomes, calibrated)
+
+    def _finished(self, labels: LabeledTrajectories, outcomes: list[WindowOutcome], calibrated: bool) -> LabeledTrajectories:
+        """``result`` of the repaired labels; ``outcomes`` are read again in camera mode only (views, lone views)."""
         if labels.filled.size:
             labels.filled = self._fill(labels)
             if isinstance(self._association, Joint3dChain):
@@ -181,14 +184,19 @@ class CaptureLabeling:
         labels, self.shape_breaks = shape_doubted(_reported(labels))
         return labels
 
-    def _labeled(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories:
+    def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True) -> LabeledTrajectories:
         """The windows' labels with their confidence, tracks extended over free points and
-        exchanges the first frame finds over the take given back (3D points: ``exchanged``)."""
+        exchanges the first frame finds over the take given back (3D points: ``exchanged``);
+        ``keep`` False empties ``outcomes`` once assembled (``label``'s own list: its marker
+        states, 3 kB a frame at 41 markers, are then not held through the take-wide repairs)."""
         labels = self._association.assemble(outcomes)
-        labels.confidence = _confidence(labels.n_frames, len(labels.names), outcomes)
+        labels.confidence = take_confidence(labels.n_frames, len(labels.names), outcomes)
+        frames = max((o.stats.last + 1 for o in outcomes), default=1)
+        if not keep:
+            outcomes.clear()
         if self._points is None:
             return labels
-        labels = extended(labels, self._points, max((o.stats.last + 1 for o in outcomes), default=1))
+        labels = extended(labels, self._points, frames)
         if not self.formulation.look_ahead:  # a frame-by-frame baseline sees no later frame: no take-wide repair
             return labels
         labels, self.exchanges = exchanged_back(labels, self._first)
@@ -236,12 +244,13 @@ class CaptureLabeling:
         counts the first pass's windows, then both passes' once a second pass runs (43/43,
         then 44/86 ...); ``observer`` sees the first pass; ``stage`` is told when the windows
         are done and the labels are assembled (35 s after the last window at 50,000 frames)."""
-        first = list(self.windows(progress=progress, observer=observer))
-        outcomes = self.refine(first, _after(progress, self.n_windows))
+        outcomes = self.refine(list(self.windows(progress=progress, observer=observer)), _after(progress, self.n_windows))
         assert outcomes is not None  # only a stop abandons the second pass
         if stage is not None:
             stage("windows done; assembling the labels (take-wide repairs, fill, confidence)")
-        return self.result(outcomes), [o.stats for o in outcomes]
+        windows = [o.stats for o in outcomes]
+        labels = self._labeled(outcomes, keep=self._view_choice is not None)  # camera mode reads them again
+        return self._finished(labels, outcomes, True), windows
 
 
 def _after(progress: Progress | None, done: int) -> Progress | None:
@@ -250,17 +259,6 @@ def _after(progress: Progress | None, done: int) -> Progress | None:
         return None
     report = progress  # bound here: mypy keeps the narrowing inside the closure
     return lambda k, n: report(done + k, done + n)
-
-
-def _confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.ndarray:
-    """``(frames, markers)``: 1 in the given first frame, each window's raw confidences in
-    its new frames, NaN where no stored window says (not labeled yet, or stored without)."""
-    confidence = np.full((frames, markers), np.nan)
-    confidence[0] = 1.0
-    for outcome in outcomes:
-        if outcome.confidence is not None:
-            confidence[outcome.stats.template + 1 : outcome.stats.last + 1] = outcome.confidence
-    return confidence
 
 
 def _reported(labels: LabeledTrajectories) -> LabeledTrajectories:

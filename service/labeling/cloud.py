@@ -192,6 +192,8 @@ def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) ->
         observed[seen] = points[taken[seen, m]]
         state = state.advance(observed, seen)
         filled[m, ~seen] = state.position[~seen]
+    if (taken >= 0).all():  # nothing to fill: a NaN seen as the window's shape, not 1 kB a frame kept per window
+        filled = np.broadcast_to(np.nan, filled.shape)
     return state, filled
 
 

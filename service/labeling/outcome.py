@@ -87,3 +87,14 @@ class WindowOutcome:
                 stats=WindowStats(**header["stats"]), state=state, labeling=header.get("labeling"),
                 **{name: stored[name] for name in _OPTIONAL if name in stored.files},
             )
+
+
+def take_confidence(frames: int, markers: int, outcomes: list[WindowOutcome]) -> np.ndarray:
+    """``(frames, markers)``: 1 in the given first frame, each window's raw confidences in
+    its new frames, NaN where no stored window says (not labeled yet, or stored without)."""
+    confidence = np.full((frames, markers), np.nan)
+    confidence[0] = 1.0
+    for outcome in outcomes:
+        if outcome.confidence is not None:
+            confidence[outcome.stats.template + 1 : outcome.stats.last + 1] = outcome.confidence
+    return confidence

@@ -85,7 +85,11 @@ def write_c3d(path: str | Path, traj: LabeledTrajectories, source: SourceFile | 
         c3d = _new_c3d(traj, source, start) if source.c3d is None else writable(source.c3d)
     except InputError as error:
         raise InputError(f"{path}: {error}") from None
-    quality = SampleQuality.of(c3d["data"]["points"], c3d["data"]["meta_points"])  # before labels replace points
+    # the input's samples: read from the input itself, which ``writable`` leaves as read (a
+    # copy beside the output's would be 1.5 kB a frame at 41 points); a new file's copied
+    # before labels replace its points
+    given = c3d if source.c3d is None else source.c3d
+    quality = SampleQuality.of(given["data"]["points"], given["data"]["meta_points"], copied=source.c3d is None)
     outside = _with_labels(c3d, traj, quality, source.unit, at, path)
     # gathered (``unlabeled`` has the frames, with or without channels): the input's own *N
     # points were in the capture, so they were labeled or are in the new *N

@@ -17,9 +17,10 @@ SHARED_DATA = ("analogs", "rotations", "platform")  # never written into: ``with
 
 def detached(c3d: ezc3d.c3d) -> ezc3d.c3d:
     """``c3d`` without the C++ file it was read into, which nothing reads again: 65 of the
-    86 MB a 10,000-frame, 41-point file takes. (ezc3d's own copy: a new, empty C++ file,
-    the Python side copied; what ``write_c3d`` has always written from.)"""
-    return copy.deepcopy(c3d)
+    86 MB a 10,000-frame, 41-point file takes. (As ezc3d's own copy: a new, empty C++ file,
+    the Python side copied; what ``write_c3d`` has always written from. Its data arrays,
+    which numpy owns, are taken over, not copied: the reader drops ``c3d``.)"""
+    return _copy(c3d, tuple(c3d["data"]))
 
 
 def writable(c3d: ezc3d.c3d) -> ezc3d.c3d:
@@ -28,6 +29,11 @@ def writable(c3d: ezc3d.c3d) -> ezc3d.c3d:
     relabel writes points, their residuals and masks and parameters, and replaces the analog
     array whole (``with_confidence``), so the input (which a server may write again) stays
     as read. At 1,000 Hz analog beside 100 Hz points the analog array is most of a file."""
+    return _copy(c3d, SHARED_DATA)
+
+
+def _copy(c3d: ezc3d.c3d, shared: tuple[str, ...]) -> ezc3d.c3d:
+    """ezc3d's ``deepcopy`` of ``c3d`` with the data arrays named in ``shared`` the same objects."""
     new = ezc3d.c3d()
     new.extract_forceplat_data = c3d.extract_forceplat_data
     for part in c3d["header"]:
@@ -37,5 +43,5 @@ def writable(c3d: ezc3d.c3d) -> ezc3d.c3d:
         new["parameters"][group] = copy.deepcopy(c3d["parameters"][group])
     for key in c3d["data"]:
         value = c3d["data"][key]
-        new["data"][key] = value if key in SHARED_DATA else copy.deepcopy(value)
+        new["data"][key] = value if key in shared else copy.deepcopy(value)
     return new

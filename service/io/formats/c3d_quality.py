@@ -37,10 +37,12 @@ class SampleQuality:
     masks: np.ndarray | None
 
     @classmethod
-    def of(cls, points: np.ndarray, meta: dict) -> SampleQuality:
+    def of(cls, points: np.ndarray, meta: dict, copied: bool = True) -> SampleQuality:
+        """Of a C3D's ``points`` and ``meta_points``: copies, or (``copied`` False, for arrays
+        nothing writes into) the arrays themselves."""
         masks = meta.get("camera_masks")
-        return cls(points[:3].copy(), meta["residuals"][0].copy(),
-                   masks.copy() if masks is not None and masks.size else None)
+        held = np.copy if copied else np.asarray
+        return cls(held(points[:3]), held(meta["residuals"][0]), held(masks) if masks is not None and masks.size else None)
 
     def taken(self, values: np.ndarray, start: int) -> tuple[np.ndarray, np.ndarray | None]:
         """For labels ``values`` ``(3, M, F')`` (the file's unit, NaN where hidden) from frame
