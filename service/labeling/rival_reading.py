@@ -29,7 +29,7 @@ from formulations.methods.formulation import Formulation
 from service.labeling.loop import Progress, WindowChain, label_windows
 from service.labeling.merged_windows import merged_windows
 from service.labeling.outcome import WindowOutcome
-from service.labeling.second_pass import Labels, Stop, with_other_reading
+from service.labeling.second_pass import Labels, Stop, judged_part, with_other_reading
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ def with_rival(
         read.append(outcome)
         if stop is not None and stop():
             return None
-    mine, theirs = labels(kept), labels(read)
+    mine, theirs = judged_part(labels(kept)), judged_part(labels(read))
     capped, judged = pair_offsets([mine.positions, theirs.positions], first.position, first.neighbours)
     # Ties stay with the window reading: its windows, certificates and look-ahead.
     taken = pass_per_marker((mine.point_index, theirs.point_index), capped, judged) == 1
