@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
@@ -82,7 +83,8 @@ class CaptureLabeling:
         self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
-            "nn-hungarian")) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+            "nn-hungarian"), partial(self._labeled, repaired=False),
+        ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
         self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
@@ -184,9 +186,10 @@ class CaptureLabeling:
         labels, self.shape_breaks = shape_doubted(_reported(labels))
         return labels
 
-    def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True) -> LabeledTrajectories:
+    def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True, repaired: bool = True) -> LabeledTrajectories:
         """The windows' labels with their confidence, tracks extended over free points and
-        exchanges the first frame finds over the take given back (3D points: ``exchanged``);
+        exchanges the first frame finds over the take given back (3D points: ``exchanged``;
+        not when ``repaired`` is False: the frame-by-frame reading's labels, as it would give them);
         ``keep`` False empties ``outcomes`` once assembled (``label``'s own list: its marker
         states, 3 kB a frame at 41 markers, are then not held through the take-wide repairs)."""
         labels = self._association.assemble(outcomes)
@@ -197,7 +200,7 @@ class CaptureLabeling:
         if self._points is None:
             return labels
         labels = extended(labels, self._points, frames)
-        if not self.formulation.look_ahead:  # a frame-by-frame baseline sees no later frame: no take-wide repair
+        if not (repaired and self.formulation.look_ahead):  # a frame-by-frame reading sees no later frame: no take-wide repair
             return labels
         labels, self.exchanges = exchanged_back(labels, self._first)
         labels, self.handovers = handed_back(labels, self._first)
