@@ -245,7 +245,8 @@ class CaptureLabeling:
     ) -> tuple[LabeledTrajectories, list[WindowStats]]:
         """Label every window in one go, and again if ``refine`` says so; ``progress``
         counts the first pass's windows, then both passes' once a second pass runs (43/43,
-        then 44/86 ...); ``observer`` sees the first pass; ``stage`` is told when the windows
+        then 44/86 ...), then on through the frame-by-frame reading's two (87/129, 130/172);
+        ``observer`` sees the first pass; ``stage`` is told when the windows
         are done and the labels are assembled (35 s after the last window at 50,000 frames)."""
         outcomes = self.refine(list(self.windows(progress=progress, observer=observer)), _after(progress, self.n_windows))
         assert outcomes is not None  # only a stop abandons the second pass
