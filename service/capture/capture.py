@@ -53,6 +53,10 @@ class LabelingOptions:
             distance spreads the first labeling measured, and keep the labeling whose rigid
             pairs agree better with the first frame (``service.labeling.second_pass``); up to
             twice the time.
+        rival_reading: With a second pass that runs (a doubtful take) and a formulation that
+            looks ahead: read the take frame by frame as well, and take the marker groups whose
+            rigid pairs that reading bends less (``service.labeling.rival_reading``); about a
+            third more time.
     """
 
     formulation: str | dict | Formulation = "lp-l1"
@@ -62,6 +66,7 @@ class LabelingOptions:
     best_view_switch_cost: float = 1.0
     best_view_window: int = 30
     second_pass: bool = True
+    rival_reading: bool = True
 
     def __post_init__(self) -> None:
         for option in fields(self):  # a notebook's np.float32(1.0) or np.bool_(False) is a plain value
@@ -78,8 +83,9 @@ class LabelingOptions:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
                 raise InputError(f"{name} must be a finite number of at least 0, got {value!r}")
-        if not isinstance(self.second_pass, bool):
-            raise InputError(f"second_pass must be True or False, got {self.second_pass!r}")
+        for name in ("second_pass", "rival_reading"):
+            if not isinstance(getattr(self, name), bool):
+                raise InputError(f"{name} must be True or False, got {getattr(self, name)!r}")
 
 
 @dataclass

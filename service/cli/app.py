@@ -77,8 +77,9 @@ def track(
     end: Annotated[int | None, typer.Option(help="Label frames before this one (default: to the last frame).")] = None,
     second_pass: Annotated[bool | None, typer.Option(
         "--second-pass/--one-pass", help="3D points, no --model: label again from the distance spreads the first "
-        "labeling measured, keep the labeling whose rigid pairs agree better with the start frame (up to "
-        "twice the time). Default: on, "
+        "labeling measured, keep the labeling whose rigid pairs agree better with the start frame, and on a "
+        "doubtful take read it frame by frame too, taking the markers that reading labels better (up to "
+        "three times the time). Default: on, "
         "or a capture document's own second_pass.", show_default=False,
     )] = None,
 ) -> None:

@@ -18,6 +18,7 @@ from service.capture.from_recording import capture_from_recording, capture_from_
 from service.capture.model_input import check_shared_names, read_model, with_model
 from service.capture.span import frame_span
 from service.cli.output import check_writable_output
+from service.cli.pass_notes import rival_note, second_pass_note
 from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, stage, warn, window_progress
 from service.errors import InputError
 from service.io.formats import check_labels_fit, is_copy, kept_source, read_labeled, write_labeled
@@ -30,7 +31,6 @@ from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
 from service.labeling.result_warnings import early_scale_warning
-from service.labeling.second_pass import PassChoice
 from service.labeling.shape_doubt import shape_break_summary
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import (
@@ -110,6 +110,7 @@ def run_track(
     write_labeled(output, written, source, start or 0)
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
+    summary["rival_reading"] = None if labeling.rival is None else labeling.rival.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
     summary["handed_back"] = handover_summary(labeling.handovers, capture.names)
     summary["shape_breaks"] = shape_break_summary(labeling.shape_breaks, result.names)
@@ -122,7 +123,8 @@ def run_track(
             f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
             f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
-            f"{_second_pass_note(labeling.choice)}{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
+            f"{second_pass_note(labeling.choice)}{rival_note(labeling.rival)}"
+            f"{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
@@ -154,7 +156,9 @@ def track_summary(
     ``unlabeled_points`` and ``unlabeled_trajectories``: what ``service.labeling.leftover_points`` kept.
     ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share, its
     rigid pairs' disagreement with the first frame, and the one kept), None when no second
-    pass applied; ``exchanged_back``, the pairs whose labels the first frame's shape gave
+    pass applied; ``rival_reading`` (``RivalChoice``: the window and frame-by-frame readings'
+    disagreement with the first frame, and the markers taken from the latter), None when it did
+    not run; ``exchanged_back``, the pairs whose labels the first frame's shape gave
     back over the take (``service.labeling.exchanged``: markers, frames from 0 [start, stop));
     ``handed_back``, the tracks given back to the marker they continue (owner, taker, frames);
     and ``shape_breaks``, the labels that left their rigid neighbours (``service.labeling.shape_doubt``).
@@ -178,17 +182,6 @@ def track_summary(
         "formulation": formulation,
         "output": str(output),
     }
-
-
-def _second_pass_note(choice: PassChoice | None) -> str:
-    """What the summary line says of a second pass that ran: which labeling was kept, and why."""
-    if choice is None or choice.second_doubtful is None:
-        return ""
-    kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
-    off = "" if choice.first_off_mm is None or choice.second_off_mm is None else (
-        f"rigid pairs {choice.first_off_mm:.1f} -> {choice.second_off_mm:.1f} mm off the first frame; ")
-    other = "" if not choice.taken_from_other else f", {counted(choice.taken_from_other, 'marker')}' labels from the other pass"
-    return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
 
 
 def _exchange_note(exchanges: int, handovers: int) -> str:

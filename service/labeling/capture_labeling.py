@@ -20,13 +20,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import replace
-from typing import Any, Protocol
+from functools import partial
 
 import numpy as np
 
-from formulations.cameras.rig import Rig
 from formulations.confidence.calibration import LABEL_CALIBRATION
-from formulations.markers.cloud_candidates import CloudGating
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.shape_breaks import ShapeBreak
@@ -41,34 +39,25 @@ from service.best_view.markers import MarkerViewChoice
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.fingerprint import capture_fingerprint
 from service.capture.formulation_spec import resolve_formulation
-from service.capture.reprojection import frame0_pixel_sigma
 from service.errors import InputError
-from service.io.recording import LabeledTrajectories, UnlabeledCloud
+from service.io.recording import LabeledTrajectories
+from service.labeling.associations import Association, association_chain
 from service.labeling.camera_usage import detections_taken, unused_camera_warning
-from service.labeling.cloud import CloudChain
 from service.labeling.exchanged import exchanged_back, handed_back
 from service.labeling.extension import extended
-from service.labeling.joint_3d import Joint3dChain, cross_camera_cloud, matcher_gates
+from service.labeling.joint_3d import Joint3dChain
 from service.labeling.leftover_points import with_leftover_points
-from service.labeling.loop import Observer, Progress, WindowChain, first_marker_state, label_windows
+from service.labeling.loop import Observer, Progress, first_marker_state, label_windows
 from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
-from service.labeling.per_camera import PerCameraChain
 from service.labeling.result_warnings import result_warnings, time_limit_warning
+from service.labeling.rival_reading import RivalChoice, RivalReading, with_rival
 from service.labeling.second_pass import PassChoice, Stop, second_pass
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 from service.labeling.take_warnings import model_misfit_warning, refuse_wrong_scale, spacing_frame
-
-
-class Association(WindowChain[Any], Protocol):
-    """A per-window chain, and what its windows' outcomes assemble into."""
-
-    def assemble(self, outcomes: list[WindowOutcome]) -> LabeledTrajectories: ...
-
-    def views(self, outcomes: list[WindowOutcome]) -> np.ndarray: ...
 
 
 class CaptureLabeling:
@@ -93,6 +82,10 @@ class CaptureLabeling:
         self._capture, self._window = capture, options.window
         self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
+        self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
+            "nn-hungarian"), partial(self._labeled, repaired=False),
+        ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+        self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self.exchanges: list[TakeExchange] = []  # given back in the last labels assembled (``exchanged``)
@@ -112,11 +105,11 @@ class CaptureLabeling:
                 model = learn_from_take(model, capture.points[: options.window])
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
-            inner = _association(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
+            inner = association_chain(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
             self._association: Association = ModelChain(inner, model, capture.points)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
-            self._association = _association(capture, options, self.formulation.look_ahead)
+            self._association = association_chain(capture, options, self.formulation.look_ahead)
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(
@@ -140,8 +133,9 @@ class CaptureLabeling:
         self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
     ) -> list[WindowOutcome] | None:
         """The windows to keep once every window is labeled: ``outcomes``, or those of a
-        second pass (``second_pass``) when it is on and agrees better with the first frame; None when
-        ``stop`` abandoned the second pass. Sets ``choice``."""
+        second pass (``second_pass``) when it is on and agrees better with the first frame, with
+        the marker groups a frame-by-frame reading labels better taken from it when the second
+        pass ran (``rival_reading``); None when ``stop`` abandoned either. Sets ``choice`` and ``rival``."""
         if not self._second_pass:
             return outcomes
         kept = second_pass(
@@ -151,6 +145,12 @@ class CaptureLabeling:
         if kept is None:
             return None
         kept_outcomes, self.choice = kept
+        if self._rival is not None and self.choice.second_doubtful is not None:  # a doubtful take: read frame by frame too
+            read = with_rival(self._rival, self._first, self._capture.n_frames, self._window, kept_outcomes,
+                              self._labeled, _after(progress, self.n_windows), stop)
+            if read is None:
+                return None
+            kept_outcomes, self.rival = read
         return outcomes if kept_outcomes is outcomes else list(stamped(kept_outcomes, self.fingerprint))  # ``is``: kept as stored
 
     def result(self, outcomes: list[WindowOutcome], calibrated: bool = True) -> LabeledTrajectories:
@@ -186,9 +186,10 @@ class CaptureLabeling:
         labels, self.shape_breaks = shape_doubted(_reported(labels))
         return labels
 
-    def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True) -> LabeledTrajectories:
+    def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True, repaired: bool = True) -> LabeledTrajectories:
         """The windows' labels with their confidence, tracks extended over free points and
-        exchanges the first frame finds over the take given back (3D points: ``exchanged``);
+        exchanges the first frame finds over the take given back (3D points: ``exchanged``;
+        not when ``repaired`` is False: the frame-by-frame reading's labels, as it would give them);
         ``keep`` False empties ``outcomes`` once assembled (``label``'s own list: its marker
         states, 3 kB a frame at 41 markers, are then not held through the take-wide repairs)."""
         labels = self._association.assemble(outcomes)
@@ -199,7 +200,7 @@ class CaptureLabeling:
         if self._points is None:
             return labels
         labels = extended(labels, self._points, frames)
-        if not self.formulation.look_ahead:  # a frame-by-frame baseline sees no later frame: no take-wide repair
+        if not (repaired and self.formulation.look_ahead):  # a frame-by-frame reading sees no later frame: no take-wide repair
             return labels
         labels, self.exchanges = exchanged_back(labels, self._first)
         labels, self.handovers = handed_back(labels, self._first)
@@ -244,7 +245,8 @@ class CaptureLabeling:
     ) -> tuple[LabeledTrajectories, list[WindowStats]]:
         """Label every window in one go, and again if ``refine`` says so; ``progress``
         counts the first pass's windows, then both passes' once a second pass runs (43/43,
-        then 44/86 ...); ``observer`` sees the first pass; ``stage`` is told when the windows
+        then 44/86 ...), then on through the frame-by-frame reading's two (87/129, 130/172);
+        ``observer`` sees the first pass; ``stage`` is told when the windows
         are done and the labels are assembled (35 s after the last window at 50,000 frames)."""
         outcomes = self.refine(list(self.windows(progress=progress, observer=observer)), _after(progress, self.n_windows))
         assert outcomes is not None  # only a stop abandons the second pass
@@ -270,28 +272,3 @@ def _reported(labels: LabeledTrajectories) -> LabeledTrajectories:
         labels.confidence = LABEL_CALIBRATION(labels.confidence)
         labels.confidence[0] = 1.0
     return labels
-
-
-def _association(capture: Capture, options: LabelingOptions, look_ahead: bool) -> Association:
-    """The chain of the capture's input mode and the chosen association; ``look_ahead``
-    False (a frame-by-frame baseline) keeps later frames out of the expected steps."""
-    # A frame-by-frame baseline sees no later frame: no median step over them, no unnamed
-    # track told from them (a birth is followed three frames).
-    gating = CloudGating() if look_ahead else CloudGating(step_median_frames=0, unnamed_tracks=False)
-    if capture.points is not None:
-        if options.association != "joint-3d":  # the default; a choice made for cameras must not pass unsaid
-            raise InputError(f"association {options.association!r} applies to camera captures; this capture is 3D points")
-        cloud = UnlabeledCloud(points=capture.points, rate=capture.rate)
-        return CloudChain(cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight,
-                          unnamed_markers=capture.unnamed_markers)
-    cameras, detections = capture.camera_frames()
-    if options.association == "per-camera":
-        return PerCameraChain(capture.names, capture.first_frame, capture.rate, Rig.of(cameras), detections)
-    if options.association != "joint-3d":
-        raise InputError(f"association {options.association!r} is not available; use joint-3d or per-camera")
-    gates = matcher_gates(frame0_pixel_sigma(capture.frame0_distances()))
-    cloud, matched = cross_camera_cloud(cameras, detections, capture.rate, *gates)
-    return Joint3dChain(
-        cloud, capture.names, capture.first_frame, gating, layout_weight=options.layout_weight, matched=matched,
-        rig=Rig.of(cameras), detections=detections,
-    )

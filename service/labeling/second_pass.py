@@ -115,13 +115,13 @@ def second_pass(
     before = doubtful_share(outcomes)
     if not DOUBTFUL_WARNING < before <= MOSTLY_DOUBTFUL:
         return outcomes, PassChoice(before, None, 1)
-    labeled = _judged(labels(outcomes))
+    labeled = judged_part(labels(outcomes))
     second: list[WindowOutcome] = []
     for outcome in label_windows(chain, formulation, with_take_spread(first, labeled.positions), frames, window, None, progress):
         second.append(outcome)
         if stop is not None and stop():
             return None
-    relabeled = _judged(labels(second))
+    relabeled = judged_part(labels(second))
     kept, taken, off = judged_passes(labeled, relabeled, first)
     mine, theirs = (second, outcomes) if kept == 2 else (outcomes, second)
     first_off, second_off = (None if np.isnan(v) else float(v) for v in off)
@@ -132,7 +132,7 @@ def second_pass(
     return merged_windows(windows, with_other_reading(theirs, mine), taken), choice
 
 
-def _judged(labels: LabeledTrajectories) -> LabeledTrajectories:
+def judged_part(labels: LabeledTrajectories) -> LabeledTrajectories:
     """What the spreads and the judges read of a pass's labels: positions and point indices
     (its fill and confidences, 1.3 kB a frame at 41 markers, are not kept beside the other pass's)."""
     return LabeledTrajectories(labels.names, labels.positions, labels.occluded, labels.rate, labels.point_index)

@@ -104,5 +104,5 @@ def _second_pass_note(store: JobStore, job_id: str) -> Callable[[int, int], None
     """The second pass's progress as the job's running note (``JobStore.note``)."""
     def note(done: int, total: int) -> None:
         store.note(job_id, f"second pass: {done} of {total} windows (the first pass is done; the pass whose rigid "
-                           "pairs fit the first frame better is kept)")
+                           "pairs fit the first frame better is kept, then a frame-by-frame reading where it fits better)")
     return note

@@ -1,0 +1,27 @@
+"""What ``track``'s summary line says of the labelings beyond the first: the second pass and
+the frame-by-frame reading (``service.labeling.second_pass``, ``service.labeling.rival_reading``)."""
+
+from __future__ import annotations
+
+from service.cli.report import counted
+from service.labeling.rival_reading import RivalChoice
+from service.labeling.second_pass import PassChoice
+
+
+def second_pass_note(choice: PassChoice | None) -> str:
+    """What the summary line says of a second pass that ran: which labeling was kept, and why."""
+    if choice is None or choice.second_doubtful is None:
+        return ""
+    kept = "second pass kept" if choice.kept == 2 else "first pass kept over a second"
+    off = "" if choice.first_off_mm is None or choice.second_off_mm is None else (
+        f"rigid pairs {choice.first_off_mm:.1f} -> {choice.second_off_mm:.1f} mm off the first frame; ")
+    other = "" if not choice.taken_from_other else f", {counted(choice.taken_from_other, 'marker')}' labels from the other pass"
+    return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
+
+
+def rival_note(rival: RivalChoice | None) -> str:
+    """What the summary line says of a frame-by-frame reading that ran (``rival_reading``)."""
+    if rival is None:
+        return ""
+    return f"; {counted(rival.markers, 'marker')}' labels from a frame-by-frame reading" if rival.markers else (
+        "; a frame-by-frame reading changed no label")

@@ -1,0 +1,71 @@
+"""A doubtful take read frame by frame as well, the marker groups that reading labels better
+taken from it (``service.labeling.rival_reading``)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import DATA
+
+from service.capture.capture import LabelingOptions
+from service.capture.from_recording import capture_from_span
+from service.errors import InputError
+from service.io.formats import read_labeled
+from service.labeling.capture_labeling import CaptureLabeling
+
+WALK = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
+START = 4400  # the file's own left foot is corrupt at 4483-4600 (a repeated frame, then LMT5-LTOE 94 -> 183 mm)
+FOOT = ["male:LHEE", "male:LANK", "male:LMT5"]
+
+
+def _foot_right_at_the_end(names: list[str], positions: np.ndarray) -> float:
+    """Share of the left foot's samples in the take's last 300 frames labeled with their own point."""
+    truth = read_labeled(WALK).without_unlabeled()
+    own = truth.positions[-300:][:, [truth.names.index(n) for n in FOOT]]
+    given = positions[-300:][:, [names.index(n) for n in FOOT]]
+    present = np.isfinite(own).all(axis=2)
+    same = np.linalg.norm(np.nan_to_num(given - own, nan=1e9), axis=2) < 1e-3
+    return float((same & present).sum() / present.sum())
+
+
+def test_the_window_reading_alone_keeps_the_foot_exchanged_to_the_end() -> None:
+    """Without the rival: after the corrupt stretch the window reading passes the foot's labels
+    round and keeps them so for 700 frames, confidently (the setup the feature is for)."""
+    capture, _ = capture_from_span(read_labeled(WALK), START)
+    labeling = CaptureLabeling(capture, LabelingOptions(rival_reading=False))
+    result, _ = labeling.label()
+    assert labeling.choice is not None and labeling.choice.second_doubtful is not None  # doubtful: a second pass ran
+    assert labeling.rival is None
+    assert _foot_right_at_the_end(result.names, result.positions) < 0.1
+
+
+def test_the_frame_by_frame_reading_gives_the_foot_back(tmp_path: Path) -> None:
+    out = tmp_path / "walk.c3d"
+    run = subprocess.run(
+        [sys.executable, "-m", "service.cli", "track", str(WALK), "--start", str(START), "--out", str(out), "--json"],
+        capture_output=True, text=True, check=True,
+    )
+    rival = json.loads(run.stdout)["rival_reading"]
+    assert rival["markers"] >= 1 and rival["rival_off_mm"] < rival["window_off_mm"]
+    written = read_labeled(out)
+    positions = written.positions[START:]  # a C3D copy keeps the frames before --start, unlabeled
+    assert _foot_right_at_the_end(written.names, positions) > 0.9
+
+
+def test_a_take_not_doubtful_is_read_once() -> None:
+    """A clean take runs no second pass, so no frame-by-frame reading either: one pass's time."""
+    capture, _ = capture_from_span(read_labeled(WALK), 0, 300)
+    labeling = CaptureLabeling(capture)
+    labeling.label()
+    assert labeling.choice is not None and labeling.choice.second_doubtful is None
+    assert labeling.rival is None
+
+
+def test_the_rival_reading_is_an_option_that_must_be_a_bool() -> None:
+    with pytest.raises(InputError, match="rival_reading must be True or False"):
+        LabelingOptions(rival_reading="yes")  # type: ignore[arg-type]
