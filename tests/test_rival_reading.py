@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import DATA
+from service_fixtures import generated_capture
 
+import service.labeling.second_pass as second_pass_module
 from service.capture.capture import LabelingOptions
 from service.capture.from_recording import capture_from_span
 from service.errors import InputError
@@ -69,3 +71,19 @@ def test_a_take_not_doubtful_is_read_once() -> None:
 def test_the_rival_reading_is_an_option_that_must_be_a_bool() -> None:
     with pytest.raises(InputError, match="rival_reading must be True or False"):
         LabelingOptions(rival_reading="yes")  # type: ignore[arg-type]
+
+
+def test_a_stop_during_the_frame_by_frame_reading_abandons_it(monkeypatch) -> None:
+    """A job cancelled while the frame-by-frame reading runs stops there, as in the second pass."""
+    monkeypatch.setattr(second_pass_module, "doubtful_share", lambda outcomes: 0.5)  # doubtful: both run
+    labeling = CaptureLabeling(generated_capture(frames=40, seed=3), LabelingOptions(window=10))
+    outcomes = list(labeling.windows())
+    asked: list[int] = []
+
+    def stop() -> bool:
+        asked.append(1)
+        return len(asked) > labeling.n_windows  # the second pass runs whole, the reading is stopped
+
+    assert labeling.refine(outcomes, stop=stop) is None
+    assert len(asked) == labeling.n_windows + 1
+    assert labeling.rival is None

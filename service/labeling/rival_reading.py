@@ -7,12 +7,12 @@ inherits the exchange. A frame-by-frame assignment (``nn-hungarian``: the same c
 costs, no later frame seen) decides each frame on that frame's evidence and often keeps the two
 apart. On the real 03_rolling from frame 562 (one pass each) the window reading labels 75.3 %
 of its named markers' samples right and the frame-by-frame one 86.9 %; on the seed-0 accuracy
-matrix the window reading is ahead on 71 of 85 rows. Neither is right everywhere, so a take
-doubtful enough for a second pass (``second_pass``) is read frame by frame as well (with its
-own second pass, as ``nn-hungarian`` labels a take), and the readings are merged as the passes
-are (``formulations.markers.pass_merge``): the markers they label differently fall into groups
-that share no point, and each group takes the frame-by-frame labels only where they bend its
-rigid pairs strictly less off the labeled first frame
+matrix the window reading (one pass) is at or above it on 71 of 85 rows. Neither is right
+everywhere, so a take doubtful enough for a second pass (``second_pass``) is read frame by
+frame as well (with its own second pass, as ``nn-hungarian`` labels a take), and the readings
+are merged as the passes are (``formulations.markers.pass_merge``): the markers they label
+differently fall into groups that share no point, and each group takes the frame-by-frame
+labels only where they bend its rigid pairs strictly less off the labeled first frame
 (``first_frame_shape``). The windows and their certificates stay the window reading's; the
 markers taken are counted in the choice (``RivalChoice``).
 """
