@@ -126,10 +126,17 @@ def second_pass(
     mine, theirs = (second, outcomes) if kept == 2 else (outcomes, second)
     first_off, second_off = (None if np.isnan(v) else float(v) for v in off)
     choice = PassChoice(before, doubtful_share(second), kept, first_off, second_off, int(taken.sum()))
+    return merged_readings(mine, theirs, taken), choice
+
+
+def merged_readings(mine: list[WindowOutcome], theirs: list[WindowOutcome], taken: np.ndarray) -> list[WindowOutcome]:
+    """``mine`` with the markers ``taken`` (``(N,)`` bool) labeled as in ``theirs``
+    (``merged_windows``), each label's confidence judged with the other reading's
+    (``with_other_reading``). Both read the same windows of one take."""
     windows = with_other_reading(mine, theirs)
-    if not taken.any():  # nothing from the other pass: its confidences need no second judging
-        return windows, choice
-    return merged_windows(windows, with_other_reading(theirs, mine), taken), choice
+    if not taken.any():  # nothing from the other reading: its confidences need no second judging
+        return windows
+    return merged_windows(windows, with_other_reading(theirs, mine), taken)
 
 
 def judged_part(labels: LabeledTrajectories) -> LabeledTrajectories:
