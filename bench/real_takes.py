@@ -218,7 +218,9 @@ def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, rou
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
-    parser.add_argument("--only", nargs="*", help="recording names (service.evaluation.matrix)")
+    # choices: a misspelt or file name (03_rolling for numediart-rolling) is refused, not an empty table
+    parser.add_argument("--only", nargs="*", choices=[r.name for r in RECORDINGS], metavar="NAME",
+                        help="recording names (service.evaluation.matrix.RECORDINGS)")
     parser.add_argument("--cap", type=int, default=0, help="label at most this many frames of each take")
     parser.add_argument("--model", action="store_true", help="label a take without a full frame 0 from a model of the "
                         "frames before its start (its first half with --half)")
