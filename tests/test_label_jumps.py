@@ -48,3 +48,26 @@ def test_a_marker_moving_on_its_own_is_no_partner_and_its_gaps_no_jumps() -> Non
     jumped = label_jumps(with_free)
     assert np.flatnonzero(jumped[:, 0]).tolist() == list(range(45, 70))
     assert not jumped[:, 1:].any()
+
+
+def _handed_over(hand_over: bool) -> Recording:
+    """Marker 3's label ends at frame 59; with ``hand_over`` marker 0's label goes on along
+    marker 3's track from frame 60, with no gap (marker 0's own point is left unlabeled)."""
+    positions = _rolling(BODY)
+    positions[60:, 3] = np.nan
+    if hand_over:
+        positions[60:, 0] = _rolling(BODY)[60:, 3]
+    return Recording([f"m{i}" for i in range(len(BODY))], positions, 100.0)
+
+
+def test_a_label_handed_over_to_a_track_whose_label_ends_is_found_to_the_end_of_its_run() -> None:
+    assert not label_jumps(_handed_over(hand_over=False)).any()  # a label ending is no hand-over
+    jumped = label_jumps(_handed_over(hand_over=True))
+    assert np.flatnonzero(jumped[:, 0]).tolist() == list(range(60, FRAMES))
+    assert not jumped[:, 1:].any()
+
+
+def test_a_fast_step_onto_no_ending_track_is_no_hand_over() -> None:
+    take = _handed_over(hand_over=False)
+    take.positions[60:, 0] += [0.0, 0.0, 200.0]  # marker 0 jumps 200 mm, far from marker 3's heading
+    assert not label_jumps(take)[:, 0].any()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from service.evaluation.scenario import Scenario
-from service.evaluation.scores import label_scores
+from service.evaluation.scores import counts_within, label_scores
 from service.evaluation.simulated import SimulatedCapture
 from service.io.recording import LabeledTrajectories, Recording, UnlabeledCloud
 
@@ -141,3 +141,12 @@ def test_empty_labeling_has_zero_accuracy_and_declares_every_point() -> None:
 def test_labeling_that_does_not_fit_the_capture_is_refused(point_index: np.ndarray) -> None:
     with pytest.raises(ValueError, match="point_index"):
         label_scores(_capture(), _labeled(point_index))
+
+
+def test_counts_within_a_mask_are_those_of_the_scores_inside_it() -> None:
+    point_index = PERFECT.copy()
+    point_index[2, 0], point_index[4, 1] = -1, 0  # marker A occluded in frame 2, B on A's point in frame 4
+    within = np.zeros(PERFECT.shape, bool)
+    within[0, :] = within[2, 0] = within[4, :] = within[5, 2] = True  # frame 0 unscored; C deleted in frame 5
+    # scored inside: (2, A) visible and wrong, frame 4's three visible, B's wrong
+    assert counts_within(_capture(), _labeled(point_index), within) == (4, 2)

@@ -21,6 +21,17 @@ that jumped is not a reference; the next run that matches the reference again is
 held still against partners on another segment before and after a gap, with the joint
 turned during it, reads as a jump: such marker-frames are left out of a score, not counted
 wrong, so the cost of that error is a smaller sample.
+
+A label can also be handed over with no gap: marker B's label leaves its track in frame t,
+landing where marker A's track, whose label ends at t - 1, was heading, while A's label is
+gone. With x^_m(t) = 2 x_m(t - 1) - x_m(t - 2) a track's constant-velocity continuation
+(x_m(t - 1) when it has no step), B's run is handed over from t to its end when
+
+    |x_B(t) - x^_B(t)| > jump_mm   and   |x_B(t) - x^_A(t)| < |x_B(t) - x^_B(t)| / handoff_ratio.
+
+The KTK basket sprint's ForearmL:Marker1 label at frame 732 moves 73 mm onto the point of
+ForearmL:Marker4 (0.1 mm from where that track was heading), whose label ends there; on no other
+take of ``service.evaluation.matrix.RECORDINGS`` does a label do this.
 """
 
 from __future__ import annotations
@@ -50,6 +61,7 @@ class LabelJumpRule:
     jump_mm: float = 25.0
     min_partners: int = 3
     min_frames: int = 10
+    handoff_ratio: float = 5.0
 
 
 def label_jumps(recording: Recording, rule: LabelJumpRule = LabelJumpRule()) -> Mask:
@@ -65,7 +77,25 @@ def label_jumps(recording: Recording, rule: LabelJumpRule = LabelJumpRule()) -> 
                 jumped[span, marker] = True
             elif length >= rule.min_frames:
                 reference = shape
-    return jumped
+    return jumped | _handed_over(recording.positions, seen, rule)
+
+
+def _handed_over(positions: Array, seen: Mask, rule: LabelJumpRule) -> Mask:
+    """``(frames, markers)`` the marker-frames of runs whose label was handed over (module doc)."""
+    handed = np.zeros_like(seen)
+    for t in range(2, len(seen)):
+        ended = seen[t - 1] & ~seen[t]
+        if not ended.any():
+            continue
+        heading = np.where((seen[t - 1] & seen[t - 2])[:, None], 2 * positions[t - 1] - positions[t - 2],
+                           positions[t - 1])
+        kept = np.flatnonzero(seen[t] & seen[t - 1])
+        own = np.linalg.norm(positions[t, kept] - heading[kept], axis=1)
+        other = np.linalg.norm(positions[t, kept][:, None] - heading[ended][None], axis=2).min(axis=1)
+        for marker in kept[(own > rule.jump_mm) & (other < own / rule.handoff_ratio)]:
+            stop = t + int(np.argmin(np.r_[seen[t:, marker], False]))  # to the end of its run
+            handed[t:stop, marker] = True
+    return handed
 
 
 def _run_shape(positions: Array, marker: int) -> tuple[Array, Array]:

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from service.evaluation.cloud import evaluate
+from service.evaluation.label_jumps import label_jumps
 from service.evaluation.scenario import Scenario
-from service.evaluation.scores import block_counts
+from service.evaluation.scores import block_counts, counts_within
 from service.io.formats import read_labeled
 from service.io.recording import Recording
 
@@ -164,6 +165,9 @@ class Cell:
         took_ghost: Marker-frames labeled with a ghost.
         seconds_per_frame: Labeling time (simulation and scoring excluded) per frame.
         blocks: ``(marker_frames, correct)`` per block of frames (``block_counts``).
+        file_jumps: Of ``marker_frames``, those where the file's own label jumped to another
+            marker (``label_jumps``): its truth is not known there.
+        correct_on_jumps: Of ``correct``, those among ``file_jumps``.
     """
 
     key: CellKey
@@ -178,6 +182,8 @@ class Cell:
     correct: int
     seconds_per_frame: float
     blocks: tuple[tuple[int, int], ...]
+    file_jumps: int = 0
+    correct_on_jumps: int = 0
 
 
 def run_cell(key: CellKey, frames_cap: int = 0, data: Path = DATA, block_frames: int = 1000) -> Cell:
@@ -187,9 +193,10 @@ def run_cell(key: CellKey, frames_cap: int = 0, data: Path = DATA, block_frames:
     scenario = replace(CONDITIONS[key.condition], seed=key.seed, start_frame=take.start, frames=frames)
     run = evaluate(take.truth, scenario, key.formulation)
     s = run.scores
+    jumps = counts_within(run.capture, run.result, label_jumps(take.truth)[take.start : take.start + frames])
     return Cell(
         key, take.recording.half, frames, take.truth.n_markers, s.label_accuracy, s.swaps, s.missed,
         s.took_ghost, s.marker_frames, s.correct, run.seconds / frames,
-        tuple(block_counts(run.capture, run.result, block_frames)),
+        tuple(block_counts(run.capture, run.result, block_frames)), *jumps,
     )
 

@@ -94,6 +94,13 @@ def block_counts(
     return [(int(visible[a:b].sum()), int(correct[a:b].sum())) for a, b in zip(bounds, bounds[1:])]
 
 
+def counts_within(capture: SimulatedCapture, result: LabeledTrajectories, within: np.ndarray) -> tuple[int, int]:
+    """``(marker_frames, correct)`` as ``label_scores`` counts them, inside the ``(frames, markers)``
+    mask ``within`` (the marker-frames where the file's own label jumped: ``label_jumps``)."""
+    *_, visible, correct = _marked(capture, result)
+    return int((visible & within).sum()), int((correct & within).sum())
+
+
 class _Marked(NamedTuple):
     marker: np.ndarray
     frame: np.ndarray
