@@ -10,6 +10,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_burst, learn_drift, learn_motion
+from formulations.markers.motion_filter import advance_filter, filter_predicts, initial_filter
 from formulations.markers.rigid import follow_neighbours
 
 # A displacement further than this many sds of a marker's motion residual (3D) from its
@@ -53,15 +54,14 @@ class MarkerState:
             axis (``motion.learn_burst``, from lag products): high while a limb accelerates,
             about 0 under noise alone, 0 when unknown.
         last_residual: ``(N, 3)`` the last frame's motion residual, 0 where it had none.
-        drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) the
-            prediction of an occluded marker drifts from where it reappears, and the
-            reappearances it was learned from (``motion.learn_drift``; one value for all
-            markers, as reappearances are too rare to learn it per marker).
-        plate_position, plate_age, plate_rate: ``(N, 3)``, ``(N,)``, ``(N,)`` where each
-            marker was at the last frame its rigid plate (``turns.rigid_triples``) was seen
-            whole, how many frames ago (-1: never), and how fast the plate turned then (rad
-            per frame, NaN unknown): a plate lost across a window's template is read against
-            it when it comes back (``turns``).
+        drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) an occluded
+            marker's prediction drifts, and the reappearances it was learned from
+            (``motion.learn_drift``; one value for all markers: reappearances are rare).
+        plate_position, plate_age, plate_rate: ``(N, 3)``, ``(N,)``, ``(N,)`` where each marker was
+            when its rigid plate (``turns.rigid_triples``) was last seen whole, how many frames ago
+            (-1: never), and how fast it turned then (rad per frame, NaN unknown; ``turns``).
+        filtered, filter_cov, filter_raw, residual_var, filter_var, noise_var, noise_samples:
+            each marker's Kalman filter and what decides where it predicts (``motion_filter.advance_filter``).
     """
 
     position: np.ndarray
@@ -86,6 +86,13 @@ class MarkerState:
     plate_position: np.ndarray
     plate_age: np.ndarray
     plate_rate: np.ndarray
+    filtered: np.ndarray
+    filter_cov: np.ndarray
+    filter_raw: np.ndarray
+    residual_var: np.ndarray
+    filter_var: np.ndarray
+    noise_var: np.ndarray
+    noise_samples: np.ndarray
 
     @classmethod
     def from_first_frame(cls, position: np.ndarray, n_neighbours: int = 16) -> MarkerState:
@@ -105,7 +112,7 @@ class MarkerState:
             motion_var=np.full(n, MOTION_VAR_PRIOR_MM2), motion_samples=np.zeros(n, int),
             burst_var=np.zeros(n), last_residual=np.zeros((n, 3)),
             drift_var=np.full(n, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(n, int),
-            plate_position=np.full((n, 3), np.nan), plate_age=np.full(n, -1), plate_rate=np.full(n, np.nan),
+            plate_position=np.full((n, 3), np.nan), plate_age=np.full(n, -1), plate_rate=np.full(n, np.nan), **initial_filter(n),
         )
 
     @cached_property
@@ -116,9 +123,8 @@ class MarkerState:
     def advance(self, observed: np.ndarray, seen: np.ndarray, damping: float = 0.8, rate: float = 0.03) -> MarkerState:
         """The state one frame later.
 
-        The guide track (``guide.guide_track``) advances a window's states with the points it
-        takes, and the window's labels advance them again, mostly with the same points: an
-        advance already made is not made twice (``_advanced``, exactly the same state).
+        The guide track advances a window's states, and the window's labels advance them again,
+        mostly with the same points: an advance already made is not made twice (``_advanced``).
 
         Args:
             observed: ``(N, 3)`` positions taken this frame (ignored where not ``seen``).
@@ -158,9 +164,8 @@ class MarkerState:
         # followed is lost (it may have been the only one on its segment): the rest carry it on
         # from there. A loose fit is not locked in: its error would compound.
         anchored = seen | (carried & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
-        # Distances learn from seen pairs and from a seen marker and one a firm rigid fit
-        # carries (it moves with its neighbours), not from one only loosely followed: its
-        # neighbours may be the wrong ones (its rigid ones lost with it), and the shape would
+        # Distances learn from seen pairs and from a seen marker and one a firm rigid fit carries,
+        # not from one loosely followed: its neighbours may be the wrong ones, and the shape would
         # learn its drift and no longer find it (``shape_reacquire``).
         known = seen | carried
         # A carried position counts as an anchor only while its own prediction is sure to
@@ -183,7 +188,7 @@ class MarkerState:
             motion_var=motion_var, motion_samples=motion_samples,
             burst_var=learn_burst(self.burst_var, residual, self.last_residual, usable, self.step_var),
             last_residual=np.where(usable[:, None], residual, 0.0),
-            drift_var=drift_var, drift_samples=drift_samples,
+            drift_var=drift_var, drift_samples=drift_samples, **advance_filter(self, observed, seen, residual, usable),
         )
 
     def _rejoined(self, velocity: np.ndarray, back: np.ndarray, measured: np.ndarray, now: np.ndarray) -> np.ndarray:
@@ -192,12 +197,9 @@ class MarkerState:
         rigid near ones first; a translation with fewer than three).
 
         The displacement from where the gap left it to where it is predicted now is no
-        velocity: the prediction jumps whenever the neighbours it follows change (one lost,
-        the model re-anchoring it), and a jump taken as a velocity puts the next frame's
-        gate off the marker, which is then lost, predicted on that velocity, found again
-        from its neighbours with the jump reversed: a cycle of every other frame (CMU
-        135_02's right forearm, 40 frames). Where no neighbour was seen twice, the implied
-        displacement stays.
+        velocity: the prediction jumps whenever the neighbours it follows change, and a jump
+        taken as a velocity puts the next gate off the marker: lost and found every other
+        frame (CMU 135_02's right forearm, 40 frames). With no neighbour seen twice it stays.
         """
         rows = np.flatnonzero(back & measured[self.neighbours].any(axis=1))
         if not len(rows):
@@ -240,8 +242,9 @@ class MarkerState:
         return var
 
     def predict(self) -> np.ndarray:
-        """``(N, 3)`` predicted position one frame ahead (see ``_prediction``)."""
-        return self._prediction[0].copy()
+        """``(N, 3)`` predicted position one frame ahead: the Kalman filter's where it predicts
+        (``motion_filter.filter_predicts``), else ``_prediction``'s."""
+        return np.where(filter_predicts(self)[:, None], self.filtered[:, 0] + self.filtered[:, 1], self._prediction[0])
 
     def stranded(self, after: int) -> np.ndarray:
         """``(N,)`` unseen for ``after`` frames or more with no seen neighbour to follow:
@@ -260,11 +263,8 @@ class MarkerState:
         6 -> 72 mm in 22 frames, though heel and toe were back after 3 and 11 (2 mm noise,
         seed 0); it then took the toe's point. Their predicted positions at its last sighting
         let it follow the foot (under 7 mm). Only as a fallback, and only sure predictions: a
-        carried position has its own error, large in fast motion. Letting every carried
-        neighbour count took the seed-0 accuracy matrix 97.104 -> 95.438 % (the running takes
-        down by up to 22 points); as a fallback 97.037 % (seeds 1-2 98.857 -> 98.793 %); with
-        the sure predictions only 97.109 %, swaps 1,711 -> 1,678, and seeds 1-2 99.037 %,
-        swaps 534 -> 488 (docs/how-a-window-is-solved.md).
+        carried position has its own error, large in fast motion (every carried neighbour
+        counting cost the seed-0 matrix 1.7 points: docs/how-a-window-is-solved.md).
         """
         seen_now = self.visible[self.neighbours]
         usable: np.ndarray = self.anchor_valid & seen_now

@@ -1,0 +1,149 @@
+"""A constant-velocity Kalman filter per marker: where a marker seen in a row will be next.
+
+The raw constant-velocity prediction x_t + (x_t - x_(t-1)) extrapolates two noisy points, so
+its error has per-axis variance 5 sigma^2 from noise alone (6 sigma^2 with the point it is
+compared to): at 4 mm of noise about 10 mm per axis, as much as half the spacing of a wrist's
+or a clavicle's markers. Filtering each marker's track (per axis, state position and
+velocity, Bar-Shalom's discrete white-noise acceleration model) averages the noise over the
+frames its motion allows:
+
+    predict:  x- = x + v,   P- = F P F' + q^2 [[1/4, 1/2], [1/2, 1]],   F = [[1, 1], [0, 1]]
+    update:   S = P-_xx + sigma^2,   K = P-_x. / S,   (x, v) = (x-, v-) + K (z - x-),
+              P = (I - K H) P-
+
+with sigma^2 the take's measurement noise and q^2 the marker's own acceleration per frame,
+both learned as the take is labeled: q^2 = s^2 - 6 sigma^2 from the running mean s^2 of the
+marker's squared constant-velocity residual (6 sigma^2 + q^2, ``motion``), and sigma^2 from the lag-one products of
+consecutive residuals, which noise alone makes -4 sigma^2 (e_t = n_t - 2 n_(t-1) + n_(t-2);
+an acceleration that persists makes them positive, so sigma^2 comes out low and the filter
+nearer the raw prediction: the safe side). With sigma^2 = 0 the filter is the raw prediction.
+A white acceleration is a poor model of a limb's: it lags behind a smooth swing the raw
+prediction follows. Its gain is averaging noise, so a marker predicts by the filter only where
+the noise is at least half its raw residual (6 sigma^2 >= q^2, i.e. s^2 <= 12 sigma^2) and the
+filter has erred less than the raw prediction on its own frames so far (running means of the
+squared errors, ``motion.learn_motion``): on a noisy take, or a still marker. Everywhere it
+erred less, the filter cost the seed-0 accuracy matrix 0.15-0.23 points at 1.5 and 2 mm (up to
+5 on the tennis serve and racing) for 0.78 at 4 mm; with the noise condition, over seeds 0-2,
++0.93 at 4 mm, +0.09 at 2 mm, -0.08 at 1.5 mm (docs/how-a-window-is-solved.md). A limb that
+suddenly accelerates (a serve) leaves a filter tuned to its calm behind: a point off the
+forecast by more than the 99.9 % chi-square of S starts the filter again from the last two points.
+
+The filter holds only while a marker is seen frame after frame on the points it filtered
+(``raw``: the last point it took, NaN when none): anything else that moves a marker (a
+reappearance, an exchange repair, a model placing it) falls back on the raw prediction, and
+two sightings in a row start the filter again.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from formulations.markers.motion import MOTION_VAR_PRIOR_MM2, learn_motion
+
+if TYPE_CHECKING:
+    from formulations.markers.state import MarkerState
+
+NOISE_RATE = 0.02  # one frame's pooled lag products, once about 50 have been learned
+NOISE_VAR_FLOOR_MM2 = 0.0  # no noise known: the raw prediction
+MANOEUVRE_CHI2 = 16.27  # chi-square, 3 degrees of freedom, 99.9 %
+
+
+def initial_filter(n: int) -> dict[str, np.ndarray]:
+    """The filter fields of ``n`` markers' first ``MarkerState``: nothing filtered, no noise known."""
+    return dict(
+        filtered=np.zeros((n, 2, 3)), filter_cov=np.zeros((n, 3)), filter_raw=np.full((n, 3), np.nan),
+        residual_var=np.full(n, MOTION_VAR_PRIOR_MM2), filter_var=np.full(n, MOTION_VAR_PRIOR_MM2),
+        noise_var=np.zeros(n), noise_samples=np.zeros(n, int),
+    )
+
+
+def filter_holds(raw: np.ndarray, position: np.ndarray, visible: np.ndarray) -> np.ndarray:
+    """``(N,)`` bool where the filter holds: seen on the point it filtered last (module doc)."""
+    holds: np.ndarray = visible & (raw == position).all(axis=1)
+    return holds
+
+
+def filter_predicts(state: MarkerState) -> np.ndarray:
+    """``(N,)`` bool where the filter holds, noise is at least half the raw residual and the
+    filter has erred less than the raw prediction (module doc)."""
+    noisy = state.residual_var <= 12 * state.noise_var
+    predicts: np.ndarray = filter_holds(state.filter_raw, state.position, state.visible) & noisy
+    return predicts & (state.filter_var < state.residual_var)
+
+
+def advance_filter(
+    state: MarkerState, observed: np.ndarray, seen: np.ndarray, residual: np.ndarray, usable: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """The filter fields of ``state`` one frame later (``MarkerState.advance``).
+
+    Args:
+        observed, seen: this frame's points and which markers took one.
+        residual: ``(N, 3)`` the points off the raw constant-velocity prediction.
+        usable: ``(N,)`` seen now and in the two frames before.
+    """
+    holds = filter_holds(state.filter_raw, state.position, state.visible)
+    lagged = usable & (state.last_residual != 0).any(axis=1)
+    noise_var, noise_samples = learn_noise(float(state.noise_var[0]), int(state.noise_samples[0]), residual,
+                                           state.last_residual, lagged)
+    filtered, cov, raw, innovation = filter_step(
+        state.filtered, state.filter_cov, holds, observed, seen, state.visible & seen, state.position,
+        max(float(state.noise_var[0]), NOISE_VAR_FLOOR_MM2), state.residual_var, state.burst_var,
+    )
+    residual_var, _ = learn_motion(state.residual_var, state.motion_samples, residual, usable, decay=1.0)
+    filter_var, _ = learn_motion(state.filter_var, state.motion_samples, innovation, usable & holds, decay=1.0)
+    return dict(
+        filtered=filtered, filter_cov=cov, filter_raw=raw, residual_var=residual_var, filter_var=filter_var,
+        noise_var=np.full_like(state.noise_var, noise_var), noise_samples=np.full_like(state.noise_samples, noise_samples),
+    )
+
+
+def filter_step(
+    filtered: np.ndarray, cov: np.ndarray, holds: np.ndarray, observed: np.ndarray, seen: np.ndarray,
+    was_seen: np.ndarray, previous: np.ndarray, noise_var: float, residual_var: np.ndarray,
+    burst_var: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Filtered state ``(N, 2, 3)``, covariance ``(N, 3)`` (xx, xv, vv) and raw point ``(N, 3)``
+    one frame later (module doc), and the innovation ``(N, 3)``: the point off the forecast.
+
+    Args:
+        holds: ``(N,)`` the filter held at the frame before (``filter_holds``).
+        observed, seen: this frame's points and which markers took one.
+        was_seen, previous: seen in the frame before too, and where.
+        noise_var: sigma^2, per axis (mm^2).
+        residual_var: ``(N,)`` s^2, the markers' constant-velocity residual variance per axis.
+    """
+    r = noise_var
+    q2 = np.maximum(residual_var - 6 * r, burst_var)
+    xx, xv, vv = cov[:, 0] + 2 * cov[:, 1] + cov[:, 2] + q2 / 4, cov[:, 1] + cov[:, 2] + q2 / 2, cov[:, 2] + q2
+    s = np.maximum(xx + r, 1e-12)
+    gain_x, gain_v = xx / s, xv / s
+    ahead = filtered[:, 0] + filtered[:, 1]
+    innovation = observed - ahead
+    updated = np.stack([ahead + gain_x[:, None] * innovation, filtered[:, 1] + gain_v[:, None] * innovation], axis=1)
+    updated_cov = np.stack([(1 - gain_x) * xx, (1 - gain_x) * xv, vv - gain_v * xv], axis=1)
+    # Two sightings in a row start it: velocity their difference (variance 2 sigma^2).
+    started = np.stack([observed, observed - previous], axis=1)
+    started_cov = np.tile(np.array([r, r, 2 * r]), (len(cov), 1))
+    # A point this far off the filter's forecast is a manoeuvre it lags behind: start again.
+    surprised = (innovation**2).sum(axis=1) / s > MANOEUVRE_CHI2
+    keep = (seen & holds & ~surprised)[:, None]
+    start = (seen & was_seen & ~holds)[:, None]
+    new_filtered = np.where(keep[:, :, None], updated, np.where(start[:, :, None], started, filtered))
+    new_cov = np.where(keep, updated_cov, np.where(start, started_cov, cov))
+    raw = np.where(keep | start, observed, np.nan)
+    return new_filtered, new_cov, raw, innovation
+
+
+def learn_noise(
+    var: float, samples: int, residual: np.ndarray, last_residual: np.ndarray, usable: np.ndarray,
+) -> tuple[float, int]:
+    """The running mean over frames of -e_t . e_(t-1) / (3 * 4), averaged over the markers with a
+    residual this frame and the last, and the frames it has learned from; sigma^2 is it floored at
+    ``NOISE_VAR_FLOOR_MM2`` (noise makes the products scatter both ways: the mean is kept)."""
+    if not usable.any():
+        return var, samples
+    lag = float(-(residual[usable] * last_residual[usable]).sum(axis=1).mean() / 12.0)
+    rate = max(1.0 / (samples + 2), NOISE_RATE)
+    return var + rate * (lag - var), samples + 1
