@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import formulations.markers.state as marker_state
-from formulations.markers.motion_filter import filter_holds, filter_predicts, filter_step
+from formulations.markers.motion_filter import MIN_NOISE_SD_MM, filter_holds, filter_predicts, filter_step
 from formulations.markers.state import MarkerState
 from service import Capture, CaptureLabeling
 
@@ -114,10 +114,12 @@ def test_a_swing_under_little_noise_is_predicted_raw():
     assert holds > 0.5 * 3 * (len(truth) - 1 - RATE)
 
 
-def test_the_filter_predicts_only_where_noise_is_half_the_residual():
+def test_the_filter_predicts_only_where_noise_is_half_the_residual_and_not_negligible():
     *_, state = _forecast_errors(_hand(), 4.0)
     assert filter_predicts(state).all()
     noise = float(state.noise_var[0])
     louder = replace(state, residual_var=np.full(len(state.position), 12.5 * noise), filter_var=state.filter_var * 0)
     assert not filter_predicts(louder).any()
     assert filter_predicts(replace(louder, residual_var=louder.residual_var * 11.5 / 12.5)).all()
+    quiet = np.full(len(state.position), 0.9 * MIN_NOISE_SD_MM**2)
+    assert not filter_predicts(replace(state, noise_var=quiet, residual_var=quiet, filter_var=quiet * 0)).any()

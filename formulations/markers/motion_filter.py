@@ -48,6 +48,9 @@ if TYPE_CHECKING:
 NOISE_RATE = 0.02  # one frame's pooled lag products, once about 50 have been learned
 NOISE_VAR_FLOOR_MM2 = 0.0  # no noise known: the raw prediction
 MANOEUVRE_CHI2 = 16.27  # chi-square, 3 degrees of freedom, 99.9 %
+# Below this the filter's gain, at most the raw forecast's noise error sqrt(5) sigma per axis
+# (1.1 mm), is a tenth of the closest markers' spacing: it cannot part markers, only tip near-ties.
+MIN_NOISE_SD_MM = 0.5
 
 
 def initial_filter(n: int) -> dict[str, np.ndarray]:
@@ -66,9 +69,9 @@ def filter_holds(raw: np.ndarray, position: np.ndarray, visible: np.ndarray) -> 
 
 
 def filter_predicts(state: MarkerState) -> np.ndarray:
-    """``(N,)`` bool where the filter holds, noise is at least half the raw residual and the
-    filter has erred less than the raw prediction (module doc)."""
-    noisy = state.residual_var <= 12 * state.noise_var
+    """``(N,)`` bool where the filter holds, noise is at least half the raw residual and at
+    least ``MIN_NOISE_SD_MM``, and the filter has erred less than the raw prediction (module doc)."""
+    noisy = (state.residual_var <= 12 * state.noise_var) & (state.noise_var >= MIN_NOISE_SD_MM**2)
     predicts: np.ndarray = filter_holds(state.filter_raw, state.position, state.visible) & noisy
     return predicts & (state.filter_var < state.residual_var)
 
