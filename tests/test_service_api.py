@@ -49,7 +49,7 @@ def capture() -> Capture:
 @pytest.fixture(scope="module")
 def cluttered() -> Capture:
     """One 20-frame window in heavy clutter whose LP optimum is fractional (a nonzero gap)."""
-    return generated_capture(frames=20, seed=22, noise_mm=10.0, ghosts_per_frame=100.0)
+    return generated_capture(frames=20, seed=38, noise_mm=10.0, ghosts_per_frame=100.0)
 
 
 def _solved_directly(capture: Capture, formulation: str) -> WindowSolution:

@@ -36,14 +36,11 @@ two sightings in a row start the filter again.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from formulations.markers.motion import MOTION_VAR_PRIOR_MM2, learn_motion
-
-if TYPE_CHECKING:
-    from formulations.markers.state import MarkerState
 
 NOISE_RATE = 0.02  # one frame's pooled lag products, once about 50 have been learned
 NOISE_VAR_FLOOR_MM2 = 0.0  # no noise known: the raw prediction
@@ -51,6 +48,35 @@ MANOEUVRE_CHI2 = 16.27  # chi-square, 3 degrees of freedom, 99.9 %
 # Below this the filter's gain, at most the raw forecast's noise error sqrt(5) sigma per axis
 # (1.1 mm), is a tenth of the closest markers' spacing: it cannot part markers, only tip near-ties.
 MIN_NOISE_SD_MM = 0.5
+
+
+class FilteredMarkers(Protocol):
+    """What the filter reads of a ``MarkerState`` (a protocol: the state imports this module)."""
+
+    @property
+    def position(self) -> np.ndarray: ...
+    @property
+    def visible(self) -> np.ndarray: ...
+    @property
+    def last_residual(self) -> np.ndarray: ...
+    @property
+    def burst_var(self) -> np.ndarray: ...
+    @property
+    def motion_samples(self) -> np.ndarray: ...
+    @property
+    def filtered(self) -> np.ndarray: ...
+    @property
+    def filter_cov(self) -> np.ndarray: ...
+    @property
+    def filter_raw(self) -> np.ndarray: ...
+    @property
+    def residual_var(self) -> np.ndarray: ...
+    @property
+    def filter_var(self) -> np.ndarray: ...
+    @property
+    def noise_var(self) -> np.ndarray: ...
+    @property
+    def noise_samples(self) -> np.ndarray: ...
 
 
 def initial_filter(n: int) -> dict[str, np.ndarray]:
@@ -68,7 +94,7 @@ def filter_holds(raw: np.ndarray, position: np.ndarray, visible: np.ndarray) -> 
     return holds
 
 
-def filter_predicts(state: MarkerState) -> np.ndarray:
+def filter_predicts(state: FilteredMarkers) -> np.ndarray:
     """``(N,)`` bool where the filter holds, noise is at least half the raw residual and at
     least ``MIN_NOISE_SD_MM``, and the filter has erred less than the raw prediction (module doc)."""
     noisy = (state.residual_var <= 12 * state.noise_var) & (state.noise_var >= MIN_NOISE_SD_MM**2)
@@ -77,7 +103,7 @@ def filter_predicts(state: MarkerState) -> np.ndarray:
 
 
 def advance_filter(
-    state: MarkerState, observed: np.ndarray, seen: np.ndarray, residual: np.ndarray, usable: np.ndarray,
+    state: FilteredMarkers, observed: np.ndarray, seen: np.ndarray, residual: np.ndarray, usable: np.ndarray,
 ) -> dict[str, np.ndarray]:
     """The filter fields of ``state`` one frame later (``MarkerState.advance``).
 
