@@ -1,8 +1,8 @@
 """The per-marker Kalman filter (``markers.motion_filter``): markers a few noise widths apart.
 
 At 4 mm of noise the raw constant-velocity prediction x_t + (x_t - x_(t-1)) errs by about
-10 mm per axis, as much as half the spacing of a hand's markers: the Vicon test file at
-4 mm lost 6 % of its labels to exchanges among wrist and finger markers 26-36 mm apart.
+10 mm per axis, as much as half the spacing of a hand's markers: on the accuracy matrix's
+validation takes at 4 mm (seeds 0-2) lp-l1 made 723 swaps without the filter, 283 with it.
 """
 
 from __future__ import annotations

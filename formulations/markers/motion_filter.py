@@ -43,7 +43,6 @@ import numpy as np
 from formulations.markers.motion import MOTION_VAR_PRIOR_MM2, learn_motion
 
 NOISE_RATE = 0.02  # one frame's pooled lag products, once about 50 have been learned
-NOISE_VAR_FLOOR_MM2 = 0.0  # no noise known: the raw prediction
 MANOEUVRE_CHI2 = 16.27  # chi-square, 3 degrees of freedom, 99.9 %
 # Below this the filter's gain, at most the raw forecast's noise error sqrt(5) sigma per axis
 # (1.1 mm), is a tenth of the closest markers' spacing: it cannot part markers, only tip near-ties.
@@ -118,7 +117,7 @@ def advance_filter(
                                            state.last_residual, lagged)
     filtered, cov, raw, innovation = filter_step(
         state.filtered, state.filter_cov, holds, observed, seen, state.visible & seen, state.position,
-        max(float(state.noise_var[0]), NOISE_VAR_FLOOR_MM2), state.residual_var, state.burst_var,
+        max(float(state.noise_var[0]), 0.0), state.residual_var, state.burst_var,  # persisting motion can make it < 0
     )
     residual_var, _ = learn_motion(state.residual_var, state.motion_samples, residual, usable, decay=1.0)
     filter_var, _ = learn_motion(state.filter_var, state.motion_samples, innovation, usable & holds, decay=1.0)
@@ -169,8 +168,8 @@ def learn_noise(
     var: float, samples: int, residual: np.ndarray, last_residual: np.ndarray, usable: np.ndarray,
 ) -> tuple[float, int]:
     """The running mean over frames of -e_t . e_(t-1) / (3 * 4), averaged over the markers with a
-    residual this frame and the last, and the frames it has learned from; sigma^2 is it floored at
-    ``NOISE_VAR_FLOOR_MM2`` (noise makes the products scatter both ways: the mean is kept)."""
+    residual this frame and the last, and the frames it has learned from. It can come out
+    negative where an acceleration persists; the filter takes sigma^2 as it floored at 0."""
     if not usable.any():
         return var, samples
     lag = float(-(residual[usable] * last_residual[usable]).sum(axis=1).mean() / 12.0)
