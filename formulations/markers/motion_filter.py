@@ -40,7 +40,7 @@ from typing import Protocol
 
 import numpy as np
 
-from formulations.markers.motion import MOTION_VAR_PRIOR_MM2, learn_motion
+from formulations.markers.motion import MOTION_CLIP, MOTION_RATE, MOTION_VAR_FLOOR_MM2, MOTION_VAR_PRIOR_MM2
 
 NOISE_RATE = 0.02  # one frame's pooled lag products, once about 50 have been learned
 MANOEUVRE_CHI2 = 16.27  # chi-square, 3 degrees of freedom, 99.9 %
@@ -89,7 +89,7 @@ def initial_filter(n: int) -> dict[str, np.ndarray]:
 
 def filter_holds(raw: np.ndarray, position: np.ndarray, visible: np.ndarray) -> np.ndarray:
     """``(N,)`` bool where the filter holds: seen on the point it filtered last (module doc)."""
-    holds: np.ndarray = visible & (raw == position).all(axis=1)
+    holds: np.ndarray = visible & np.logical_and.reduce(raw == position, axis=1)  # .all's wrappers cost more
     return holds
 
 
@@ -112,19 +112,29 @@ def advance_filter(
         usable: ``(N,)`` seen now and in the two frames before.
     """
     holds = filter_holds(state.filter_raw, state.position, state.visible)
-    lagged = usable & (state.last_residual != 0).any(axis=1)
+    lagged = usable & np.logical_or.reduce(state.last_residual != 0, axis=1)
     noise_var, noise_samples = learn_noise(float(state.noise_var[0]), int(state.noise_samples[0]), residual,
                                            state.last_residual, lagged)
     filtered, cov, raw, innovation = filter_step(
         state.filtered, state.filter_cov, holds, observed, seen, state.visible & seen, state.position,
         max(float(state.noise_var[0]), 0.0), state.residual_var, state.burst_var,  # persisting motion can make it < 0
     )
-    residual_var, _ = learn_motion(state.residual_var, state.motion_samples, residual, usable, decay=1.0)
-    filter_var, _ = learn_motion(state.filter_var, state.motion_samples, innovation, usable & holds, decay=1.0)
+    # learn_motion at decay 1 (its rate then 1 / (samples + 2), at least MOTION_RATE), both
+    # means at once: the same values for a third of its numpy calls, this module's main cost
+    rate = np.maximum(1.0 / (state.motion_samples + 2), MOTION_RATE)
     return dict(
-        filtered=filtered, filter_cov=cov, filter_raw=raw, residual_var=residual_var, filter_var=filter_var,
+        filtered=filtered, filter_cov=cov, filter_raw=raw,
+        residual_var=_learn_mean(state.residual_var, rate, residual, usable),
+        filter_var=_learn_mean(state.filter_var, rate, innovation, usable & holds),
         noise_var=np.full_like(state.noise_var, noise_var), noise_samples=np.full_like(state.noise_samples, noise_samples),
     )
+
+
+def _learn_mean(var: np.ndarray, rate: np.ndarray, residual: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """``motion.learn_motion``'s variance at decay 1 with its ``rate`` given (bit for bit the same)."""
+    square = np.minimum(np.add.reduce(residual * residual, axis=1) / 3, MOTION_CLIP * var)
+    learned: np.ndarray = np.where(usable, np.maximum(var + rate * (square - var), MOTION_VAR_FLOOR_MM2), var)
+    return learned
 
 
 def filter_step(
@@ -142,25 +152,34 @@ def filter_step(
         noise_var: sigma^2, per axis (mm^2).
         residual_var: ``(N,)`` s^2, the markers' constant-velocity residual variance per axis.
     """
+    # Run once per marker state advanced, on a few dozen markers: numpy's per-call overhead is
+    # the cost, so few calls, the two rows of the state at once, and no stack or tile.
     r = noise_var
     q2 = np.maximum(residual_var - 6 * r, burst_var)
-    xx, xv, vv = cov[:, 0] + 2 * cov[:, 1] + cov[:, 2] + q2 / 4, cov[:, 1] + cov[:, 2] + q2 / 2, cov[:, 2] + q2
-    s = np.maximum(xx + r, 1e-12)
-    gain_x, gain_v = xx / s, xv / s
-    ahead = filtered[:, 0] + filtered[:, 1]
-    innovation = observed - ahead
-    updated = np.stack([ahead + gain_x[:, None] * innovation, filtered[:, 1] + gain_v[:, None] * innovation], axis=1)
-    updated_cov = np.stack([(1 - gain_x) * xx, (1 - gain_x) * xv, vv - gain_v * xv], axis=1)
-    # Two sightings in a row start it: velocity their difference (variance 2 sigma^2).
-    started = np.stack([observed, observed - previous], axis=1)
-    started_cov = np.tile(np.array([r, r, 2 * r]), (len(cov), 1))
+    c_xx, c_xv, c_vv = cov.T
+    prior = np.empty((len(cov), 2))  # P-_xx, P-_xv: the gain's numerators, side by side
+    np.add(c_xx + 2 * c_xv + c_vv, q2 / 4, out=prior[:, 0])
+    np.add(c_xv + c_vv, q2 / 2, out=prior[:, 1])
+    s = np.maximum(prior[:, 0] + r, 1e-12)
+    gain = prior / s[:, None]
+    forecast = filtered.copy()  # F (x, v): (x + v, v)
+    forecast[:, 0] += filtered[:, 1]
+    innovation = observed - forecast[:, 0]
     # A point this far off the filter's forecast is a manoeuvre it lags behind: start again.
-    surprised = (innovation**2).sum(axis=1) / s > MANOEUVRE_CHI2
-    keep = (seen & holds & ~surprised)[:, None]
-    start = (seen & was_seen & ~holds)[:, None]
-    new_filtered = np.where(keep[:, :, None], updated, np.where(start[:, :, None], started, filtered))
-    new_cov = np.where(keep, updated_cov, np.where(start, started_cov, cov))
-    raw = np.where(keep | start, observed, np.nan)
+    surprised = np.add.reduce(innovation * innovation, axis=1) / s > MANOEUVRE_CHI2
+    keep = seen & holds & ~surprised
+    start = seen & was_seen & ~holds
+    forecast += gain[:, :, None] * innovation[:, None]
+    new_filtered = np.where(keep[:, None, None], forecast, filtered)
+    updated_cov = np.empty_like(cov)
+    np.multiply((1 - gain[:, :1]), prior, out=updated_cov[:, :2])
+    np.subtract(c_vv + q2, gain[:, 1] * prior[:, 1], out=updated_cov[:, 2])
+    new_cov = np.where(keep[:, None], updated_cov, cov)
+    if start.any():  # rare: after a gap or a repair
+        # Two sightings in a row start it: velocity their difference (variance 2 sigma^2).
+        new_filtered[start, 0], new_filtered[start, 1] = observed[start], observed[start] - previous[start]
+        new_cov[start] = (r, r, 2 * r)
+    raw = np.where((keep | start)[:, None], observed, np.nan)
     return new_filtered, new_cov, raw, innovation
 
 
@@ -170,8 +189,10 @@ def learn_noise(
     """The running mean over frames of -e_t . e_(t-1) / (3 * 4), averaged over the markers with a
     residual this frame and the last, and the frames it has learned from. It can come out
     negative where an acceleration persists; the filter takes sigma^2 as it floored at 0."""
-    if not usable.any():
+    rows = np.flatnonzero(usable)
+    if not len(rows):
         return var, samples
-    lag = float(-(residual[usable] * last_residual[usable]).sum(axis=1).mean() / 12.0)
+    # add.reduce / count is what .sum(axis=1).mean() computes, without its wrappers' overhead
+    lag = -float(np.add.reduce(np.add.reduce(residual[rows] * last_residual[rows], axis=1)) / len(rows)) / 12.0
     rate = max(1.0 / (samples + 2), NOISE_RATE)
     return var + rate * (lag - var), samples + 1
