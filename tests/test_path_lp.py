@@ -5,6 +5,7 @@ import pytest
 from windows import brute_force, random_window
 
 import formulations.relaxation.solve_lp as solve_lp_module
+from formulations.relaxation.components import restrict
 from formulations.relaxation.lp_model import window_lp
 from formulations.relaxation.path_lp import PROVEN, STALLED, solve_path_lp
 from formulations.relaxation.viterbi import ArcLayers, shortest_path_arcs, shortest_paths
@@ -86,3 +87,17 @@ def test_a_stalled_path_lp_hands_the_window_to_the_arc_lp(monkeypatch: pytest.Mo
     assert relaxed.optimal and relaxed.status != STALLED
     assert relaxed.bound == pytest.approx(arc_lp_value(problem), abs=1e-7)
     assert relaxed.n_variables == problem.n_arcs  # the arc LP's columns, not paths
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_sub_window_takes_its_arc_order_from_the_window_as_its_own_sort(seed):
+    problem = random_window(seed, n_objects=6, n_frames=4, n_points=4, per_object=3)
+    order = problem.arc_order  # sorted: restrict derives a large sub-window's from it
+    for objects in (np.arange(6), np.arange(1, 6), np.array([0, 2, 3, 5])):
+        sub, _ = restrict(problem, objects)
+        derived = sub.__dict__.get("arc_order")
+        assert derived is not None or 2 * sub.n_arcs <= problem.n_arcs
+        del sub.__dict__["arc_order"]  # sorted afresh
+        if derived is not None:
+            assert np.array_equal(derived, sub.arc_order) and derived.dtype == sub.arc_order.dtype
+    assert np.array_equal(order, ArcLayers.of(problem).order)

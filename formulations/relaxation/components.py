@@ -49,7 +49,8 @@ def restrict(problem: WindowProblem, objects: np.ndarray) -> tuple[WindowProblem
     new_index[nodes] = np.arange(len(nodes))
     new_object = np.full(problem.n_objects, -1)
     new_object[objects] = np.arange(len(objects))
-    arcs = np.flatnonzero(keep_object[problem.node_object[problem.arc_tail]])
+    kept_arc = keep_object[problem.node_object[problem.arc_tail]]
+    arcs = np.flatnonzero(kept_arc)
     pair_kept = keep_object[problem.layout_pairs].all(axis=1) if len(problem.layout_pairs) else np.zeros(0, bool)
     sub = WindowProblem(
         n_objects=len(objects), n_frames=problem.n_frames,
@@ -61,4 +62,10 @@ def restrict(problem: WindowProblem, objects: np.ndarray) -> tuple[WindowProblem
         layout_pairs=new_object[problem.layout_pairs[pair_kept]].reshape(-1, 2),
         layout_weight=problem.layout_weight[pair_kept],
     )
+    if "arc_order" in problem.__dict__ and 2 * len(arcs) > problem.n_arcs:  # the window's arcs are sorted
+        # Nodes and arcs keep their relative order here, so the kept arcs in the window's order
+        # are the sub-window's stable sort (``WindowProblem.arc_order``). Taken so where the
+        # sub-window holds most arcs: 03_rolling's path-LP components, 50-87k arcs, 0.3-0.5 ms
+        # against 0.6-0.9 ms sorting; a small one sorts its own faster, and only if it is priced.
+        sub.__dict__["arc_order"] = np.cumsum(kept_arc)[problem.arc_order[kept_arc[problem.arc_order]]] - 1
     return sub, nodes

@@ -59,11 +59,7 @@ class ArcLayers:
 
     @classmethod
     def of(cls, problem: WindowProblem) -> ArcLayers:
-        # Arcs join consecutive frames, so (frame of the tail, head) orders as the head's rank
-        # among the nodes by (frame, index): one stable sort on a key small enough for a radix sort.
-        rank = np.empty(problem.n_nodes, np.min_scalar_type(max(problem.n_nodes - 1, 0)))
-        rank[np.argsort(problem.node_frame, kind="stable")] = np.arange(problem.n_nodes)
-        order = np.argsort(rank[problem.arc_head], kind="stable")
+        order = problem.arc_order  # sorted once per window, a sub-window's taken from it
         head = problem.arc_head[order]
         group_start = np.flatnonzero(np.r_[True, head[1:] != head[:-1]]) if len(order) else np.zeros(0, np.intp)
         # a group's layer is the frame of its tails, one before its head's

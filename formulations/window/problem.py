@@ -77,6 +77,20 @@ class WindowProblem:
         objects_per_resource = _distinct_objects_per_row(used, self.node_object)
         return used[objects_per_resource >= 2]
 
+    @cached_property
+    def arc_order(self) -> np.ndarray:
+        """``(A,)`` the arcs sorted (stably) by (frame of the tail, head): ``viterbi.ArcLayers``'
+        order, kept with the window so that a sub-window (``components.restrict``) takes its own
+        from it instead of sorting again.
+
+        Arcs join consecutive frames, so that order is the head's rank among the nodes by
+        (frame, index): one stable sort on a key small enough for a radix sort.
+        """
+        rank = np.empty(self.n_nodes, np.min_scalar_type(max(self.n_nodes - 1, 0)))
+        rank[np.argsort(self.node_frame, kind="stable")] = np.arange(self.n_nodes)
+        order: np.ndarray = np.argsort(rank[self.arc_head], kind="stable")
+        return order
+
     def blocks(self) -> tuple[np.ndarray, np.ndarray]:
         """``(N, M+2)`` first node and node count of every (object, frame) block, frames 0..M+1."""
         starts = np.flatnonzero(_block_starts(self.node_object, self.node_frame))
