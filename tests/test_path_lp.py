@@ -1,13 +1,16 @@
 """The path LP (column generation over whole paths) against the arc LP it replaces on large windows."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from windows import brute_force, random_window
 
 import formulations.relaxation.solve_lp as solve_lp_module
 from formulations.relaxation.components import restrict
 from formulations.relaxation.lp_model import window_lp
-from formulations.relaxation.path_lp import PROVEN, STALLED, solve_path_lp
+from formulations.relaxation.path_lp import PROVEN, STALLED, _columns, _GroupRows, solve_path_lp
 from formulations.relaxation.viterbi import ArcLayers, shortest_path_arcs, shortest_paths
 from formulations.solvers import create_backend
 from formulations.window.objective import path_arcs
@@ -101,3 +104,24 @@ def test_a_sub_window_takes_its_arc_order_from_the_window_as_its_own_sort(seed):
         if derived is not None:
             assert np.array_equal(derived, sub.arc_order) and derived.dtype == sub.arc_order.dtype
     assert np.array_equal(order, ArcLayers.of(problem).order)
+
+
+def test_path_columns_are_the_coo_built_matrix_duplicates_summed():
+    rng = np.random.default_rng(1)
+    for _ in range(100):  # groups spanning frames: a path may cross one twice (an entry of 2)
+        n, g, k, m = (int(rng.integers(1, 8)) for _ in range(4))
+        node_groups = sp.csc_matrix((rng.random((g, 20)) < 0.3).astype(float))
+        problem = SimpleNamespace(n_objects=n, arc_head=rng.integers(0, 20, 60))
+        paths, objects = rng.integers(0, 60, (k, m + 1)), rng.integers(0, n, k)
+        built = _columns(problem, node_groups, objects, paths, _GroupRows(np.full(g, -1)))
+        rows = _GroupRows(np.full(g, -1))
+        nodes = problem.arc_head[paths[:, :-1]]
+        groups = [node_groups.indices[node_groups.indptr[v]:node_groups.indptr[v + 1]] for v in nodes.ravel()]
+        group_rows = n + rows.of(np.concatenate(groups).astype(int))
+        column_of = np.repeat(np.repeat(np.arange(k), m), [len(each) for each in groups])
+        entries, columns = np.r_[objects, group_rows], np.r_[np.arange(k), column_of]
+        coo = sp.csc_matrix((np.ones(len(entries)), (entries, columns)), shape=(n + rows.count, k))
+        assert built.shape == coo.shape
+        for field in ("indptr", "indices", "data"):
+            assert np.array_equal(getattr(built, field), getattr(coo, field))
+            assert getattr(built, field).dtype == getattr(coo, field).dtype

@@ -199,7 +199,22 @@ def _columns(problem: WindowProblem, node_groups: sp.csc_matrix, objects: np.nda
     first = np.repeat(node_groups.indptr[nodes.ravel()], counts.ravel())
     within = np.arange(len(first)) - np.repeat(np.cumsum(counts.ravel()) - counts.ravel(), counts.ravel())
     group_rows = n + rows.of(node_groups.indices[first + within])
-    column_of = np.repeat(np.arange(k), per_column)
-    entries = np.r_[objects, group_rows]
-    columns = np.r_[np.arange(k), column_of]
-    return sp.csc_matrix((np.ones(len(entries)), (entries, columns)), shape=(n + rows.count, k))
+    # CSC arrays written directly, as the COO route gave them (scipy sorts each column's rows and
+    # sums duplicates: a group a path crosses twice is one entry of 2), at a fraction of its cost.
+    height = n + rows.count
+    key = np.sort(np.repeat(np.arange(k), per_column) * height + group_rows)  # (column, group row)
+    opens = np.ones(len(key), bool)
+    np.not_equal(key[1:], key[:-1], out=opens[1:])
+    distinct = key[opens]
+    column = distinct // height
+    index = np.int32 if max(height, k + len(key)) < 2**31 else np.int64  # scipy's choice of index type
+    indptr = np.zeros(k + 1, index)
+    np.cumsum(np.bincount(column, minlength=k) + 1, out=indptr[1:])
+    heads = np.zeros(indptr[-1], bool)
+    heads[indptr[:-1]] = True  # each column's object row first: below every group row
+    indices, data = np.empty(indptr[-1], index), np.ones(indptr[-1])
+    indices[heads], indices[~heads] = objects, distinct - column * height
+    data[~heads] = np.diff(np.flatnonzero(np.append(opens, True)))
+    matrix = sp.csc_matrix((data, indices, indptr), shape=(height, k))
+    matrix.has_canonical_format = True  # sorted, no duplicates: scipy need not check again
+    return matrix
