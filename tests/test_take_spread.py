@@ -3,7 +3,7 @@
 import numpy as np
 
 from formulations.markers.state import MarkerState
-from formulations.markers.take_spread import DECILE_SPAN_SD, MIN_FRAMES, SPREAD_FLOOR_MM2, take_spread, with_take_spread
+from formulations.markers.take_spread import DECILE_SPAN_SD, MIN_FRAMES, SPREAD_FLOOR_MM2, _spread, take_spread, with_take_spread
 
 
 def _take(seed: int, frames: int = 200, markers: int = 6) -> np.ndarray:
@@ -63,3 +63,16 @@ def test_the_deciles_are_numpys_percentiles_for_every_count_of_labeled_frames() 
         distance[row, rng.permutation(61)[n:]] = np.nan
     distance[60:] = np.round(distance[60:], 0)  # ties
     assert np.array_equal(_deciles(distance), np.nanpercentile(distance, [10, 90], axis=1), equal_nan=True)
+
+
+def test_a_labeling_read_again_gets_its_spread_kept_and_a_changed_one_its_own() -> None:
+    positions = _take(3)
+    neighbours = np.array([[j for j in range(6) if j != m][:4] for m in range(6)])
+    first = take_spread(positions, neighbours)
+    first[:] = -1.0  # the caller's copy: what is kept is not written into
+    again = take_spread(positions.copy(), neighbours)
+    assert np.array_equal(again, _spread(positions, neighbours), equal_nan=True)
+    moved = positions.copy()
+    moved[:, 0] *= 1.5
+    assert np.array_equal(take_spread(moved, neighbours), _spread(moved, neighbours), equal_nan=True)
+    assert not np.array_equal(take_spread(moved, neighbours), again, equal_nan=True)
