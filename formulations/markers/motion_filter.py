@@ -40,7 +40,7 @@ from typing import Protocol
 
 import numpy as np
 
-from formulations.markers.motion import MOTION_CLIP, MOTION_RATE, MOTION_VAR_FLOOR_MM2, MOTION_VAR_PRIOR_MM2
+from formulations.markers.motion import MOTION_VAR_PRIOR_MM2, learn_motion
 
 NOISE_RATE = 0.02  # one frame's pooled lag products, once about 50 have been learned
 MANOEUVRE_CHI2 = 16.27  # chi-square, 3 degrees of freedom, 99.9 %
@@ -119,22 +119,12 @@ def advance_filter(
         state.filtered, state.filter_cov, holds, observed, seen, state.visible & seen, state.position,
         max(float(state.noise_var[0]), 0.0), state.residual_var, state.burst_var,  # persisting motion can make it < 0
     )
-    # learn_motion at decay 1 (its rate then 1 / (samples + 2), at least MOTION_RATE), both
-    # means at once: the same values for a third of its numpy calls, this module's main cost
-    rate = np.maximum(1.0 / (state.motion_samples + 2), MOTION_RATE)
+    residual_var, _ = learn_motion(state.residual_var, state.motion_samples, residual, usable, decay=1.0)
+    filter_var, _ = learn_motion(state.filter_var, state.motion_samples, innovation, usable & holds, decay=1.0)
     return dict(
-        filtered=filtered, filter_cov=cov, filter_raw=raw,
-        residual_var=_learn_mean(state.residual_var, rate, residual, usable),
-        filter_var=_learn_mean(state.filter_var, rate, innovation, usable & holds),
+        filtered=filtered, filter_cov=cov, filter_raw=raw, residual_var=residual_var, filter_var=filter_var,
         noise_var=np.full_like(state.noise_var, noise_var), noise_samples=np.full_like(state.noise_samples, noise_samples),
     )
-
-
-def _learn_mean(var: np.ndarray, rate: np.ndarray, residual: np.ndarray, usable: np.ndarray) -> np.ndarray:
-    """``motion.learn_motion``'s variance at decay 1 with its ``rate`` given (bit for bit the same)."""
-    square = np.minimum(np.add.reduce(residual * residual, axis=1) / 3, MOTION_CLIP * var)
-    learned: np.ndarray = np.where(usable, np.maximum(var + rate * (square - var), MOTION_VAR_FLOOR_MM2), var)
-    return learned
 
 
 def filter_step(
