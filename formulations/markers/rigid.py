@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+RIGID_SD_MM = 10.0  # as ShapeReacquisition.max_sd_mm: one segment's skin markers keep their distances
+
 
 def rigid_transform(source: np.ndarray, target: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rotation R and centroids such that ``target ~ R (source - c_s) + c_t`` for each set.

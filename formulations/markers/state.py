@@ -11,13 +11,11 @@ from scipy.spatial import cKDTree
 
 from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_burst, learn_drift, learn_motion
 from formulations.markers.motion_filter import advance_filter, filter_predicts, initial_filter
+from formulations.markers.rejoined import rejoined_velocity
+from formulations.markers.rigid import RIGID_SD_MM as RIGID_SD_MM
 from formulations.markers.rigid import follow_neighbours
 
-# A displacement further than this many sds of a marker's motion residual (3D) from its
-# neighbours' is a jump of its prediction, not a velocity: the guide's gates are 5 sds wide.
-JUMP_SIGMAS = 5.0
 SURE_STREAK = 3  # frames in a row a marker's point must have been its own to vouch for where it was
-RIGID_SD_MM = 10.0  # as ShapeReacquisition.max_sd_mm: one segment's skin markers keep their distances
 
 
 @dataclass(frozen=True)
@@ -153,7 +151,7 @@ class MarkerState:
         # velocity from before a gap is wrong for a fast limb), else damped.
         implied = np.where(followed[:, None], predicted - self.position, self.velocity * damping)
         velocity = np.where(was_seen[:, None], observed - self.position, implied)
-        velocity = self._rejoined(velocity, seen & ~self.visible, was_seen, position)
+        velocity = rejoined_velocity(self, velocity, seen & ~self.visible, was_seen, position)
         residual = observed - predicted
         usable = seen & (self.streak >= 2)
         motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, usable)
@@ -191,31 +189,7 @@ class MarkerState:
             drift_var=drift_var, drift_samples=drift_samples, **advance_filter(self, observed, seen, residual, usable),
         )
 
-    def _rejoined(self, velocity: np.ndarray, back: np.ndarray, measured: np.ndarray, now: np.ndarray) -> np.ndarray:
-        """``velocity`` with each marker seen again after a gap (``back``) at ``now`` moved by
-        the rigid motion of its neighbours measured in this frame (``follow_neighbours``,
-        rigid near ones first; a translation with fewer than three).
-
-        The displacement from where the gap left it to where it is predicted now is no
-        velocity: the prediction jumps whenever the neighbours it follows change, and a jump
-        taken as a velocity puts the next gate off the marker: lost and found every other
-        frame (CMU 135_02's right forearm, 40 frames). With no neighbour seen twice it stays.
-        """
-        rows = np.flatnonzero(back & measured[self.neighbours].any(axis=1))
-        if not len(rows):
-            return velocity
-        rotation, c_s, c_t, _ = self._neighbour_motion(
-            rows, measured[self.neighbours[rows]], self.position[self.neighbours[rows]], now[self.neighbours[rows]],
-            self.step_var[rows],
-        )
-        before = np.einsum("sji,sj->si", rotation, now[rows] - c_t) + c_s
-        shared = now[rows] - before
-        jump = np.linalg.norm(velocity[rows] - shared, axis=1) > JUMP_SIGMAS * np.sqrt(3 * self.step_var[rows])
-        rejoined = velocity.copy()
-        rejoined[rows[jump]] = shared[jump]
-        return rejoined
-
-    def _neighbour_motion(
+    def neighbour_motion(
         self, rows: np.ndarray, usable: np.ndarray, source: np.ndarray, target: np.ndarray, motion_var: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The robust rigid motion (``follow_neighbours``) of markers ``rows``' usable
@@ -290,7 +264,7 @@ class MarkerState:
         follow = np.flatnonzero(followed)
         if len(follow) == 0:
             return ahead, followed, followed
-        rotation, c_s, c_t, firm = self._neighbour_motion(
+        rotation, c_s, c_t, firm = self.neighbour_motion(
             follow, usable[follow], self.anchor_neighbours[follow], ahead[self.neighbours[follow]], self.motion_var[follow],
         )
         predicted = ahead.copy()
