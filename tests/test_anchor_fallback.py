@@ -67,6 +67,6 @@ def test_carried_neighbours_are_not_followed_where_three_rigid_ones_were_seen():
     anchor, _, noisy = _at_anchor()
     seen = np.ones(8, bool)
     seen[MT5] = False  # MT1 and the navicular, seen at the anchor, stay seen
-    followable = anchor.advance(noisy[ANCHOR + 1], seen)._followable()
+    followable = anchor.advance(noisy[ANCHOR + 1], seen)._followable
     carried = anchor.anchor_carried[MT5]
     assert carried.any() and not followable[MT5][carried].any()

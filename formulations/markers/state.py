@@ -223,9 +223,10 @@ class MarkerState:
     def stranded(self, after: int) -> np.ndarray:
         """``(N,)`` unseen for ``after`` frames or more with no seen neighbour to follow:
         nothing carries these markers but a damped stale velocity."""
-        stranded: np.ndarray = (self.unseen >= after) & ~self._followable().any(axis=1)
+        stranded: np.ndarray = (self.unseen >= after) & ~self._followable.any(axis=1)
         return stranded
 
+    @cached_property
     def _followable(self) -> np.ndarray:
         """``(N, K)`` neighbours seen both at the marker's anchor frame and now; and for a
         marker with fewer than three such neighbours rigid with it (learned sd under
@@ -238,12 +239,11 @@ class MarkerState:
         seed 0); it then took the toe's point. Their predicted positions at its last sighting
         let it follow the foot (under 7 mm). Only as a fallback, and only sure predictions: a
         carried position has its own error, large in fast motion (every carried neighbour
-        counting cost the seed-0 matrix 1.7 points: docs/how-a-window-is-solved.md).
-        """
+        counting cost the seed-0 matrix 1.7 points: docs/how-a-window-is-solved.md). Once per
+        state (the guide asks twice a frame, the prediction once): not to be written into."""
         seen_now = self.visible[self.neighbours]
         usable: np.ndarray = self.anchor_valid & seen_now
-        rigid = self.distance_var < RIGID_SD_MM**2
-        short = (usable & rigid).sum(axis=1) < 3
+        short = (usable & (self.distance_var < RIGID_SD_MM**2)).sum(axis=1) < 3
         usable[short] |= (self.anchor_carried & seen_now)[short]
         return usable
 
@@ -259,7 +259,7 @@ class MarkerState:
         three such neighbours remain; damped constant velocity when none does.
         """
         ahead = self.position + self.velocity
-        usable = self._followable()
+        usable = self._followable
         followed = ~self.visible & usable.any(axis=1)
         follow = np.flatnonzero(followed)
         if len(follow) == 0:
