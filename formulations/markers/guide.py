@@ -209,10 +209,12 @@ def assign_within_gates(distance: np.ndarray, radius: np.ndarray, miss_cost: flo
     """
     n, d = distance.shape
     blocked = 1e9
-    cost = np.where(distance <= radius[:, None], distance, blocked)
-    miss = np.full((n, n), blocked)
-    np.fill_diagonal(miss, np.broadcast_to(miss_cost, (n,)))
-    rows, cols = linear_sum_assignment(np.hstack([cost, miss]))
+    # [gated distances | misses on the diagonal] written in place: stacking two blocks cost
+    # as much as the assignment, twice a frame
+    cost = np.full((n, d + n), blocked)
+    np.copyto(cost[:, :d], distance, where=distance <= radius[:, None])
+    cost.ravel()[d :: d + n + 1] = miss_cost
+    rows, cols = linear_sum_assignment(cost)
     result = np.full(n, -1)
     hit = cols < d
     result[rows[hit]] = cols[hit]
