@@ -90,14 +90,18 @@ def reacquire_by_shape(
     own = score[np.arange(len(looked_for)), len(free) + np.arange(len(looked_for))]  # each prediction's own fit
     score = score[:, : len(free)]
     inside = score <= chi_square_gate(settings.quantile, settings.rigid)[judges.count][:, None]
+    if not inside.any():  # no point fits any lost marker's shape: nothing can move (most frames)
+        return guess
     outside = (min(score.shape) + 1) * (score.max() + 1.0)  # above any sum of inside scores
     rows, cols = linear_sum_assignment(np.where(inside, score, outside))
-    contested = _claimed_by_another(guess, state, looked_for, free, settings)
+    alone = inside[rows, cols] & (inside.sum(axis=1)[rows] == 1) & (inside.sum(axis=0)[cols] == 1)
+    better = alone & (score[rows, cols] < own[rows])
+    rows, cols = rows[better], cols[better]
+    if not len(rows):  # asked only now: whether another lost marker claims the point costs the most
+        return guess
+    contested = _claimed_by_another(guess, state, looked_for, free, settings)[rows, cols]
     moved = guess.copy()
-    for row, col in zip(rows, cols):
-        alone = inside[row].sum() == 1 and inside[:, col].sum() == 1 and not contested[row, col]
-        if inside[row, col] and alone and score[row, col] < own[row]:
-            moved[looked_for[row]] = free[col]
+    moved[looked_for[rows[~contested]]] = free[cols[~contested]]
     return moved
 
 
