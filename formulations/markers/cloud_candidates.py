@@ -30,6 +30,7 @@ then saves a miss every frame, while the track's own miss is free.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain
 
 import numpy as np
 import scipy.sparse as sp
@@ -116,9 +117,9 @@ def cloud_candidates(
         if len(cloud) == 0:
             continue
         inside = cKDTree(cloud).query_ball_point(guide.predicted[f], guide.radius[f])
-        counts = np.fromiter((len(i) for i in inside), dtype=int, count=len(inside))
+        counts = np.fromiter(map(len, inside), dtype=int, count=len(inside))
         objects.append(np.repeat(np.arange(len(inside)), counts))
-        points.append(np.fromiter((p for i in inside for p in i), dtype=int, count=counts.sum()))
+        points.append(np.fromiter(chain.from_iterable(inside), dtype=int, count=counts.sum()))  # C-level, not a generator
         frame_of.append(np.full(counts.sum(), f + 1))
     obj, frame, point = (np.concatenate(a) if a else np.zeros(0, int) for a in (objects, frame_of, points))
     if around is not None and unnamed.seeded.any():

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from formulations.markers.guide import GuideTrack
+from formulations.markers.lengths import lengths
 from formulations.markers.motion import MOTION_VAR_PRIOR_MM2
 from formulations.markers.state import MarkerState
 from formulations.markers.unnamed import UnnamedChains
@@ -51,7 +52,7 @@ def marker_likelihood(
     step_var = np.where(state.velocity_known[obj], step_var, np.maximum(step_var, MOTION_VAR_PRIOR_MM2))
     step_sigma = np.sqrt(step_var)
     predicted_sigma = np.sqrt(step_var + state.drift_var[obj] * guide.unseen[frame - 1, obj])
-    off = np.linalg.norm(location - guide.predicted[frame - 1, obj], axis=1) / predicted_sigma
+    off = lengths(location - guide.predicted[frame - 1, obj]) / predicted_sigma
     reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
     offset = 3 * np.log(step_sigma) + base
     typical = np.full(int(np.count_nonzero(unnamed.point >= 0)), np.sqrt(np.median(state.motion_var)))

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from formulations.markers.exchange import reassigned
+from formulations.markers.lengths import lengths
 from formulations.markers.state import RIGID_SD_MM as RIGID_SD_MM
 from formulations.markers.state import MarkerState
 
@@ -128,7 +129,7 @@ def _sines(points: np.ndarray) -> np.ndarray:
     """``(Q,)`` V(a, b, c, d) over the product of the edges from a, for ``(Q, 4, 3)`` quadruples."""
     edges = points[:, 1:] - points[:, :1]
     volume = np.einsum("qi,qi->q", np.cross(edges[:, 0], edges[:, 1]), edges[:, 2])
-    sines: np.ndarray = volume / np.maximum(np.prod(np.linalg.norm(edges, axis=2), axis=1), 1e-12)
+    sines: np.ndarray = volume / np.maximum(np.prod(lengths(edges), axis=1), 1e-12)
     return sines
 
 

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.lengths import lengths
+
 REFERENCE_SECONDS = 2.0  # the labeled start's own stretch: short enough that its labels hold
 MIN_REFERENCE_FRAMES = 10  # fewer joint sightings say nothing of a pair's distance
 NEIGHBOURS = 4  # enough that one neighbour's own bad label cannot make a majority
@@ -66,7 +68,7 @@ def shape_breaks(positions: NDArray[np.float64], rate: float) -> list[ShapeBreak
     min_frames = max(2, int(MIN_SECONDS * rate))
     breaks = []
     for i in range(markers):
-        distance = np.linalg.norm(positions - positions[:, [i]], axis=2)  # (frames, markers)
+        distance = lengths(positions - positions[:, [i]])  # (frames, markers)
         distance[:, i] = np.nan
         reference, spread = _pair_figures(distance, first)
         if not np.isfinite(reference).any():

@@ -41,6 +41,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2 as chi_square
 
+from formulations.markers.lengths import lengths
 from formulations.markers.reacquire import free_points
 from formulations.markers.state import MarkerState
 
@@ -121,7 +122,7 @@ def _claimed_by_another(
     """``(L, P)`` the free point is another unseen marker's: predicted within ``claim_mm`` of
     it, and inside that marker's own chi-square gate (at least one rigid neighbour seen)."""
     unseen = np.flatnonzero(~state.visible)
-    near = np.linalg.norm(free[None] - guess[unseen][:, None], axis=2) <= settings.claim_mm  # (U, P)
+    near = lengths(free[None] - guess[unseen][:, None]) <= settings.claim_mm  # (U, P)
     claim = np.zeros_like(near)
     close = np.flatnonzero(near.any(axis=1))
     if len(close):
@@ -153,7 +154,7 @@ class _Judges:
 
     def chi_square(self, guess: np.ndarray, points: np.ndarray) -> np.ndarray:
         """``(L, P)`` chi2 of every point for each marker (module doc)."""
-        distance = np.linalg.norm(points[None, :, None] - guess[self.neighbour][:, None], axis=3)  # (L, P, R)
+        distance = lengths(points[None, :, None] - guess[self.neighbour][:, None])  # (L, P, R)
         score: np.ndarray = (self.counted[:, None] * (distance - self.mean[:, None]) ** 2 / self.spread[:, None]).sum(axis=2)
         return score
 

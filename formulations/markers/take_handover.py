@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.markers.heading import track_heading
+from formulations.markers.lengths import lengths
 from formulations.markers.noise import MAD_TO_SIGMA
 from formulations.markers.take_exchange import EXCHANGE_NATS, FIT_COST, MIN_RATE, capped_cost, near_pairs, rigid_pairs
 
@@ -147,7 +148,7 @@ def _first_handover(
     labeled: NDArray[np.bool_] = np.asarray(np.isfinite(positions).all(axis=2), dtype=bool)  # (F, N)
     owner_heading, taker_heading = headings.owner, headings.taker
     gate = CONTINUE_SDS * scale  # (N,)
-    own_miss = np.linalg.norm(positions - taker_heading, axis=2)  # (F, N): each label from its own heading
+    own_miss = lengths(positions - taker_heading)  # (F, N): each label from its own heading
     arrives = labeled[1:] & (~labeled[:-1] | ~(own_miss[1:] <= gate))  # (F - 1, N): T from frame t = 1..
     strays = _strays(positions, labeled, owner_heading, gate)
     leaves = labeled[:-1] & (~labeled[1:] | strays[1:])  # V labeled in t - 1, not in t (or astray)
@@ -156,7 +157,7 @@ def _first_handover(
     for t0 in (int(t) for t in candidates[candidates >= after]):
         owners, takers = np.flatnonzero(leaves[t0 - 1]), np.flatnonzero(arrives[t0 - 1])
         x = positions[t0, takers]  # (T, 3)
-        to_owner = np.linalg.norm(x[:, None] - owner_heading[t0, owners][None], axis=2)  # (T, V)
+        to_owner = lengths(x[:, None] - owner_heading[t0, owners][None])  # (T, V)
         to_own = np.nan_to_num(own_miss[t0, takers], nan=np.inf)[:, None]
         fits = (to_owner <= gate[owners][None]) & (to_own > FAR_RATIO * to_owner) & ~(to_own <= gate[takers][:, None])
         order = np.argsort(np.where(fits, to_owner / gate[owners][None], np.inf), axis=None)[: int(fits.sum())]
@@ -234,5 +235,5 @@ class FirstShape:
             return np.full(len(x), np.nan)
         witnesses = positions[start : start + len(x)][:, j]
         # d0 is one noisy frame: d - d0 varies by the spread twice (+ 1 mm^2 for a spread near 0)
-        z = (np.linalg.norm(x[:, None] - witnesses, axis=2) - self.d0[m, j]) / np.sqrt(2.0 * self.spread[m, j] + 1.0)
+        z = (lengths(x[:, None] - witnesses) - self.d0[m, j]) / np.sqrt(2.0 * self.spread[m, j] + 1.0)
         return capped_cost(z)

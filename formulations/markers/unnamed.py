@@ -54,6 +54,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from formulations.markers.guide import Gate, GuideTrack
+from formulations.markers.lengths import lengths
 from formulations.markers.state import MarkerState
 
 HELD_MM = 1e-6  # a point this close to a seen marker is that marker's
@@ -167,7 +168,7 @@ def _guide_holds(guide: GuideTrack, state: MarkerState, frames: list[np.ndarray]
         now = np.full((n, 3), np.nan)
         now[took >= 0] = points[took[took >= 0]]
         stepped = np.asarray(np.isfinite(step).all(axis=1))
-        explained = _continues(np.linalg.norm(now - (last + step), axis=1), np.linalg.norm(now - last, axis=1),
+        explained = _continues(lengths(now - (last + step)), lengths(now - last),
                                stepped, reach, link_radius)
         broken |= ~explained & np.isfinite(now).all(axis=1) & np.isfinite(last).all(axis=1)
         held = held_all[f - 1].copy()
@@ -192,7 +193,7 @@ def _predecessors(free: np.ndarray, before: np.ndarray, reach: float) -> tuple[n
     if not len(before) or not len(free):
         return np.zeros(len(free), bool), np.zeros((len(free), 3))
     near = before[cdist(free, before).argmin(axis=1)]
-    return np.linalg.norm(free - near, axis=1) <= reach, free - near
+    return lengths(free - near) <= reach, free - near
 
 
 @dataclass

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.lengths import lengths
+
 Array = NDArray[np.float64]
 
 
@@ -25,7 +27,7 @@ def distance_spread(positions: Array, min_frames: int) -> tuple[Array, NDArray[n
     n = positions.shape[1]
     sd, count = np.empty((n, n)), np.empty((n, n), dtype=np.int64)
     for marker in range(n):  # a row at a time: (K, N) distances, not (K, N, N, 3) differences
-        dist = np.linalg.norm(positions - positions[:, marker : marker + 1], axis=2)
+        dist = lengths(positions - positions[:, marker : marker + 1])
         seen = np.isfinite(dist)
         count[marker] = seen.sum(axis=0)
         filled = np.where(seen, dist, 0.0)

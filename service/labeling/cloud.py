@@ -18,6 +18,7 @@ from formulations.markers.cloud_candidates import CloudGating, CloudWindow, clou
 from formulations.markers.coexistence import BackLinks, coexisted
 from formulations.markers.exchange import continued_points, repair_exchanges
 from formulations.markers.guide import assign_nearest
+from formulations.markers.lengths import lengths
 from formulations.markers.mirror import repair_mirrors
 from formulations.markers.pair_evidence import repair_pair_evidence
 from formulations.markers.state import MarkerState
@@ -174,7 +175,7 @@ def _unclaimed(points: np.ndarray, state: MarkerState) -> np.ndarray:
     held = state.position[state.visible]
     if len(points) == 0 or len(held) == 0:
         return np.ones(len(points), bool)
-    nearest = np.min(np.linalg.norm(points[:, None] - held[None], axis=2), axis=1)
+    nearest = np.min(lengths(points[:, None] - held[None]), axis=1)
     return np.asarray(nearest > 1e-6)
 
 

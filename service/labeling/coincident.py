@@ -14,6 +14,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from formulations.markers.lengths import lengths
+
 COINCIDENT_MM = 0.5  # under any marker's radius; two real markers are never this close
 SAMPLED_FRAMES = 400  # distances read on this many evenly spaced frames (O(F N^2) otherwise)
 LISTED = 4  # pairs named in the warning line
@@ -37,7 +39,7 @@ def sampled_rows(positions: np.ndarray) -> Iterator[np.ndarray]:
     held 0.9 GB at 300 markers and 6 GB at 500 (with its ``(S, N, N, 3)`` differences)."""
     sampled = positions[np.unique(np.linspace(0, len(positions) - 1, SAMPLED_FRAMES).astype(int))]
     for n in range(sampled.shape[1]):
-        yield np.linalg.norm(sampled - sampled[:, [n]], axis=2)
+        yield lengths(sampled - sampled[:, [n]])
 
 
 def coincident_warning(pairs: list[tuple[str, str]]) -> str | None:
