@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from formulations.markers.cloud_candidates import CloudGating, cloud_candidates
-from formulations.markers.motion import MOTION_DECAY, axis_mean, learn_drift, learn_motion
+from formulations.markers.motion import MOTION_DECAY, learn_drift, learn_motion
 from formulations.markers.state import MarkerState
 from formulations.window.likelihood import BURST_SHARE, BURST_WIDTH, step_loss
 
@@ -97,11 +97,3 @@ def test_an_old_prediction_is_wide_but_never_capped():
     assert capped[1] == pytest.approx(capped[2])  # fails without the feature: the cap
     assert likelihood[0] < likelihood[1] < likelihood[2]
 
-
-@pytest.mark.parametrize("shape", [(0, 3), (1, 3), (62, 3), (17, 5)])
-def test_axis_mean_is_numpy_mean_bit_for_bit(shape):
-    """Labels must not move: the learned variances take ``axis_mean`` where they took ``mean``."""
-    rng = np.random.default_rng(3)
-    values = rng.normal(size=shape) * 10.0 ** rng.integers(-3, 4, size=shape)
-    assert np.array_equal(axis_mean(values), values.mean(axis=1))
-    assert np.array_equal(axis_mean(values[::2] ** 2), (values[::2] ** 2).mean(axis=1))

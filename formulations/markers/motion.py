@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from formulations.markers.means import axis_mean
+
 # Before a marker's own motion is known its residual is taken as 10 mm per axis: wide
 # enough for one frame of a fast limb at 50 Hz, learned away within a few frames.
 MOTION_VAR_PRIOR_MM2 = 100.0
@@ -44,14 +46,6 @@ MOTION_DECAY = 0.1
 MOTION_VAR_FLOOR_MM2 = 0.25
 MOTION_CLIP = 9.0  # a sample counts at most as a 3-sigma one
 BURST_RATE = 0.5  # the fast estimate: half the last frame, half what it said before
-
-
-def axis_mean(values: np.ndarray) -> np.ndarray:
-    """``values.mean(axis=1)`` bit for bit (the same sum, divided by the count), without the
-    wrapper that costs a mean of three numbers several times the arithmetic: every frame of
-    labeling learns motion four times."""
-    mean: np.ndarray = np.add.reduce(values, axis=1) / values.shape[1]
-    return mean
 
 
 def learn_motion(

@@ -49,6 +49,7 @@ from itertools import permutations
 
 import numpy as np
 
+from formulations.markers.means import axis_mean
 from formulations.markers.mirror import LearnedPairs, rigid_bound, rigid_groups
 from formulations.markers.state import MarkerState
 
@@ -222,16 +223,16 @@ def _turns(before: np.ndarray, now: np.ndarray, expected: np.ndarray,
            orders: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per triple ``(K, 3, 3)`` and each of the P ``orders`` of ``now``'s rows: the angle (rad) of
     its Kabsch rotation off ``expected``, its RMS fit residual (mm), and the rotation ``(K, P, 3, 3)``."""
-    a = before - before.mean(axis=1, keepdims=True)
+    a = before - axis_mean(before, 1, keepdims=True)
     moved = now[:, orders]  # (K, P, 3, 3)
-    b = moved - moved.mean(axis=2, keepdims=True)
+    b = moved - axis_mean(moved, 2, keepdims=True)
     u, _, vt = np.linalg.svd(np.einsum("tki,tpkj->tpij", a, b))
     sign = np.sign(np.linalg.det(np.einsum("tpji,tpkj->tpik", vt, u)))
     d = np.tile(np.eye(3), sign.shape + (1, 1))
     d[..., 2, 2] = np.where(sign == 0, 1.0, sign)
     rotation = np.einsum("tpji,tpjk,tplk->tpil", vt, d, u)  # R = V D U^T, b ~ R a
     fitted = np.einsum("tpij,tkj->tpki", rotation, a)
-    fit = np.sqrt(((fitted - b) ** 2).sum(axis=3).mean(axis=2))
+    fit = np.sqrt(axis_mean(((fitted - b) ** 2).sum(axis=3), 2))
     off = np.einsum("tpij,tkj->tpik", rotation, expected)  # R_pi R_hat^T
     cosine = np.clip((np.trace(off, axis1=2, axis2=3) - 1.0) / 2.0, -1.0, 1.0)
     return np.arccos(cosine), fit, rotation
