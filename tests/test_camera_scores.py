@@ -89,9 +89,11 @@ def test_a_marker_seen_by_one_camera_is_scored_when_labeled_and_not_missed_when_
 
 @pytest.mark.skipif(not CMU.exists(), reason="needs ../shared/data (CMU 85_02)")
 def test_eval_in_camera_mode_scores_its_swaps_in_its_accuracy(tmp_path):
-    """The repro: per-camera through caliscope's 4 webcams, 100 frames; 2 swaps beside 100 %."""
+    """The repro: per-camera through caliscope's 4 webcams; 2 swaps beside 100 % at 100 frames.
+    200 frames: since a marker back from a gap takes its segment's motion (2026-12-03) the
+    first 100 have no swap left (99.44 %), and the check needs one (3 at 200, 95.96 %)."""
     scenario = tmp_path / "cam2.toml"
-    scenario.write_text(f'mode = "cameras"\ncalibration = "{CALISCOPE}"\nassociation = "per-camera"\nframes = 100\n')
+    scenario.write_text(f'mode = "cameras"\ncalibration = "{CALISCOPE}"\nassociation = "per-camera"\nframes = 200\n')
     result = run_cli("-q", "eval", CMU, "--scenario", scenario, "--json")
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)
