@@ -56,19 +56,6 @@ def test_a_track_taken_by_a_long_lost_marker_is_given_back(seed: int) -> None:
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_an_owner_that_left_on_a_stray_point_gets_its_track_back(seed: int) -> None:
-    """The owner takes a ghost 100 mm off its heading in the frame the taker takes its point,
-    and is unlabeled after (walking5 at 4 mm, the heel): it never left by an empty frame, so
-    without the stray test nothing was handed back."""
-    take = _take(seed)
-    labels, fill = _lost(take, TAKER, drift_mm=150.0)
-    labels[HANDED_AT:, TAKER], labels[HANDED_AT:, OWNER] = take[HANDED_AT:, OWNER], np.nan
-    labels[HANDED_AT, OWNER] = take[HANDED_AT, OWNER] + np.array([60.0, -80.0, 0.0])
-    fill[HANDED_AT + 1 :, OWNER] = take[HANDED_AT + 1 :, OWNER] + 5.0
-    assert _handovers(labels, fill) == [(OWNER, TAKER, HANDED_AT, FRAMES)]
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_marker_that_really_comes_back_as_another_leaves_keeps_its_points(seed: int) -> None:
     """The owner is occluded from 300 and the close neighbour, lost since 40, returns at 300 on
     its own point, 7 mm from where the owner was heading and 40 mm from its own drifted fill:

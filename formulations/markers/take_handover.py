@@ -10,8 +10,7 @@ for 140 frames, took the left thigh marker's last 10 frames at 46 nats against 5
 thigh marker was read as occluded while its point sat 3 mm from where it was heading). Once
 the take is labeled both tracks are known, and the hand-over shows as two jumps:
 
-- the owner V, labeled in frame t - 1 and not in t (or, in t, on a point outside its own
-  3.4 s_V and in no frame after: astray, ``_strays``), was heading to h_V(t) (its last labeled
+- the owner V, labeled in frame t - 1 and not in t, was heading to h_V(t) (its last labeled
   step continued, ``heading``); the taker T's point x in t lies within ``CONTINUE_SDS``
   sd of it: |x - h_V(t)| <= 3.4 s_V, s_V the per-axis sd of V's own constant-velocity
   residual x_t - 2 x_(t-1) + x_(t-2) over the take (MAD-scaled median: 99 % of a 3D
@@ -150,8 +149,7 @@ def _first_handover(
     gate = CONTINUE_SDS * scale  # (N,)
     own_miss = lengths(positions - taker_heading)  # (F, N): each label from its own heading
     arrives = labeled[1:] & (~labeled[:-1] | ~(own_miss[1:] <= gate))  # (F - 1, N): T from frame t = 1..
-    strays = _strays(positions, labeled, owner_heading, gate)
-    leaves = labeled[:-1] & (~labeled[1:] | strays[1:])  # V labeled in t - 1, not in t (or astray)
+    leaves = labeled[:-1] & ~labeled[1:]  # V labeled in t - 1, not in t
     returns, lost = labeled[1:] & ~labeled[:-1], ~labeled[:-1] & ~labeled[1:]
     candidates = np.flatnonzero(arrives.any(axis=1) & (leaves.any(axis=1) | lost.any(axis=1))) + 1
     for t0 in (int(t) for t in candidates[candidates >= after]):
@@ -162,7 +160,7 @@ def _first_handover(
         fits = (to_owner <= gate[owners][None]) & (to_own > FAR_RATIO * to_owner) & ~(to_own <= gate[takers][:, None])
         order = np.argsort(np.where(fits, to_owner / gate[owners][None], np.inf), axis=None)[: int(fits.sum())]
         for k, v in zip(*np.unravel_index(order, fits.shape)):
-            found = _handed(labeled & ~strays, int(owners[v]), int(takers[k]), t0)
+            found = _handed(labeled, int(owners[v]), int(takers[k]), t0)
             if shape.allows(positions, found.owner, found.taker, t0, found.stop):
                 return found
         for taker in np.flatnonzero(returns[t0 - 1]):
@@ -171,18 +169,6 @@ def _first_handover(
                 if shape.claims(positions, found.owner, found.taker, t0, found.stop):
                     return found
     return None
-
-
-def _strays(positions: Array, labeled: NDArray[np.bool_], heading: Array, gate: Array) -> NDArray[np.bool_]:
-    """``(F, N)`` labels off their marker's own heading by more than its gate with no label in the
-    frame after: the marker left there, on a point not its own. OpenSim walking5 at 4 mm: the
-    heel took a ghost 97 mm off its heading for one frame while the lost lateral malleolus took
-    its point, 18 mm from it, and held it for 31 frames; the owner never left by ``leaves``."""
-    off = ~(np.linalg.norm(positions - heading, axis=2) <= gate)  # NaN heading: no say
-    stray: NDArray[np.bool_] = labeled & off & np.isfinite(heading).all(axis=2)
-    stray[:-1] &= ~labeled[1:]
-    stray[-1] = False
-    return stray
 
 
 def _handed(labeled: NDArray[np.bool_], owner: int, taker: int, start: int) -> Handover:
