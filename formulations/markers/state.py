@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cached_property
 
 import numpy as np
@@ -112,6 +112,11 @@ class MarkerState:
             drift_var=np.full(n, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(n, int),
             plate_position=np.full((n, 3), np.nan), plate_age=np.full(n, -1), plate_rate=np.full(n, np.nan), **initial_filter(n),
         )
+
+    def __getstate__(self) -> dict[str, object]:
+        """Its fields only, for another process (``rival_process``): what ``cached_property``
+        derived from them is derived again there, and ``_advanced``'s weak dictionary cannot travel."""
+        return {field.name: getattr(self, field.name) for field in fields(self)}
 
     @cached_property
     def visible(self) -> np.ndarray:

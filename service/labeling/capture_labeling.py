@@ -19,6 +19,7 @@ loop, the formulation and the first marker state are the same for all.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from contextlib import nullcontext
 from dataclasses import replace
 from functools import partial
 
@@ -52,8 +53,9 @@ from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
-from service.labeling.rival_reading import RivalChoice, RivalReading, with_rival
-from service.labeling.second_pass import PassChoice, Stop, second_pass
+from service.labeling.rival_process import RivalBeside, runs_beside
+from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame
+from service.labeling.second_pass import PassChoice, Stop, judged_part, second_pass, second_pass_runs
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
@@ -79,7 +81,7 @@ class CaptureLabeling:
         self.formulation = resolve_formulation(options.formulation)
         self._spans = window_spans(capture.n_frames, options.window)
         self.n_windows = len(self._spans)
-        self._capture, self._window = capture, options.window
+        self._capture, self._options, self._window = capture, options, options.window
         self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
         self._second_pass = options.second_pass and capture.model is None and capture.points is not None
         self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
@@ -135,23 +137,34 @@ class CaptureLabeling:
         """The windows to keep once every window is labeled: ``outcomes``, or those of a
         second pass (``second_pass``) when it is on and agrees better with the first frame, with
         the marker groups a frame-by-frame reading labels better taken from it when the second
-        pass ran (``rival_reading``); None when ``stop`` abandoned either. Sets ``choice`` and ``rival``."""
+        pass ran (``rival_reading``; read in a child process meanwhile on a large take,
+        ``rival_process``); None when ``stop`` abandoned either. Sets ``choice`` and ``rival``."""
         if not self._second_pass:
             return outcomes
-        kept = second_pass(
-            self._association, self.formulation, self._first, self._capture.n_frames, self._window, outcomes,
-            self._labeled, progress, stop,
-        )
-        if kept is None:
-            return None
-        kept_outcomes, self.choice = kept
-        if self._rival is not None and self.choice.second_doubtful is not None:  # a doubtful take: read frame by frame too
-            read = with_rival(self._rival, self._first, self._capture.n_frames, self._window, kept_outcomes,
-                              self._labeled, _after(progress, self.n_windows), stop)
-            if read is None:
+        rival = self._rival is not None and second_pass_runs(outcomes)  # a doubtful take: read frame by frame too
+        beside = rival and runs_beside(sum(o.stats.total_seconds for o in outcomes))
+        with RivalBeside(self._capture, self._options) if beside else nullcontext() as child:
+            kept = second_pass(
+                self._association, self.formulation, self._first, self._capture.n_frames, self._window, outcomes,
+                self._labeled, progress, stop,
+            )
+            if kept is None:
                 return None
-            kept_outcomes, self.rival = read
+            kept_outcomes, self.choice = kept
+            if rival:
+                after, labels = _after(progress, self.n_windows), judged_part(self._labeled(kept_outcomes))
+                read = child.read(after, stop) if child is not None else self.read_frame_by_frame(after, stop)
+                if read is None:
+                    return None
+                assert self._rival is not None
+                kept_outcomes, self.rival = merged_with_rival(self._rival, self._first, kept_outcomes, labels, read)
         return outcomes if kept_outcomes is outcomes else list(stamped(kept_outcomes, self.fingerprint))  # ``is``: kept as stored
+
+    def read_frame_by_frame(self, progress: Progress | None = None, stop: Stop | None = None) -> list[WindowOutcome] | None:
+        """The take's windows read frame by frame (``rival_reading``), with its own second pass;
+        None when ``stop`` abandoned them. Only when ``rival_reading`` is on for this take."""
+        assert self._rival is not None
+        return read_frame_by_frame(self._rival, self._first, self._capture.n_frames, self._window, progress, stop)
 
     def result(self, outcomes: list[WindowOutcome], calibrated: bool = True) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes, their tracks extended over the

@@ -27,6 +27,7 @@ from formulations.markers.first_frame_shape import disagreement, pair_offsets
 from formulations.markers.pass_merge import pass_per_marker
 from formulations.markers.state import MarkerState
 from formulations.methods.formulation import Formulation
+from service.io.recording import LabeledTrajectories
 from service.labeling.loop import Progress, WindowChain, label_windows
 from service.labeling.outcome import WindowOutcome
 from service.labeling.second_pass import Labels, Stop, judged_part, merged_readings, second_pass
@@ -60,19 +61,17 @@ class RivalChoice:
         return {"window_off_mm": self.window_off_mm, "rival_off_mm": self.rival_off_mm, "markers": self.markers}
 
 
-def with_rival(
-    rival: RivalReading, first: MarkerState, frames: int, window: int, kept: list[WindowOutcome], labels: Labels,
-    progress: Progress | None = None, stop: Stop | None = None,
-) -> tuple[list[WindowOutcome], RivalChoice] | None:
-    """``kept`` with the marker groups the frame-by-frame reading labels better taken from it
-    (module doc), each label's confidence judged with the other reading's
-    (``merged_readings``); None when ``stop`` asked to abandon the reading.
+def read_frame_by_frame(
+    rival: RivalReading, first: MarkerState, frames: int, window: int, progress: Progress | None = None,
+    stop: Stop | None = None,
+) -> list[WindowOutcome] | None:
+    """The take's windows read frame by frame, with their own second pass; None when ``stop``
+    asked to abandon the reading. Needs nothing of the window reading: ``rival_process`` runs
+    it beside that reading's second pass.
 
     Args:
         rival: The frame-by-frame chain and formulation.
         first, frames, window: As the take was labeled (``first``: the labeled first frame's state).
-        kept: The windows kept so far (after the second pass).
-        labels: Gives a reading's labels, tracks extended.
     """
     read: list[WindowOutcome] = []
     for outcome in label_windows(rival.chain, rival.formulation, first, frames, window, None, progress):
@@ -85,10 +84,25 @@ def with_rival(
     done, report = len(read), progress
     passes = second_pass(rival.chain, rival.formulation, first, frames, window, read, rival.labels,
                          None if report is None else lambda k, n: report(done + k, done + n), stop)
-    if passes is None:
-        return None
-    read = passes[0]
-    mine, theirs = judged_part(labels(kept)), judged_part(rival.labels(read))
+    return None if passes is None else passes[0]
+
+
+def merged_with_rival(
+    rival: RivalReading, first: MarkerState, kept: list[WindowOutcome], labels: LabeledTrajectories,
+    read: list[WindowOutcome],
+) -> tuple[list[WindowOutcome], RivalChoice]:
+    """``kept`` with the marker groups the frame-by-frame reading ``read`` labels better taken
+    from it (module doc), each label's confidence judged with the other reading's
+    (``merged_readings``), and what was taken.
+
+    Args:
+        rival: The frame-by-frame reading (its ``labels``).
+        first: The labeled first frame's state.
+        kept: The windows kept so far (after the second pass).
+        labels: ``kept``'s labels, tracks extended (``judged_part`` is enough): assembled while
+            the reading runs beside (``rival_process``).
+    """
+    mine, theirs = judged_part(labels), judged_part(rival.labels(read))
     capped, judged = pair_offsets([mine.positions, theirs.positions], first.position, first.neighbours)
     # Ties stay with the window reading: its windows, certificates and look-ahead.
     taken = pass_per_marker((mine.point_index, theirs.point_index), capped, judged) == 1

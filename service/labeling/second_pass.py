@@ -95,6 +95,12 @@ def doubtful_share(outcomes: list[WindowOutcome]) -> float:
     return sum(o.stats.doubtful for o in outcomes) / labels if labels else 0.0
 
 
+def second_pass_runs(outcomes: list[WindowOutcome]) -> bool:
+    """Whether ``second_pass`` labels the take of first-pass ``outcomes`` again: a share of
+    doubtful labels above a clean take's and below a mostly wrong one's (module doc)."""
+    return DOUBTFUL_WARNING < doubtful_share(outcomes) <= MOSTLY_DOUBTFUL
+
+
 def second_pass(
     chain: WindowChain, formulation: Formulation, first: MarkerState, frames: int, window: int,
     outcomes: list[WindowOutcome], labels: Labels, progress: Progress | None = None,
@@ -113,7 +119,7 @@ def second_pass(
             (a clean take is not assembled twice).
     """
     before = doubtful_share(outcomes)
-    if not DOUBTFUL_WARNING < before <= MOSTLY_DOUBTFUL:
+    if not second_pass_runs(outcomes):
         return outcomes, PassChoice(before, None, 1)
     labeled = judged_part(labels(outcomes))
     second: list[WindowOutcome] = []

@@ -1,0 +1,70 @@
+"""The frame-by-frame reading run in a child process beside the second pass
+(``service.labeling.rival_process``): the same labels as read here, its failures said, a stop ends it."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+from service_fixtures import generated_capture
+
+import service.labeling.capture_labeling as capture_labeling
+from formulations.markers.state import MarkerState
+from service.capture.capture import Capture, LabelingOptions
+from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.rival_process import RivalBeside
+
+
+def _doubtful() -> Capture:
+    """A take doubtful enough for a second pass and the frame-by-frame reading."""
+    return generated_capture(frames=120, seed=1, noise_mm=3.0, ghosts_per_frame=6.0)
+
+
+def _labeled(monkeypatch: pytest.MonkeyPatch, beside: bool) -> tuple[CaptureLabeling, object, list[RivalBeside]]:
+    started: list[RivalBeside] = []
+
+    class Spied(RivalBeside):
+        def __init__(self, capture: Capture, options: LabelingOptions) -> None:
+            super().__init__(capture, options)
+            started.append(self)
+
+    monkeypatch.setattr(capture_labeling, "runs_beside", lambda seconds: beside)
+    monkeypatch.setattr(capture_labeling, "RivalBeside", Spied)
+    labeling = CaptureLabeling(_doubtful(), LabelingOptions(window=10))
+    result, _ = labeling.label()
+    return labeling, result, started
+
+
+def test_the_reading_beside_gives_the_labels_read_here(monkeypatch: pytest.MonkeyPatch) -> None:
+    here, here_result, none = _labeled(monkeypatch, beside=False)
+    beside, beside_result, started = _labeled(monkeypatch, beside=True)
+    assert here.rival is not None and not none  # the take is doubtful: the reading ran, here
+    assert len(started) == 1  # ... and the second time in a child
+    assert beside.rival == here.rival and beside.choice == here.choice
+    for field in ("positions", "point_index", "confidence", "filled"):
+        assert np.array_equal(getattr(beside_result, field), getattr(here_result, field), equal_nan=True), field
+
+
+def test_a_marker_state_travels_to_another_process_whole() -> None:
+    """Its weakly held advances stay behind; what it predicts and how it advances do not change."""
+    state = MarkerState.from_first_frame(np.random.default_rng(0).uniform(0, 500, (12, 3)))
+    state = state.advance(state.position + 3.0, np.ones(12, bool)).advance(state.position + 7.0, np.arange(12) % 3 > 0)
+    copy = pickle.loads(pickle.dumps(state))
+    assert np.array_equal(copy.predict(), state.predict())
+    seen = np.arange(12) % 4 > 0
+    assert np.array_equal(copy.advance(state.position + 9.0, seen).position, state.advance(state.position + 9.0, seen).position)
+
+
+def test_a_child_that_fails_says_why() -> None:
+    """Options the child cannot label with (no second pass: no frame-by-frame reading to run)."""
+    failed = r"frame-by-frame reading's process failed \(exit 1\): AssertionError"
+    with RivalBeside(generated_capture(frames=20), LabelingOptions(second_pass=False)) as child, \
+            pytest.raises(RuntimeError, match=failed):
+        child.read()
+
+
+def test_a_stop_ends_the_child() -> None:
+    with RivalBeside(_doubtful(), LabelingOptions(window=10)) as child:
+        assert child.read(stop=lambda: True) is None
+    assert child.ended
