@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.markers.lengths import lengths
+from formulations.markers.means import column_nanmedian
 
 REFERENCE_SECONDS = 2.0  # the labeled start's own stretch: short enough that its labels hold
 MIN_REFERENCE_FRAMES = 10  # fewer joint sightings say nothing of a pair's distance
@@ -91,9 +92,9 @@ def _pair_figures(distance: NDArray[np.float64], first: int) -> tuple[NDArray[np
     early = np.where(seen & (np.cumsum(seen, axis=0) <= first), distance, np.nan)
     enough = seen.sum(axis=0) >= MIN_REFERENCE_FRAMES
     reference, spread = np.full(distance.shape[1], np.nan), np.full(distance.shape[1], np.nan)
-    reference[enough] = np.nanmedian(early[:, enough], axis=0)
-    middle = np.nanmedian(distance[:, enough], axis=0)
-    spread[enough] = 1.4826 * np.nanmedian(np.abs(distance[:, enough] - middle), axis=0)
+    reference[enough] = column_nanmedian(early[:, enough])
+    middle = column_nanmedian(distance[:, enough])
+    spread[enough] = 1.4826 * column_nanmedian(np.abs(distance[:, enough] - middle))
     return reference, spread
 
 
