@@ -18,7 +18,9 @@ import numpy as np
 
 def axis_mean(values: np.ndarray, axis: int = 1, keepdims: bool = False) -> np.ndarray:
     """``values.mean(axis=axis, keepdims=keepdims)``."""
-    mean: np.ndarray = np.add.reduce(values, axis=axis, keepdims=keepdims) / values.shape[axis]
+    # two calls: numpy's stubs type ``keepdims`` as a literal, so a bool variable matches neither
+    total = np.add.reduce(values, axis=axis, keepdims=True) if keepdims else np.add.reduce(values, axis=axis)
+    mean: np.ndarray = total / values.shape[axis]
     return mean
 
 
