@@ -10,10 +10,11 @@ import pytest
 from service_fixtures import generated_capture
 
 import service.labeling.capture_labeling as capture_labeling
+import service.labeling.rival_process as rival_process
 from formulations.markers.state import MarkerState
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.capture_labeling import CaptureLabeling
-from service.labeling.rival_process import RivalBeside
+from service.labeling.rival_process import EarlyStart, RivalBeside
 
 
 def _doubtful() -> Capture:
@@ -21,7 +22,8 @@ def _doubtful() -> Capture:
     return generated_capture(frames=120, seed=1, noise_mm=3.0, ghosts_per_frame=6.0)
 
 
-def _labeled(monkeypatch: pytest.MonkeyPatch, beside: bool) -> tuple[CaptureLabeling, object, list[RivalBeside]]:
+def _spied(monkeypatch: pytest.MonkeyPatch) -> list[RivalBeside]:
+    """The children started from now on (by ``refine`` or ``EarlyStart``)."""
     started: list[RivalBeside] = []
 
     class Spied(RivalBeside):
@@ -29,21 +31,43 @@ def _labeled(monkeypatch: pytest.MonkeyPatch, beside: bool) -> tuple[CaptureLabe
             super().__init__(capture, options)
             started.append(self)
 
-    monkeypatch.setattr(capture_labeling, "runs_beside", lambda seconds: beside)
     monkeypatch.setattr(capture_labeling, "RivalBeside", Spied)
+    monkeypatch.setattr(rival_process, "RivalBeside", Spied)
+    return started
+
+
+def _labeled(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool) -> tuple[CaptureLabeling, object, list[RivalBeside]]:
+    """``late``: ``refine`` starts the child; ``early``: the first pass does (``EarlyStart``)."""
+    started = _spied(monkeypatch)
+    monkeypatch.setattr(capture_labeling, "runs_beside", lambda seconds: late)
+    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds: early)
     labeling = CaptureLabeling(_doubtful(), LabelingOptions(window=10))
-    result, _ = labeling.label()
+    progress: list[tuple[int, int]] = []
+    result, _ = labeling.label(progress=lambda k, n: progress.append((k, n)))
+    assert progress[-1] == (4 * labeling.n_windows, 4 * labeling.n_windows)  # both readings' two passes counted
     return labeling, result, started
 
 
-def test_the_reading_beside_gives_the_labels_read_here(monkeypatch: pytest.MonkeyPatch) -> None:
-    here, here_result, none = _labeled(monkeypatch, beside=False)
-    beside, beside_result, started = _labeled(monkeypatch, beside=True)
+@pytest.mark.parametrize("late, early", [(True, False), (False, True)])
+def test_the_reading_beside_gives_the_labels_read_here(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool) -> None:
+    here, here_result, none = _labeled(monkeypatch, late=False, early=False)
+    beside, beside_result, started = _labeled(monkeypatch, late, early)
     assert here.rival is not None and not none  # the take is doubtful: the reading ran, here
-    assert len(started) == 1  # ... and the second time in a child
+    assert len(started) == 1 and started[0].ended  # ... and the second time in one child, done
     assert beside.rival == here.rival and beside.choice == here.choice
     for field in ("positions", "point_index", "confidence", "filled"):
         assert np.array_equal(getattr(beside_result, field), getattr(here_result, field), equal_nan=True), field
+
+
+def test_a_reading_started_early_is_ended_when_the_take_is_not_doubtful(monkeypatch: pytest.MonkeyPatch) -> None:
+    started = _spied(monkeypatch)
+    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds: True)
+    early = EarlyStart(_doubtful(), LabelingOptions(window=10))
+    first_pass = CaptureLabeling(_doubtful(), LabelingOptions(window=10, rival_reading=False)).windows()  # no child of its own
+    list(early.watched(first_pass))
+    assert len(started) == 1 and not started[0].ended  # doubtful: started while the first pass ran
+    assert early.taken(False) is None
+    assert started[0].ended
 
 
 def test_a_marker_state_travels_to_another_process_whole() -> None:

@@ -53,7 +53,7 @@ from service.labeling.model_start import ModelChain, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
-from service.labeling.rival_process import RivalBeside, runs_beside
+from service.labeling.rival_process import EarlyStart, RivalBeside, runs_beside
 from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame
 from service.labeling.second_pass import PassChoice, Stop, judged_part, second_pass, second_pass_runs
 from service.labeling.shape_doubt import shape_doubted
@@ -87,6 +87,7 @@ class CaptureLabeling:
         self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
             "nn-hungarian"), partial(self._labeled, repaired=False),
         ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+        self._early = None if self._rival is None else EarlyStart(capture, options)  # the reading beside, started early
         self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
@@ -127,9 +128,10 @@ class CaptureLabeling:
         """
         if after is not None:
             check_resumable(after, self._spans, len(self._first.position), self.fingerprint)
-        return stamped(label_windows(
+        windows = stamped(label_windows(
             self._association, self.formulation, self._first, self._capture.n_frames, self._window, after, progress, observer
         ), self.fingerprint)
+        return windows if self._early is None else self._early.watched(windows)
 
     def refine(
         self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
@@ -142,8 +144,10 @@ class CaptureLabeling:
         if not self._second_pass:
             return outcomes
         rival = self._rival is not None and second_pass_runs(outcomes)  # a doubtful take: read frame by frame too
-        beside = rival and runs_beside(sum(o.stats.total_seconds for o in outcomes))
-        with RivalBeside(self._capture, self._options) if beside else nullcontext() as child:
+        child = self._early.taken(rival) if self._early is not None else None  # started during the first pass
+        if child is None and rival and runs_beside(sum(o.stats.total_seconds for o in outcomes)):
+            child = RivalBeside(self._capture, self._options)
+        with child if child is not None else nullcontext():
             kept = second_pass(
                 self._association, self.formulation, self._first, self._capture.n_frames, self._window, outcomes,
                 self._labeled, progress, stop,

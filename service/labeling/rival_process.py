@@ -25,6 +25,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
@@ -32,7 +33,7 @@ from typing import TYPE_CHECKING
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.loop import Progress
 from service.labeling.outcome import WindowOutcome
-from service.labeling.second_pass import Stop
+from service.labeling.second_pass import Stop, second_pass_runs
 
 if TYPE_CHECKING:
     from service.labeling.capture_labeling import CaptureLabeling
@@ -63,7 +64,8 @@ class RivalBeside:
             [sys.executable, "-m", __name__, str(folder / "capture.pickle"), str(self._answer), str(os.getpid())],
             stdout=subprocess.PIPE, stderr=self._errors, text=True, cwd=Path(__file__).resolve().parents[2])
         self._done = (0, 0)  # the child's last progress (windows done, windows)
-        threading.Thread(target=self._follow, daemon=True).start()
+        self._follower = threading.Thread(target=self._follow, daemon=True)
+        self._follower.start()
 
     def _follow(self) -> None:
         assert self._process.stdout is not None
@@ -81,16 +83,23 @@ class RivalBeside:
         while self._process.poll() is None:
             if stop is not None and stop():
                 return None
-            if progress is not None and self._done != reported and self._done[1]:
-                reported = self._done
-                progress(*reported)
+            reported = self._reported(progress, reported)
             time.sleep(POLL_SECONDS)
+        self._follower.join()  # its output ends with the process: the last progress is in
+        self._reported(progress, reported)
         if self._process.returncode != 0:
             self._errors.seek(0)
             last = (self._errors.read().strip().splitlines() or ["no message"])[-1]
             raise RuntimeError(f"the frame-by-frame reading's process failed (exit {self._process.returncode}): {last}")
         windows: list[WindowOutcome] = pickle.loads(self._answer.read_bytes())
         return windows
+
+    def _reported(self, progress: Progress | None, reported: tuple[int, int]) -> tuple[int, int]:
+        """The child's progress passed on if it moved since ``reported``; what was passed on."""
+        if progress is None or self._done == reported or not self._done[1]:
+            return reported
+        progress(*self._done)
+        return self._done
 
     @property
     def ended(self) -> bool:
@@ -106,6 +115,36 @@ class RivalBeside:
         self._process.wait()
         self._errors.close()
         self._folder.cleanup()
+
+
+class EarlyStart:
+    """Starts the reading beside during the first pass, once that pass has taken
+    ``BESIDE_MIN_SECONDS`` and its windows so far are doubtful enough for a second pass
+    (``second_pass_runs``): it then runs beside the rest of the first pass too (03_rolling:
+    otherwise the window reading's second pass waits 4-5 s for it at the end). ``taken``
+    hands it over when the whole first pass is doubtful, and ends it otherwise."""
+
+    def __init__(self, capture: Capture, options: LabelingOptions) -> None:
+        self._capture, self._options = capture, options
+        self._seen: list[WindowOutcome] = []
+        self._child: RivalBeside | None = None
+
+    def watched(self, windows: Iterator[WindowOutcome]) -> Iterator[WindowOutcome]:
+        """``windows``, each looked at (``EarlyStart``) as it finishes."""
+        for outcome in windows:
+            self._seen.append(outcome)
+            if self._child is None and runs_beside(sum(o.stats.total_seconds for o in self._seen)) \
+                    and second_pass_runs(self._seen):
+                self._child = RivalBeside(self._capture, self._options)
+            yield outcome
+
+    def taken(self, wanted: bool) -> RivalBeside | None:
+        """The reading started early, if ``wanted`` (else it is ended); None if none started."""
+        child, self._child, self._seen = self._child, None, []
+        if child is not None and not wanted:
+            child.__exit__(None, None, None)
+            return None
+        return child
 
 
 def _exit_with_parent(parent: int) -> None:
