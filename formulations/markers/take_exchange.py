@@ -85,6 +85,11 @@ class TakeExchange:
     stop: int
     nats: float
 
+    @property
+    def markers(self) -> tuple[int, int]:
+        """The two markers, each taking the other's labels (as ``TakeRotation.markers``)."""
+        return self.a, self.b
+
 
 def take_exchanges(
     positions: Array, first: Array, neighbours: NDArray[np.int64], predicted: Array | None = None,
@@ -168,7 +173,7 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
         return None
     apart, apart0 = to_own - to_other, d0[a, j] - d0[b, j]
-    if _fit((-apart[both & inside] - apart0) / sd) > FIT_COST or _fit((apart[outside] - apart0) / sd) > FIT_COST:
+    if fit((-apart[both & inside] - apart0) / sd) > FIT_COST or fit((apart[outside] - apart0) / sd) > FIT_COST:
         return None
     return TakeExchange(a, b, start, stop, nats)
 
@@ -210,7 +215,7 @@ def _distance(x: Array, y: Array) -> Array:
     return distance
 
 
-def _fit(e: Array) -> float:
+def fit(e: Array) -> float:
     """Mean over frames of ``capped_cost(e)``, e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j: how the
     pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
     return float(np.nanmean(capped_cost(e))) if len(e) else 0.0

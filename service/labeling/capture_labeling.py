@@ -31,6 +31,7 @@ from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.shape_breaks import ShapeBreak
 from formulations.markers.take_exchange import TakeExchange
 from formulations.markers.take_handover import Handover
+from formulations.markers.take_rotation import TakeRotation
 from formulations.subject.contradiction import SegmentMisfit, labeled_misfits
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_tracks import joint_tracks
@@ -91,7 +92,7 @@ class CaptureLabeling:
         self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
-        self.exchanges: list[TakeExchange] = []  # given back in the last labels assembled (``exchanged``)
+        self.exchanges: list[TakeExchange | TakeRotation] = []  # given back in the last labels assembled (``exchanged``)
         self.handovers: list[Handover] = []  # tracks given back to their owners, likewise
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)

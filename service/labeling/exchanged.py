@@ -1,6 +1,7 @@
-"""A labeling with the exchanges the labeled first frame finds over the whole take given
-back (``formulations.markers.take_exchange``), and the tracks other markers took over handed
-back to the markers they continue (``formulations.markers.take_handover``).
+"""A labeling with the exchanges (and rotations of three markers) the labeled first frame finds
+over the whole take given back (``formulations.markers.take_exchange``, ``take_rotation``), and
+the tracks other markers took over handed back to the markers they continue
+(``formulations.markers.take_handover``).
 
 Such a label is one the windows read otherwise: it is given back, and marked doubtful
 (``EXCHANGED_CONFIDENCE``) so that the summary counts it and a user looks at it.
@@ -16,23 +17,36 @@ import numpy as np
 from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, take_exchanges
 from formulations.markers.take_handover import Handover, held_fill, take_handovers
+from formulations.markers.take_rotation import TakeRotation, take_rotations
 from service.io.recording import LabeledTrajectories
 
 EXCHANGED_CONFIDENCE = 0.5  # the windows and the first frame's shape read these labels otherwise
 
 
-def exchanged_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[LabeledTrajectories, list[TakeExchange]]:
-    """``labels`` with each exchange of ``take_exchanges`` applied to every per-label array,
-    and the exchanges."""
-    exchanges = take_exchanges(labels.positions, first.position, first.neighbours, _predicted(labels))
+def exchanged_back(
+    labels: LabeledTrajectories, first: MarkerState,
+) -> tuple[LabeledTrajectories, list[TakeExchange | TakeRotation]]:
+    """``labels`` with each exchange of ``take_exchanges``, then each rotation of three markers
+    of ``take_rotations`` in what they leave, applied to every per-label array; and both."""
     arrays = _per_label(labels)
+    exchanges = take_exchanges(labels.positions, first.position, first.neighbours, _predicted(labels))
     for e in exchanges:
-        for values in arrays.values():
-            values[e.start : e.stop, [e.a, e.b]] = values[e.start : e.stop, [e.b, e.a]]
-        if "confidence" in arrays:
-            arrays["confidence"][e.start : e.stop, [e.a, e.b]] = np.fmin(
-                arrays["confidence"][e.start : e.stop, [e.a, e.b]], EXCHANGED_CONFIDENCE)
-    return (replace(labels, **arrays) if exchanges else labels), exchanges
+        _given_back(arrays, e)
+    rotations = take_rotations(arrays["positions"], first.position, first.neighbours, arrays.get("filled"))
+    for r in rotations:
+        _given_back(arrays, r)
+    given: list[TakeExchange | TakeRotation] = [*exchanges, *rotations]
+    return (replace(labels, **arrays) if given else labels), given
+
+
+def _given_back(arrays: dict[str, Any], given: TakeExchange | TakeRotation) -> None:
+    """Each of ``given.markers`` takes the next one's labels (the last the first's) over its
+    frames, in every array; marked doubtful (``EXCHANGED_CONFIDENCE``)."""
+    run, markers = slice(given.start, given.stop), list(given.markers)
+    for values in arrays.values():
+        values[run, markers] = values[run, markers[1:] + markers[:1]]
+    if "confidence" in arrays:
+        arrays["confidence"][run, markers] = np.fmin(arrays["confidence"][run, markers], EXCHANGED_CONFIDENCE)
 
 
 def handed_back(labels: LabeledTrajectories, first: MarkerState) -> tuple[LabeledTrajectories, list[Handover]]:
@@ -69,10 +83,10 @@ def _per_label(labels: LabeledTrajectories) -> dict[str, Any]:
     return {name: getattr(labels, name).copy() for name in names if getattr(labels, name).size}
 
 
-def exchange_summary(exchanges: list[TakeExchange], names: list[str]) -> list[dict]:
-    """Each exchange as ``{"markers": [a, b], "frames": [start, stop]}`` (frames from 0, stop
-    exclusive), for a summary."""
-    return [{"markers": [names[e.a], names[e.b]], "frames": [e.start, e.stop]} for e in exchanges]
+def exchange_summary(exchanges: list[TakeExchange | TakeRotation], names: list[str]) -> list[dict]:
+    """Each exchange (two markers) or rotation (three) as ``{"markers": [a, b, ...], "frames":
+    [start, stop]}`` (frames from 0, stop exclusive; each marker took the next one's labels), for a summary."""
+    return [{"markers": [names[m] for m in e.markers], "frames": [e.start, e.stop]} for e in exchanges]
 
 
 def handover_summary(handovers: list[Handover], names: list[str]) -> list[dict]:

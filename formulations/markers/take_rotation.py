@@ -1,0 +1,165 @@
+"""Recovery over a whole labeled take: three markers whose labels went round, given back on
+the say of the labeled first frame.
+
+A pair exchange (``take_exchange``) cannot undo a rotation: three near markers of one segment,
+each on the next one's point. CMU 135_02 relabeled from frame 0: the file's own left foot is
+corrupt from frame 4483 (a repeated frame, then LMT5 183 mm from LTOE instead of 94), and past
+it the windows had the heel on the ankle's point, the ankle on the fifth metatarsal's and the
+metatarsal on the heel's, for the remaining 700 frames: no pair of them exchanged gives any
+marker its own point back, so no pair's gain clears.
+
+A rotation is judged as an exchange is, with the costs of ``take_exchange``: for a triangle
+(a, b, c) of markers rigid with each other and near in the first frame, each cyclic order
+pi (a takes b's labels, b takes c's, c takes a's; or the other way round) gains in a frame
+labeling all three
+
+    g_t = sum_m c_m(x_m, t) - sum_m c_m(x_pi(m), t),
+
+over the witnesses rigid with all three, sd_mj^2 = var_mj + var_pi(m)j. It may start and stop
+where the rotated labels step nearer to where each marker was heading (its track continued
+over gaps by the windows' fill) than the labels do, or after a frame labeling at most one of
+the three (135_02's foot: two of them unlabeled for three frames, the fill heading where the
+rotated labels went); it is made where the best run's sum reaches
+``EXCHANGE_NATS`` and ``MIN_RATE`` a frame, and where each pair (m, pi(m))'s difference of
+distances to the witnesses keeps the first frame's, rotated inside the run and as labeled
+outside it (``FIT_COST``): the tests of the exchange, one pair at a time. Pair exchanges go
+first; a rotation is looked for in what they leave.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.heading import track_heading
+from formulations.markers.noise import MAD_TO_SIGMA
+from formulations.markers.rigid import RIGID_SD_MM
+from formulations.markers.take_exchange import EXCHANGE_NATS, FIT_COST, MIN_RATE, NEAREST, best_run, capped_cost, near_pairs
+from formulations.markers.take_spread import MIN_FRAMES, SPREAD_FLOOR_MM2
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class TakeRotation:
+    """Over frames [start, stop) each of ``markers`` takes the labels of the next one (the
+    last the first's)."""
+
+    markers: tuple[int, int, int]
+    start: int
+    stop: int
+    nats: float
+
+
+def take_rotations(positions: Array, first: Array, neighbours: NDArray[np.int64], predicted: Array | None = None,
+                   ) -> list[TakeRotation]:
+    """The rotations that give a labeling back its first frame's shape (module doc), best
+    first, each judged on the labels the ones before left; arguments as ``take_exchanges``."""
+    d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
+    known = np.asarray(np.isfinite(first).all(axis=1))
+    near = near_pairs(neighbours, NEAREST) & known[:, None] & known[None, :]
+    continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
+    working, done = np.stack([positions, continued]), []
+    triangles = [t for t in _triangles(near) if _rigid_sides(positions, t)]
+    while triangles:
+        found = [r for t in triangles for order in (t, (t[0], t[2], t[1]))
+                 if (r := _judged(working, order, neighbours, d0)) is not None]
+        if not found:
+            break
+        best = max(found, key=lambda r: r.nats)
+        moved = list(best.markers)
+        working[:, best.start : best.stop, moved] = working[:, best.start : best.stop, moved[1:] + moved[:1]]
+        done.append(best)
+        triangles = [t for t in triangles if set(t) != set(moved)]
+    return done
+
+
+def _triangles(linked: NDArray[np.bool_]) -> list[tuple[int, int, int]]:
+    """Every (a, b, c), a < b < c, whose three pairs are ``linked``."""
+    out = []
+    for a in range(len(linked)):
+        later = [int(b) for b in np.flatnonzero(linked[a]) if b > a]
+        out += [(a, b, c) for b, c in combinations(later, 2) if linked[b, c]]
+    return out
+
+
+def _spread(positions: Array, rows: list[int], columns: list[int]) -> Array:
+    """``(R, C)`` robust variance of each distance over the frames labeling both, the squared
+    median absolute deviation (``MAD_TO_SIGMA``): near right while well under half of those frames
+    are wrong (a rotation over 40 % of a take; ``take_spread``'s deciles hold to a tenth, and the
+    first frame's distance is one pose: CMU 135_02's ankle to fifth metatarsal 109 mm there, 103
+    over the take); floored at ``SPREAD_FLOOR_MM2``; inf where too few frames (``MIN_FRAMES``)
+    or the same marker."""
+    d = np.linalg.norm(positions[:, rows][:, :, None] - positions[:, columns][:, None], axis=3)  # (F, R, C)
+    enough = np.isfinite(d).sum(axis=0) >= MIN_FRAMES
+    with np.errstate(all="ignore"):
+        d = np.where(enough, d, 0.0)
+        off = np.nanmedian(np.abs(d - np.nanmedian(d, axis=0)), axis=0)
+    var: Array = np.maximum((MAD_TO_SIGMA * off) ** 2, SPREAD_FLOOR_MM2)
+    var[~enough | (np.array(rows)[:, None] == np.array(columns)[None])] = np.inf
+    return var
+
+
+def _rigid(positions: Array, rows: list[int], columns: list[int]) -> NDArray[np.bool_]:
+    """``(R, C)`` pairs whose distance spread (``_spread``) is a rigid one's (``RIGID_SD_MM``);
+    False on the diagonal."""
+    rigid: NDArray[np.bool_] = np.asarray(_spread(positions, rows, columns) <= RIGID_SD_MM**2)
+    return rigid
+
+
+def _rigid_sides(positions: Array, triangle: tuple[int, int, int]) -> bool:
+    """The triangle's three sides keep their lengths as a rigid pair's do (``_rigid``)."""
+    rigid = _rigid(positions, list(triangle), list(triangle))
+    return bool(rigid[0, 1] and rigid[0, 2] and rigid[1, 2])
+
+
+def _judged(tracks: Array, order: tuple[int, int, int], neighbours: NDArray[np.int64], d0: Array,
+            ) -> TakeRotation | None:
+    """The rotation ``order`` over its best frames, None when it does not clear (module doc)."""
+    positions, markers = tracks[0], list(order)
+    taken = markers[1:] + markers[:1]  # marker markers[k] takes the labels of taken[k]
+    near = [int(j) for j in np.unique(neighbours[markers]) if j not in markers]
+    witness = [j for j, ok in zip(near, np.asarray(_rigid(positions, markers, near).all(axis=0))) if ok]
+    judges = witness + markers  # the triangle's own sides judge too
+    var = _spread(positions, markers, judges)
+    right, rotated = np.zeros(len(positions)), np.zeros(len(positions))
+    for k, (m, t) in enumerate(zip(markers, taken)):
+        others = [i for i, j in enumerate(judges) if j != m]
+        sd = np.sqrt(var[k, others] + var[markers.index(t), others])
+        jud = [judges[i] for i in others]
+        # the triangle's other markers, in the rotated labeling, sit on the points they take
+        where = np.stack([positions[:, taken[markers.index(j)]] if j in markers else positions[:, j] for j in jud], axis=1)
+        right = right + capped_cost((np.linalg.norm(positions[:, m][:, None] - positions[:, jud], axis=2) - d0[m, jud]) / sd)
+        rotated = rotated + capped_cost((np.linalg.norm(positions[:, t][:, None] - where, axis=2) - d0[m, jud]) / sd)
+    every = np.isfinite(right) & np.isfinite(rotated) & np.isfinite(positions[:, markers]).all(axis=(1, 2))
+    gain = np.where(every, right - rotated, 0.0)
+    if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:
+        return None
+    start, stop, nats = best_run(gain, _may_turn(tracks, markers, taken))
+    inside = np.zeros(len(every), bool)
+    inside[start:stop] = True
+    if nats < max(EXCHANGE_NATS, MIN_RATE * every[inside].sum()) or not (every & inside).any():
+        return None
+    if np.nanmean(rotated[every & inside]) / 3 > FIT_COST:  # the rotated labels fit as right ones do
+        return None
+    return TakeRotation((order[0], order[1], order[2]), start, stop, nats)
+
+
+def _may_turn(tracks: Array, markers: list[int], taken: list[int]) -> NDArray[np.bool_]:
+    """``(F + 1,)`` where the rotation may start or stop (module doc)."""
+    labels, continued = tracks[0], tracks[1]
+    heading = {m: track_heading(continued[:, m]) for m in markers}
+    kept = sum(_distance(labels[:, m], heading[m]) for m in markers)
+    crossed = sum(_distance(labels[:, t], heading[m]) for m, t in zip(markers, taken))
+    # the pair's "neither labeled": with two of three unseen, nothing seen says which came back where
+    lost = (~np.isfinite(labels[:, markers]).all(axis=2)).sum(axis=1) >= 2
+    return np.append((crossed < kept) | np.append(False, lost[:-1]), True)
+
+
+def _distance(x: Array, y: Array) -> Array:
+    """``(F,)`` distance, 0 where either is NaN."""
+    distance: Array = np.nan_to_num(np.linalg.norm(x - y, axis=1), nan=0.0)
+    return distance
