@@ -48,11 +48,21 @@ def _labeled(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool) -> tuple[
     return labeling, result, started
 
 
-@pytest.mark.parametrize("late, early", [(True, False), (False, True)])
-def test_the_reading_beside_gives_the_labels_read_here(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool) -> None:
-    here, here_result, none = _labeled(monkeypatch, late=False, early=False)
-    beside, beside_result, started = _labeled(monkeypatch, late, early)
+@pytest.fixture(scope="module")
+def read_here() -> tuple[CaptureLabeling, object]:
+    """The doubtful take labeled with the reading in this process (once for both tests)."""
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        here, here_result, none = _labeled(monkeypatch, late=False, early=False)
     assert here.rival is not None and not none  # the take is doubtful: the reading ran, here
+    return here, here_result
+
+
+@pytest.mark.parametrize("late, early", [(True, False), (False, True)])
+def test_the_reading_beside_gives_the_labels_read_here(
+    monkeypatch: pytest.MonkeyPatch, read_here: tuple[CaptureLabeling, object], late: bool, early: bool,
+) -> None:
+    here, here_result = read_here
+    beside, beside_result, started = _labeled(monkeypatch, late, early)
     assert len(started) == 1 and started[0].ended  # ... and the second time in one child, done
     assert beside.rival == here.rival and beside.choice == here.choice
     for field in ("positions", "point_index", "confidence", "filled"):
