@@ -3,21 +3,18 @@ taken from it (``service.labeling.rival_reading``)."""
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from conftest import DATA
 from service_fixtures import generated_capture
 
+import service.labeling.exchanged as exchanged_module
 import service.labeling.second_pass as second_pass_module
 from service.capture.capture import LabelingOptions
 from service.capture.from_recording import capture_from_span
 from service.errors import InputError
 from service.io.formats import read_labeled
+from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
 
 WALK = DATA / "c3d_mocaprecovery_cmu_hdm05_numediart" / "135_02.c3d"
@@ -35,28 +32,39 @@ def _foot_right_at_the_end(names: list[str], positions: np.ndarray) -> float:
     return float((same & present).sum() / present.sum())
 
 
-def test_the_window_reading_alone_keeps_the_foot_exchanged_to_the_end() -> None:
-    """Without the rival: after the corrupt stretch the window reading passes the foot's labels
-    round and keeps them so for 700 frames, confidently (the setup the feature is for)."""
+def _labeled(monkeypatch: pytest.MonkeyPatch, rival: bool, rotations: bool) -> tuple[CaptureLabeling, LabeledTrajectories]:
+    """The walk from ``START`` labeled; ``rotations`` False turns the take-wide rotation repair
+    off (``take_rotation``), which since it landed gives the foot back by itself."""
+    if not rotations:
+        monkeypatch.setattr(exchanged_module, "take_rotations", lambda *args: [])
     capture, _ = capture_from_span(read_labeled(WALK), START)
-    labeling = CaptureLabeling(capture, LabelingOptions(rival_reading=False))
+    labeling = CaptureLabeling(capture, LabelingOptions(rival_reading=rival))
     result, _ = labeling.label()
+    return labeling, result
+
+
+def test_the_window_reading_alone_keeps_the_foot_round_to_the_end_without_the_rotation_repair(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Without the rival and the rotation repair: after the corrupt stretch the window reading
+    passes the foot's labels round and keeps them so for 700 frames (the setup both are for)."""
+    labeling, result = _labeled(monkeypatch, rival=False, rotations=False)
     assert labeling.choice is not None and labeling.choice.second_doubtful is not None  # doubtful: a second pass ran
     assert labeling.rival is None
     assert _foot_right_at_the_end(result.names, result.positions) < 0.1
 
 
-def test_the_frame_by_frame_reading_gives_the_foot_back(tmp_path: Path) -> None:
-    out = tmp_path / "walk.c3d"
-    run = subprocess.run(
-        [sys.executable, "-m", "service.cli", "track", str(WALK), "--start", str(START), "--out", str(out), "--json"],
-        capture_output=True, text=True, check=True,
-    )
-    rival = json.loads(run.stdout)["rival_reading"]
-    assert rival["markers"] >= 1 and rival["rival_off_mm"] < rival["window_off_mm"]
-    written = read_labeled(out)
-    positions = written.positions[START:]  # a C3D copy keeps the frames before --start, unlabeled
-    assert _foot_right_at_the_end(written.names, positions) > 0.9
+def test_the_rotation_repair_gives_the_foot_back(monkeypatch: pytest.MonkeyPatch) -> None:
+    labeling, result = _labeled(monkeypatch, rival=False, rotations=True)
+    assert _foot_right_at_the_end(result.names, result.positions) > 0.9
+    assert any(len(e.markers) == 3 for e in labeling.exchanges)
+
+
+def test_the_frame_by_frame_reading_gives_the_foot_back(monkeypatch: pytest.MonkeyPatch) -> None:
+    labeling, result = _labeled(monkeypatch, rival=True, rotations=False)
+    assert labeling.rival is not None
+    assert labeling.rival.markers >= 1 and labeling.rival.rival_off_mm < labeling.rival.window_off_mm  # type: ignore[operator]
+    assert _foot_right_at_the_end(result.names, result.positions) > 0.9
 
 
 def test_a_take_not_doubtful_is_read_once() -> None:

@@ -4,7 +4,7 @@ A doubtful take is read four times: two window passes, then the frame-by-frame r
 own second pass (``rival_reading``; on the real 03_rolling 18 + 21 s of windows, then 12 + 10 s).
 The frame-by-frame reading needs nothing of the window passes, so on a machine with a second
 core it runs in a child process while the window reading's second pass runs here, and the two
-meet at the merge. The child is a fresh interpreter (``python -m service.labeling.rival_process``),
+meet at the merge. The child is a fresh interpreter (``python -m service.labeling.rival_child``),
 not a fork: multiprocessing forbids a job's daemonic worker children, and a fork of a threaded
 server is unsafe; a plain subprocess works the same under the CLI, a job's worker and a Dask
 worker. Its start-up (about 1.5 s of imports here) is paid back only on a take whose first pass
@@ -28,19 +28,14 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING
 
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.loop import Progress
 from service.labeling.outcome import WindowOutcome
 from service.labeling.second_pass import Stop, second_pass_runs
 
-if TYPE_CHECKING:
-    from service.labeling.capture_labeling import CaptureLabeling
-
 BESIDE_MIN_SECONDS = 5.0  # first-pass seconds from which a child's ~1.5 s start-up is worth paying
 POLL_SECONDS = 0.05  # how often the parent looks at its child (stop latency)
-PARENT_POLL_SECONDS = 0.5  # how often the child checks that its parent is still there
 
 
 def runs_beside(first_pass_seconds: float) -> bool:
@@ -61,7 +56,8 @@ class RivalBeside:
         (folder / "capture.pickle").write_bytes(pickle.dumps((capture, options), protocol=pickle.HIGHEST_PROTOCOL))
         self._errors = (folder / "stderr.txt").open("w+")
         self._process = subprocess.Popen(
-            [sys.executable, "-m", __name__, str(folder / "capture.pickle"), str(self._answer), str(os.getpid())],
+            [sys.executable, "-m", "service.labeling.rival_child", str(folder / "capture.pickle"), str(self._answer),
+             str(os.getpid())],
             stdout=subprocess.PIPE, stderr=self._errors, text=True, cwd=Path(__file__).resolve().parents[2])
         self._done = (0, 0)  # the child's last progress (windows done, windows)
         self._follower = threading.Thread(target=self._follow, daemon=True)
@@ -145,25 +141,3 @@ class EarlyStart:
             child.__exit__(None, None, None)
             return None
         return child
-
-
-def _exit_with_parent(parent: int) -> None:
-    """End the child once its parent is gone (killed job, Ctrl-C): nobody will read its windows."""
-    while True:
-        time.sleep(PARENT_POLL_SECONDS)
-        if os.getppid() != parent:
-            os._exit(1)
-
-
-def _main(capture_file: str, answer_file: str, parent: str) -> None:
-    threading.Thread(target=_exit_with_parent, args=(int(parent),), daemon=True).start()
-    from service.labeling.capture_labeling import CaptureLabeling  # the parent's own import: it imports this module
-
-    capture, options = pickle.loads(Path(capture_file).read_bytes())
-    labeling: CaptureLabeling = CaptureLabeling(capture, options)
-    windows = labeling.read_frame_by_frame(lambda k, n: print(k, n, flush=True))
-    Path(answer_file).write_bytes(pickle.dumps(windows, protocol=pickle.HIGHEST_PROTOCOL))
-
-
-if __name__ == "__main__":
-    _main(*sys.argv[1:4])
