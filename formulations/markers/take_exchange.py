@@ -173,7 +173,7 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
         return None
     apart, apart0 = to_own - to_other, d0[a, j] - d0[b, j]
-    if fit((-apart[both & inside] - apart0) / sd) > FIT_COST or fit((apart[outside] - apart0) / sd) > FIT_COST:
+    if _fit((-apart[both & inside] - apart0) / sd) > FIT_COST or _fit((apart[outside] - apart0) / sd) > FIT_COST:
         return None
     return TakeExchange(a, b, start, stop, nats)
 
@@ -203,19 +203,19 @@ def _may_turn(own: Array, other: Array, own_continued: Array, other_continued: A
     would put a jump into two tracks, or exchange markers too far apart for one to have taken
     the other's point."""
     heading = [track_heading(own_continued), track_heading(other_continued)]
-    kept = _distance(own, heading[0]) + _distance(other, heading[1])
-    crossed = _distance(other, heading[0]) + _distance(own, heading[1])
+    kept = label_distance(own, heading[0]) + label_distance(other, heading[1])
+    crossed = label_distance(other, heading[0]) + label_distance(own, heading[1])
     neither = np.asarray(~np.isfinite(own).all(axis=1) & ~np.isfinite(other).all(axis=1))
     return np.append((crossed < kept) | np.append(False, neither[:-1]), True)
 
 
-def _distance(x: Array, y: Array) -> Array:
+def label_distance(x: Array, y: Array) -> Array:
     """``(F,)`` distance, 0 where either is NaN (a marker without a label steps nowhere)."""
     distance: Array = np.nan_to_num(np.linalg.norm(x - y, axis=1), nan=0.0)
     return distance
 
 
-def fit(e: Array) -> float:
+def _fit(e: Array) -> float:
     """Mean over frames of ``capped_cost(e)``, e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j: how the
     pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
     return float(np.nanmean(capped_cost(e))) if len(e) else 0.0

@@ -39,7 +39,16 @@ from numpy.typing import NDArray
 from formulations.markers.heading import track_heading
 from formulations.markers.noise import MAD_TO_SIGMA
 from formulations.markers.rigid import RIGID_SD_MM
-from formulations.markers.take_exchange import EXCHANGE_NATS, FIT_COST, MIN_RATE, NEAREST, best_run, capped_cost, near_pairs
+from formulations.markers.take_exchange import (
+    EXCHANGE_NATS,
+    FIT_COST,
+    MIN_RATE,
+    NEAREST,
+    best_run,
+    capped_cost,
+    label_distance,
+    near_pairs,
+)
 from formulations.markers.take_spread import MIN_FRAMES, SPREAD_FLOOR_MM2
 
 Array = NDArray[np.float64]
@@ -165,14 +174,8 @@ def _may_turn(tracks: Array, markers: list[int], taken: list[int]) -> NDArray[np
     """``(F + 1,)`` where the rotation may start or stop (module doc)."""
     labels, continued = tracks[0], tracks[1]
     heading = {m: track_heading(continued[:, m]) for m in markers}
-    kept = sum(_distance(labels[:, m], heading[m]) for m in markers)
-    crossed = sum(_distance(labels[:, t], heading[m]) for m, t in zip(markers, taken))
+    kept = sum(label_distance(labels[:, m], heading[m]) for m in markers)
+    crossed = sum(label_distance(labels[:, t], heading[m]) for m, t in zip(markers, taken))
     # the pair's "neither labeled": with two of three unseen, nothing seen says which came back where
     lost = (~np.isfinite(labels[:, markers]).all(axis=2)).sum(axis=1) >= 2
     return np.append((crossed < kept) | np.append(False, lost[:-1]), True)
-
-
-def _distance(x: Array, y: Array) -> Array:
-    """``(F,)`` distance, 0 where either is NaN."""
-    distance: Array = np.nan_to_num(np.linalg.norm(x - y, axis=1), nan=0.0)
-    return distance
