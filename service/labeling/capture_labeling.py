@@ -187,6 +187,12 @@ class CaptureLabeling:
         check_outcomes(outcomes, self._spans, len(self._first.position), self.fingerprint)
         return self._finished(self._labeled(outcomes), outcomes, calibrated)
 
+    def assembled(self, outcomes: list[WindowOutcome], repaired: bool = True) -> LabeledTrajectories:
+        """The windows' labels as ``result`` starts from: confidences, tracks extended and, when
+        ``repaired``, the take-wide exchanges and hand-overs given back; no fill, calibration or
+        shape doubt yet. What each stage of ``label`` hands on (``bench/real_stages.py``)."""
+        return self._labeled(outcomes, repaired=repaired)
+
     def _finished(self, labels: LabeledTrajectories, outcomes: list[WindowOutcome], calibrated: bool) -> LabeledTrajectories:
         """``result`` of the repaired labels; ``outcomes`` are read again in camera mode only (views, lone views)."""
         if labels.filled.size:
