@@ -27,14 +27,15 @@ from service.server.runner import run_job
 from service.server.store import store_for
 
 TENNIS = DATA / "c3d_kineticstoolkit" / "kinematics_tennis_serve.c3d"  # 50 Hz, the arm ~100 mm per frame
+FRAMES = 400  # frames 0-399 hold the elbow glitch at 190 and the exchange after it
 
 
-def _correct(truth: Path, output: Path) -> float:
-    """Share of the file's own samples that the output labels with their own point."""
+def _correct(truth: Path, output: Path, frames: int | None = None) -> float:
+    """Share of the file's own samples (in its first ``frames``) that the output labels with their own point."""
     given, written = read_labeled(truth), read_labeled(output)
-    own = written.positions[:, [written.names.index(n) for n in given.names]]
-    present = np.isfinite(given.positions).all(axis=2)
-    same = np.linalg.norm(np.nan_to_num(own - given.positions, nan=1e9), axis=2) < 1e-3
+    own = written.positions[:frames, [written.names.index(n) for n in given.names]]
+    present = np.isfinite(given.positions[:frames]).all(axis=2)
+    same = np.linalg.norm(np.nan_to_num(own - given.positions[:frames], nan=1e9), axis=2) < 1e-3
     return float((same & present).sum() / present.sum())
 
 
@@ -49,17 +50,20 @@ def _track(output: Path, *flags: str) -> dict:
 
 def test_the_tennis_serve_is_right_only_with_the_second_pass(tmp_path: Path) -> None:
     """One pass learns the arm's spreads too late: the arm's markers exchange after the file's
-    own elbow glitch at frame 190. The second pass starts from the spreads of the whole take."""
-    once = _track(tmp_path / "once.c3d", "--one-pass")
-    twice = _track(tmp_path / "twice.c3d")
+    own elbow glitch at frame 190. The second pass starts from the spreads of the whole take.
+    Its first 400 frames hold the case (95.70 against 99.87 % on 2026-12-03; the whole take,
+    97.05 against 99.92 %, took three times as long)."""
+    once = _track(tmp_path / "once.c3d", "--one-pass", "--end", str(FRAMES))
+    twice = _track(tmp_path / "twice.c3d", "--end", str(FRAMES))
     assert once["second_pass"] is None
-    assert _correct(TENNIS, tmp_path / "once.c3d") < 0.98  # 97.05 % (91 % before the median expected steps)
-    assert _correct(TENNIS, tmp_path / "twice.c3d") > 0.99
+    assert _correct(TENNIS, tmp_path / "once.c3d", FRAMES) < 0.98
+    assert _correct(TENNIS, tmp_path / "twice.c3d", FRAMES) > 0.99
     choice = twice["second_pass"]
     assert choice["kept"] == 2 and choice["second_off_mm"] < choice["first_off_mm"]
     assert twice["doubtful_fraction"] < once["doubtful_fraction"]
     line = subprocess.run(
-        [sys.executable, "-m", "service.cli", "-q", "track", str(TENNIS), "--out", str(tmp_path / "line.c3d")],
+        [sys.executable, "-m", "service.cli", "-q", "track", str(TENNIS), "--out", str(tmp_path / "line.c3d"),
+         "--end", str(FRAMES)],
         capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "400"},
     ).stdout
     assert (f"second pass kept (rigid pairs {choice['first_off_mm']:.1f} -> {choice['second_off_mm']:.1f} mm off the "

@@ -23,12 +23,13 @@ DATA = REPO.parent / "shared" / "data"
 EZC3D = DATA / "c3d_ezc3d_testfiles"
 OPENSIM = DATA / "mocap_opensim"
 TENNIS = DATA / "c3d_kineticstoolkit" / "kinematics_tennis_serve.c3d"  # metres
+UNITS_FRAMES = 200  # the tennis serve labeled this far: enough samples to tell metres from mm
 KEPT_GROUPS = ("ANALOG", "FORCE_PLATFORM", "EVENT", "TRIAL", "SUBJECTS", "MANUFACTURER", "SEG")
 
 
-def _track(source: Path, out: Path) -> dict:
+def _track(source: Path, out: Path, *flags: str) -> dict:
     result = subprocess.run([sys.executable, "-m", "service.cli", "-q", "track", str(source), "--out", str(out),
-                             "--json"], cwd=REPO, capture_output=True, text=True, timeout=600)
+                             "--json", *flags], cwd=REPO, capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stderr
     return json.loads(result.stdout)
 
@@ -169,13 +170,14 @@ def test_a_trc_starting_past_frame_1_keeps_its_frame_numbers_and_times(tmp_path:
 
 
 def test_tennis_in_metres_stays_in_metres(tmp_path: Path) -> None:
-    _track(TENNIS, tmp_path / "x.c3d")
+    """Its first ``UNITS_FRAMES`` labeled (units need no more), the file written whole."""
+    _track(TENNIS, tmp_path / "x.c3d", "--end", str(UNITS_FRAMES))
     before, after = _assert_input_kept(TENNIS, tmp_path / "x.c3d")
     assert after["parameters"]["POINT"]["UNITS"]["value"] == ["m"]
     # In metres: a mm value written unconverted would be off by a factor of 1000.
     points = after["data"]["points"][:3].transpose(2, 1, 0)  # the labeled points, then the unlabeled *N
-    _assert_input_samples(points[:, : before["header"]["points"]["size"]], before["data"]["points"][:3].transpose(2, 1, 0),
-                          atol=1e-9)
+    labeled = points[:UNITS_FRAMES, : before["header"]["points"]["size"]]
+    _assert_input_samples(labeled, before["data"]["points"][:3].transpose(2, 1, 0)[:UNITS_FRAMES], atol=1e-9)
     assert (after["data"]["meta_points"]["residuals"][0].T[np.isnan(points).any(axis=2)] == -1).all()
 
 
