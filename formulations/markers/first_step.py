@@ -18,7 +18,7 @@ acceleration, the median over markers of their least a_ij: a point reached only 
 acceleration far beyond the others' is a ghost or a neighbour's, and the marker is better
 left where it was.
 
-At 70-90 mm a frame a glove of three markers 30 mm apart that turns as it travels has no
+At 70-90 mm a frame a glove of three markers 43 mm apart that turns as it travels has no
 clear least acceleration: its hand accelerates by as much as its markers are apart, and a
 marker sent onto a glove mate's point, the mate left without one, can cost less in sum (the
 wheelchair racing take under the matrix's default scenario, seed 0: the glove's second and
