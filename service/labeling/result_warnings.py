@@ -3,7 +3,7 @@ after its summary, and a job's status and page show once it is done.
 
 An integral window is optimal under the model, not proven right: a take whose labels are
 mostly doubtful or mostly occluded, whose labels leave the shape of their rigid neighbours, whose markers move
-further per frame than they are apart, that is not
+further per frame than they are apart, whose plates no distance tells apart, that is not
 human-sized in its unit, has copied columns, or where no marker is labeled though points are
 there, is labeled wrongly in ways the certificate does not see. These lines say so.
 """
@@ -21,6 +21,7 @@ from service.labeling.coincident import coincident_pairs, coincident_warning
 from service.labeling.lost_subject import away_span, away_warning, unnamed_span, unnamed_warning
 from service.labeling.shape_doubt import shape_break_warning
 from service.labeling.stats import DOUBTFUL_WARNING, REPORTED_DOUBTFUL_BELOW, doubtful_fraction
+from service.labeling.symmetric_plates import symmetric_plate_warning, symmetric_plates
 from service.labeling.take_warnings import fast_markers, fast_motion_warning, scale_warning, spacing_frame
 from service.labeling.triangulated_scale import triangulated_scale_warning
 
@@ -79,14 +80,15 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
     so only the speed is."""
     fraction = doubtful_fraction(result.confidence, result.occluded) if result.confidence.size else None
     identified = capture.model is not None and not np.isfinite(np.asarray(capture.first_frame, dtype=float)).any()
+    first = np.asarray(capture.first_frame, dtype=float).reshape(-1, 3)
     lines = [
         occluded_warning(result.occluded),
         doubtful_warning(fraction, MODEL_ADVICE if identified else "check them"),
         shape_break_warning(breaks, result.names, start),
         fast_motion_warning(fast_markers(result.names, result.positions)),
-        scale_warning(np.asarray(capture.first_frame, dtype=float).reshape(-1, 3), result.positions, capture.rate, unit,
-                      spacing=not spacing_judged, names=list(capture.names)),
+        scale_warning(first, result.positions, capture.rate, unit, spacing=not spacing_judged, names=list(capture.names)),
         coincident_warning(coincident_pairs(result.names, result.positions)),
+        symmetric_plate_warning(symmetric_plates(list(capture.names), first)),
     ]
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against
         counts = np.array([len(p) for p in capture.points])
