@@ -30,13 +30,10 @@ def symmetric_plates(names: list[str], frame: np.ndarray) -> list[tuple[str, str
     if len(seen) < NEAREST + 1:
         return []
     _, nearest = cKDTree(frame[seen]).query(frame[seen], k=NEAREST + 1)
-    mates = [set(seen[row[1:]]) for row in nearest]
-    near = dict(zip(seen, mates, strict=True))
-    plates = set()
-    for marker in seen:
-        for a, b in combinations(sorted(near[marker]), 2):
-            if {marker, b} <= near[a] | {a} and {marker, a} <= near[b] | {b}:
-                plates.add(tuple(sorted((int(marker), int(a), int(b)))))
+    near = {int(m): {int(j) for j in seen[row[1:]]} for m, row in zip(seen, nearest, strict=True)}
+    # each of the three names the other two: a, b of m's, and m with the other of a's and b's
+    plates = {tuple(sorted((m, a, b))) for m, (a, b) in ((m, sorted(pair)) for m, pair in near.items())
+              if near[a] == {m, b} and near[b] == {m, a}}
     found = []
     for plate in sorted(plates):
         sides = [float(np.linalg.norm(frame[i] - frame[j])) for i, j in combinations(plate, 2)]
