@@ -18,7 +18,10 @@ second is the shape signature: the distances from the candidate to the predicted
 positions of the marker's neighbours j against their learned means dbar_nj, weighted by
 a_j = 1 / (var_nj + 1) over neighbours tracked in the previous frame (Ringer & Lasenby
 2004: markers on one segment keep their distances). It is what stops a marker from
-inheriting the track of an occluded neighbour.
+inheriting the track of an occluded neighbour. For a marker a firm rigid fit carries, a_j
+counts its carriers only (``MarkerState.carriers``): distances are learned from sightings,
+so a wrist learned rigid with a still thigh stays so while it is carried up and away, and
+only the carry knows better.
 
 A track of points no marker holds that is seeded at the template (``markers.unnamed``) was
 seen beside every marker seen there, and beside an unseen marker whose last point the track
@@ -180,6 +183,11 @@ def _shape_deviation(
     predicted = np.take(guide.predicted.reshape(-1, 3), at, axis=0)  # (C, K, 3)
     distance = lengths(location[:, None] - predicted)
     weight = guide.tracked.ravel()[at] / (state.distance_var[obj] + 1.0)
+    if guide.carriers is not None:
+        # A carried marker is judged by the rigid body carrying it: a pair learned while the
+        # subject sat still (a lifting wrist and the thigh) that the carry found apart says nothing.
+        carriers = guide.carriers[frame - 1, obj]  # (C, K)
+        weight = weight * (carriers | ~carriers.any(axis=1, keepdims=True))
     deviation = np.minimum(np.abs(distance - state.distance_mean[obj]), SHAPE_CAP_MM)
     mean_deviation: np.ndarray = (weight * deviation).sum(axis=1) / np.maximum(weight.sum(axis=1), SHAPE_WEIGHT_FLOOR)
     return mean_deviation

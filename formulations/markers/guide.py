@@ -84,6 +84,7 @@ class GuideTrack:
     unseen: np.ndarray  # (M, N) frames unseen before m (0: seen in frame m-1)
     burst_var: np.ndarray  # (M, N) the guide's burst variance before frame m (``MarkerState.burst_var``)
     point: np.ndarray | None = None  # (M, N) the point it took in frame m, -1 none
+    carriers: np.ndarray | None = None  # (M, N, K) ``MarkerState.carriers`` before frame m
     # The states it advanced through: held here while the window is solved, so that the
     # labels' advances with the same points reuse them (``MarkerState.advance`` keeps its
     # advanced states only weakly).
@@ -116,6 +117,7 @@ def guide_track(
     unseen = np.empty((m, n), dtype=int)
     burst_var = np.empty((m, n))
     point = np.full((m, n), -1)
+    carriers = np.zeros((m,) + state.neighbours.shape, bool)
     states: list[MarkerState] = []
     state = _moving_start(state, frames, gate)
     for f, points in enumerate(frames):
@@ -125,6 +127,7 @@ def guide_track(
             guess = realign_lost(guess, lost, state.visible, points, reacquisition)
             guess = refine_by_segment(guess, lost, state.neighbours, state.distance_var, points, reacquisition)
         guess = reacquire_by_shape(guess, state, points)
+        carriers[f] = state.carriers
         predicted[f], tracked[f], unseen[f], burst_var[f] = guess, state.streak >= trust_after, state.unseen, state.burst_var
         # Predicted displacement: a marker's own velocity while seen, its neighbours'
         # motion while occluded; unknown only right after the labeled first frame.
@@ -145,7 +148,7 @@ def guide_track(
         states.append(state)
     return GuideTrack(
         predicted=predicted, radius=radius, velocity=velocity, tracked=tracked, unseen=unseen, burst_var=burst_var,
-        point=point, states=tuple(states),
+        point=point, carriers=carriers, states=tuple(states),
     )
 
 

@@ -77,6 +77,7 @@ def _direction(centred: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 FOLLOW_ITERATIONS = 3
+FIRM_INLIERS = 3
 
 
 def follow_neighbours(
@@ -92,8 +93,9 @@ def follow_neighbours(
     The first fit is the prior-weighted one: the prior favours near, rigid neighbours.
 
     Returns:
-        Rotations and centroids as ``rigid_transform``, and ``(S,)`` whether the fit is firm:
-        three or more neighbours within c of it, a rigid body that really carries the marker.
+        Rotations and centroids as ``rigid_transform``, and ``(S, K)`` the usable neighbours
+        within c of the fit: three or more make it firm (``FIRM_INLIERS``), a rigid body that
+        really carries the marker; the rest did not share its motion.
 
     Args:
         source, target: ``(S, K, 3)`` neighbours at the anchor frame and now.
@@ -109,5 +111,5 @@ def follow_neighbours(
         weight = prior / (1.0 + error2 / scale2)
     rotation, c_s, c_t = rigid_transform(source, target, weight)
     moved = np.matmul(source - c_s[:, None], rotation.transpose(0, 2, 1)) + c_t[:, None]
-    inliers = ((prior > 0) & (((moved - target) ** 2).sum(axis=2) <= scale2)).sum(axis=1)
-    return rotation, c_s, c_t, inliers >= 3
+    inliers: np.ndarray = (prior > 0) & (((moved - target) ** 2).sum(axis=2) <= scale2)
+    return rotation, c_s, c_t, inliers

@@ -12,8 +12,8 @@ from scipy.spatial import cKDTree
 from formulations.markers.motion import DRIFT_VAR_PRIOR_MM2, MOTION_VAR_PRIOR_MM2, learn_burst, learn_drift, learn_motion
 from formulations.markers.motion_filter import advance_filter, filter_predicts, initial_filter
 from formulations.markers.rejoined import rejoined_velocity
+from formulations.markers.rigid import FIRM_INLIERS, follow_neighbours
 from formulations.markers.rigid import RIGID_SD_MM as RIGID_SD_MM
-from formulations.markers.rigid import follow_neighbours
 
 SURE_STREAK = 3  # frames in a row a marker's point must have been its own to vouch for where it was
 
@@ -149,7 +149,8 @@ class MarkerState:
 
     def _advance(self, observed: np.ndarray, seen: np.ndarray, damping: float, rate: float) -> MarkerState:
         """``advance`` computed."""
-        predicted, followed, carried = self._prediction
+        predicted, followed, carried, carriers = self._prediction
+        rejected = carried[:, None] & self._followable & ~carriers
         position = np.where(seen[:, None], observed, predicted)
         was_seen = self.visible & seen
         # Seen twice: measured. Otherwise the displacement the neighbours imply (a stale
@@ -167,14 +168,14 @@ class MarkerState:
         # followed is lost (it may have been the only one on its segment): the rest carry it on
         # from there. A loose fit is not locked in: its error would compound.
         anchored = seen | (carried & (self.anchor_valid & ~seen[self.neighbours]).any(axis=1))
-        # Distances learn from seen pairs and from a seen marker and one a firm rigid fit carries,
-        # not from one loosely followed: its neighbours may be the wrong ones, and the shape would
-        # learn its drift and no longer find it (``shape_reacquire``).
-        known = seen | carried
+        # Distances learn from sightings only: a carried position is the labeler's own guess, and
+        # a pair learned from it confirms the guess as the shape (CMU 85_02's thigh marker, carried
+        # by the pelvis, learned its knee pair at 341 mm, truly 219, and drifted 300 mm). What a carried
+        # marker moves with is its fit's ``carriers`` instead.
         # A carried position counts as an anchor only while its own prediction is sure to
         # within what a rigid pair's distance varies by: not in fast motion.
         sure_carry = carried & ~seen & (self.prediction_var(self.unseen) < RIGID_SD_MM**2)
-        both = known[:, None] & known[self.neighbours] & (seen[:, None] | seen[self.neighbours])
+        both = seen[:, None] & seen[self.neighbours]
         around = np.take(position, self.neighbours, axis=0)  # (N, K, 3), once; np.take gathers rows faster than indexing
         deviation = np.linalg.norm(position[:, None] - around, axis=2) - self.distance_mean
         return replace(
@@ -182,7 +183,9 @@ class MarkerState:
             unseen=np.where(seen, 0, self.unseen + 1), streak=np.where(seen, self.streak + 1, 0),
             anchor=np.where(anchored[:, None], position, self.anchor),
             anchor_neighbours=np.where(anchored[:, None, None], around, self.anchor_neighbours),
-            anchor_valid=np.where(anchored[:, None], seen[self.neighbours], self.anchor_valid),
+            # Re-anchored while carried: the neighbours the fit found not moving with it stay out
+            # (a lifting wrist that loses its ulnar mate must not fall back onto the still thigh).
+            anchor_valid=np.where(anchored[:, None], seen[self.neighbours] & ~rejected, self.anchor_valid),
             anchor_carried=np.where(anchored[:, None], sure_carry[self.neighbours], self.anchor_carried),
             seen_at=np.where(seen[:, None], np.where((self.streak >= SURE_STREAK - 1)[:, None], observed, np.nan),
                              self.seen_at),
@@ -198,14 +201,15 @@ class MarkerState:
         self, rows: np.ndarray, usable: np.ndarray, source: np.ndarray, target: np.ndarray, motion_var: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The robust rigid motion (``follow_neighbours``) of markers ``rows``' usable
-        neighbours from ``source`` to ``target`` ``(R, K, 3)``; a translation with fewer than three."""
+        neighbours from ``source`` to ``target`` ``(R, K, 3)``; a translation with fewer than three.
+        The last element is the fit's inliers ``(R, K)`` (``follow_neighbours``)."""
         # Rigidity prior: the learned distance variance, and nearness (a neighbour twice as
         # far is a quarter as likely to share the marker's segment); see ``follow_neighbours``.
         spacing = np.maximum(self.distance_mean[rows], 1.0)
         prior = usable / ((self.distance_var[rows] + 1.0) * spacing**2)
-        rotation, c_s, c_t, firm = follow_neighbours(source, target, prior, motion_var)
+        rotation, c_s, c_t, inliers = follow_neighbours(source, target, prior, motion_var)
         rotation[usable.sum(axis=1) < 3] = np.eye(3)
-        return rotation, c_s, c_t, firm
+        return rotation, c_s, c_t, inliers
 
     @property
     def step_var(self) -> np.ndarray:
@@ -224,6 +228,12 @@ class MarkerState:
         """``(N, 3)`` predicted position one frame ahead: the Kalman filter's where it predicts
         (``motion_filter.filter_predicts``), else ``_prediction``'s."""
         return np.where(filter_predicts(self)[:, None], self.filtered[:, 0] + self.filtered[:, 1], self._prediction[0])
+
+    @property
+    def carriers(self) -> np.ndarray:
+        """``(N, K)`` for a marker a firm rigid fit carries into the next frame, the neighbours
+        that fit found moving with it (its segment, as far as the take has shown); False elsewhere."""
+        return self._prediction[3]
 
     def stranded(self, after: int) -> np.ndarray:
         """``(N,)`` unseen for ``after`` frames or more with no seen neighbour to follow:
@@ -253,9 +263,9 @@ class MarkerState:
         return usable
 
     @cached_property
-    def _prediction(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Predicted positions, which markers followed their neighbours, and which of those
-        a firm rigid fit carried (``rigid.follow_neighbours``); computed once per state (the
+    def _prediction(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Predicted positions, which markers followed their neighbours, which of those a firm
+        rigid fit carried (``rigid.follow_neighbours``), and ``carriers``; computed once per state (the
         labeler predicts a state, then advances it), so never to be written into.
 
         Constant velocity for markers seen now. An unseen marker follows the neighbours
@@ -267,13 +277,16 @@ class MarkerState:
         usable = self._followable
         followed = ~self.visible & usable.any(axis=1)
         follow = np.flatnonzero(followed)
+        carriers = np.zeros(self.neighbours.shape, bool)
         if len(follow) == 0:
-            return ahead, followed, followed
-        rotation, c_s, c_t, firm = self.neighbour_motion(
+            return ahead, followed, followed, carriers
+        rotation, c_s, c_t, inliers = self.neighbour_motion(
             follow, usable[follow], self.anchor_neighbours[follow], ahead[self.neighbours[follow]], self.motion_var[follow],
         )
         predicted = ahead.copy()
         predicted[follow] = np.einsum("sij,sj->si", rotation, self.anchor[follow] - c_s) + c_t
+        firm = inliers.sum(axis=1) >= FIRM_INLIERS
         carried = np.zeros_like(followed)
         carried[follow] = firm
-        return predicted, followed, carried
+        carriers[follow] = inliers & firm[:, None]
+        return predicted, followed, carried, carriers
