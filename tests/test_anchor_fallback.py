@@ -60,7 +60,9 @@ def test_a_marker_lost_after_its_mates_follows_them_once_they_are_back():
     # The setup fails without it: following the ankle and the swinging shank, across the joint.
     assert _errors(without, truth, noisy).max() > 50.0
     errors = _errors(anchor, truth, noisy)
-    assert errors.max() < 20.0 and np.ptp(errors[1:]) < 3.0
+    # No growth: the fitted trend over the gap, not the spread of 24 noisy errors (0.5 mm noise)
+    growth_per_frame = np.polyfit(np.arange(len(errors) - 1), errors[1:], 1)[0]
+    assert errors.max() < 20.0 and abs(growth_per_frame) < 0.1
 
 
 def test_carried_neighbours_are_not_followed_where_three_rigid_ones_were_seen():

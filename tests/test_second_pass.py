@@ -19,9 +19,11 @@ import service.labeling.second_pass as second_pass_module
 from formulations.confidence.two_readings import agreed_confidence
 from service.capture.capture import LabelingOptions
 from service.io.formats import read_labeled
+from service.io.formats.csv import read_csv_labeled
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.outcome import WindowOutcome
 from service.labeling.second_pass import second_pass
+from service.labeling.stats import REPORTED_DOUBTFUL_BELOW
 from service.server.results import trajectories_from_bytes
 from service.server.runner import run_job
 from service.server.store import store_for
@@ -39,6 +41,18 @@ def _correct(truth: Path, output: Path, frames: int | None = None) -> float:
     return float((same & present).sum() / present.sum())
 
 
+def _wrong_and_sure(truth: Path, output: Path, frames: int) -> float:
+    """Share of a CSV output's labels (in its first ``frames``) on another point than the file's
+    own, with no doubt reported: the errors a user would not look at."""
+    given, written = read_labeled(truth), read_csv_labeled(output)
+    order = [written.names.index(n) for n in given.names]
+    own = written.positions[:frames, order]
+    labeled = np.isfinite(own).all(axis=2)
+    same = np.linalg.norm(np.nan_to_num(own - given.positions[:frames], nan=1e9), axis=2) < 1e-3
+    sure = written.confidence[:frames, order] >= REPORTED_DOUBTFUL_BELOW
+    return float((labeled & ~same & sure).sum() / labeled.sum())
+
+
 def _track(output: Path, *flags: str) -> dict:
     run = subprocess.run(
         [sys.executable, "-m", "service.cli", "track", str(TENNIS), "--out", str(output), "--json", *flags],
@@ -53,14 +67,19 @@ def test_the_tennis_serve_is_right_only_with_the_second_pass(tmp_path: Path) -> 
     own elbow glitch at frame 190. The second pass starts from the spreads of the whole take.
     Its first 400 frames hold the case (95.70 against 99.87 % on 2026-12-03; the whole take,
     97.05 against 99.92 %, took three times as long)."""
-    once = _track(tmp_path / "once.c3d", "--one-pass", "--end", str(FRAMES))
-    twice = _track(tmp_path / "twice.c3d", "--end", str(FRAMES))
+    once = _track(tmp_path / "once.csv", "--one-pass", "--end", str(FRAMES))
+    twice = _track(tmp_path / "twice.csv", "--end", str(FRAMES))
     assert once["second_pass"] is None
-    assert _correct(TENNIS, tmp_path / "once.c3d", FRAMES) < 0.98
-    assert _correct(TENNIS, tmp_path / "twice.c3d", FRAMES) > 0.99
+    assert _correct(TENNIS, tmp_path / "once.csv", FRAMES) < 0.98
+    assert _correct(TENNIS, tmp_path / "twice.csv", FRAMES) > 0.99
     choice = twice["second_pass"]
     assert choice["kept"] == 2 and choice["second_off_mm"] < choice["first_off_mm"]
-    assert twice["doubtful_fraction"] < once["doubtful_fraction"]
+    # The errors one pass is sure of are gone, not merely doubted (2.5 % of its labels against
+    # 0.06 % on 2026-12-04). The two passes' disagreement is doubted (two_readings): the more one
+    # pass gets wrong, the more right labels the second doubts (3.2 -> 5.3 % doubtful since
+    # distances are learned from sightings only), so the doubt's share is not what is compared.
+    assert _wrong_and_sure(TENNIS, tmp_path / "once.csv", FRAMES) > 0.01
+    assert _wrong_and_sure(TENNIS, tmp_path / "twice.csv", FRAMES) < 0.002
     line = subprocess.run(
         [sys.executable, "-m", "service.cli", "-q", "track", str(TENNIS), "--out", str(tmp_path / "line.c3d"),
          "--end", str(FRAMES)],
