@@ -149,7 +149,8 @@ class MarkerState:
 
     def _advance(self, observed: np.ndarray, seen: np.ndarray, damping: float, rate: float) -> MarkerState:
         """``advance`` computed."""
-        predicted, followed, carried, carriers = self._prediction
+        predicted, followed, carriers = self._prediction
+        carried = np.asarray(carriers.any(axis=1))  # a firm fit has FIRM_INLIERS carriers or more
         rejected = carried[:, None] & self._followable & ~carriers
         position = np.where(seen[:, None], observed, predicted)
         was_seen = self.visible & seen
@@ -233,7 +234,7 @@ class MarkerState:
     def carriers(self) -> np.ndarray:
         """``(N, K)`` for a marker a firm rigid fit carries into the next frame, the neighbours
         that fit found moving with it (its segment, as far as the take has shown); False elsewhere."""
-        return self._prediction[3]
+        return self._prediction[2]
 
     def stranded(self, after: int) -> np.ndarray:
         """``(N,)`` unseen for ``after`` frames or more with no seen neighbour to follow:
@@ -263,9 +264,9 @@ class MarkerState:
         return usable
 
     @cached_property
-    def _prediction(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Predicted positions, which markers followed their neighbours, which of those a firm
-        rigid fit carried (``rigid.follow_neighbours``), and ``carriers``; computed once per state (the
+    def _prediction(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Predicted positions, which markers followed their neighbours, and ``carriers`` (a firm
+        rigid fit's, ``rigid.follow_neighbours``); computed once per state (the
         labeler predicts a state, then advances it), so never to be written into.
 
         Constant velocity for markers seen now. An unseen marker follows the neighbours
@@ -279,14 +280,11 @@ class MarkerState:
         follow = np.flatnonzero(followed)
         carriers = np.zeros(self.neighbours.shape, bool)
         if len(follow) == 0:
-            return ahead, followed, followed, carriers
+            return ahead, followed, carriers
         rotation, c_s, c_t, inliers = self.neighbour_motion(
             follow, usable[follow], self.anchor_neighbours[follow], ahead[self.neighbours[follow]], self.motion_var[follow],
         )
         predicted = ahead.copy()
         predicted[follow] = np.einsum("sij,sj->si", rotation, self.anchor[follow] - c_s) + c_t
-        firm = inliers.sum(axis=1) >= FIRM_INLIERS
-        carried = np.zeros_like(followed)
-        carried[follow] = firm
-        carriers[follow] = inliers & firm[:, None]
-        return predicted, followed, carried, carriers
+        carriers[follow] = inliers & (inliers.sum(axis=1) >= FIRM_INLIERS)[:, None]
+        return predicted, followed, carriers
