@@ -95,3 +95,50 @@ def test_a_stop_during_the_frame_by_frame_reading_abandons_it(monkeypatch) -> No
     assert labeling.refine(outcomes, stop=stop) is None
     assert len(asked) == labeling.n_windows + 1
     assert labeling.rival is None
+
+
+def test_the_merges_judge_the_labels_they_merge_and_the_second_pass_learns_from_the_repaired(monkeypatch) -> None:
+    """Both merges take window columns, so they must group and judge the windows' own labels.
+    Judged on the take-wide repairs' labels, the groups were those of other point indices: on the
+    real wheelchair racing take the window reading had the right glove, its repaired labels gave
+    GloveR2 and GloveR3 one point for 568 frames, and the merge then took an exchanged glove
+    (refine stage 97.77 -> 95.08 %). Here a repair that marks marker 0 must not reach a judge;
+    the spreads the second pass starts from are still learned from the repaired labels."""
+    import service.labeling.capture_labeling as capture_labeling_module
+    import service.labeling.rival_reading as rival_module
+
+    def marked(labels: LabeledTrajectories, first: object) -> tuple[LabeledTrajectories, list]:
+        labels.point_index = labels.point_index.copy()
+        labels.point_index[:, 0] = 10**6
+        labels.positions = labels.positions.copy()
+        labels.positions[:, 0] += 1000.0
+        return labels, []
+
+    judged: list[tuple[np.ndarray, np.ndarray]] = []
+    real = second_pass_module.pass_per_marker
+
+    def spy(points, capped, judged_triples):
+        judged.append(points)
+        return real(points, capped, judged_triples)
+
+    learned: list[np.ndarray] = []
+    real_spread = second_pass_module.with_take_spread
+
+    def spread_spy(first, positions):
+        learned.append(positions)
+        return real_spread(first, positions)
+
+    monkeypatch.setattr(second_pass_module, "with_take_spread", spread_spy)
+    monkeypatch.setattr(capture_labeling_module, "exchanged_back", marked)
+    monkeypatch.setattr(second_pass_module, "doubtful_share", lambda outcomes: 0.5)  # doubtful: both run
+    for module in (second_pass_module, rival_module):
+        monkeypatch.setattr(module, "pass_per_marker", spy)
+    labeling = CaptureLabeling(generated_capture(frames=40, seed=3), LabelingOptions(window=10))
+    outcomes = list(labeling.windows())
+    kept = labeling.refine(outcomes)
+    assert kept is not None and labeling.rival is not None
+    unrepaired = labeling.assembled(outcomes, repaired=False).positions[:, 0]
+    assert np.allclose(learned[0][:, 0], unrepaired + 1000.0, equal_nan=True)
+    assert len(judged) >= 2  # the second pass's merge and the frame-by-frame one
+    assert all((points < 10**6).all() for pair in judged for points in pair)
+    assert labeling.assembled(kept).point_index[:, 0].max() == 10**6  # the repair does run on what is kept

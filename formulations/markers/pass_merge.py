@@ -30,7 +30,8 @@ def pass_per_marker(
     """``(N,)`` 0 or 1: whose labels each marker keeps (module doc); 0 where the passes agree.
 
     Args:
-        points: Each pass's ``(F, N)`` point index per frame and marker, -1 unlabeled.
+        points: Each pass's ``(F, N)`` point index per frame and marker, -1 unlabeled: those of
+            the labels merged, or the groups do not keep one point to one marker.
         capped, judged: The passes' offsets off the labeled first frame, in the order of
             ``points`` (``first_frame_shape.pair_offsets``).
     """

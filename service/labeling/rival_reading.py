@@ -99,8 +99,9 @@ def merged_with_rival(
         rival: The frame-by-frame reading (its ``labels``).
         first: The labeled first frame's state.
         kept: The windows kept so far (after the second pass).
-        labels: ``kept``'s labels, tracks extended (``judged_part`` is enough): assembled while
-            the reading runs beside (``rival_process``).
+        labels: ``kept``'s labels, tracks extended but not repaired (the merge takes window
+            columns; ``judged_part`` is enough): assembled while the reading runs beside
+            (``rival_process``).
     """
     mine, theirs = judged_part(labels), judged_part(rival.labels(read))
     capped, judged = pair_offsets([mine.positions, theirs.positions], first.position, first.neighbours)

@@ -104,7 +104,7 @@ def second_pass_runs(outcomes: list[WindowOutcome]) -> bool:
 def second_pass(
     chain: WindowChain, formulation: Formulation, first: MarkerState, frames: int, window: int,
     outcomes: list[WindowOutcome], labels: Labels, progress: Progress | None = None,
-    stop: Stop | None = None,
+    stop: Stop | None = None, learned: Labels | None = None,
 ) -> tuple[list[WindowOutcome], PassChoice] | None:
     """The windows to keep (``outcomes`` itself when no second pass runs, else the kept
     pass's, with the markers the other pass labels better taken from it: ``pass_merge``;
@@ -115,15 +115,20 @@ def second_pass(
         chain, formulation, frames, window: As the first pass was labeled.
         first: The first pass's first marker state (its positions: the labeled first frame).
         outcomes: The first pass's windows.
-        labels: Gives a pass's labels, tracks extended; asked only when a second pass runs
-            (a clean take is not assembled twice).
+        labels: Gives a pass's labels, tracks extended, as the merge takes them (the windows'
+            own: no take-wide repair); asked only when a second pass runs (a clean take is not
+            assembled twice).
+        learned: Gives the first pass's labels the second pass learns its spreads from
+            (``labels`` when None): repaired ones, where exchanges the take-wide repairs give
+            back no longer widen their pairs.
     """
     before = doubtful_share(outcomes)
     if not second_pass_runs(outcomes):
         return outcomes, PassChoice(before, None, 1)
     labeled = judged_part(labels(outcomes))
+    taught = labeled if learned is None else judged_part(learned(outcomes))
     second: list[WindowOutcome] = []
-    for outcome in label_windows(chain, formulation, with_take_spread(first, labeled.positions), frames, window, None, progress):
+    for outcome in label_windows(chain, formulation, with_take_spread(first, taught.positions), frames, window, None, progress):
         second.append(outcome)
         if stop is not None and stop():
             return None
