@@ -148,15 +148,12 @@ class CaptureLabeling:
         child = self._early.taken(rival) if self._early is not None else None  # started during the first pass
         if child is None and rival and runs_beside(sum(o.stats.total_seconds for o in outcomes)):
             child = RivalBeside(self._capture, self._options)
-        # Both merges take window columns, so they judge the windows' own labels: the take-wide
-        # repairs' point indices group other markers, and a merged window then gave two markers
-        # one point (the real wheelchair racing take: GloveR2 and GloveR3 for 568 frames).
+        # Both merges take window columns, so they judge the windows' own labels (repaired ones
+        # grouped other markers: the real racing take's GloveR2 and GloveR3 got one point, 568 frames).
         unrepaired = partial(self._labeled, repaired=False)
         with child if child is not None else nullcontext():
-            kept = second_pass(
-                self._association, self.formulation, self._first, self._capture.n_frames, self._window, outcomes,
-                unrepaired, progress, stop, learned=self._labeled,
-            )
+            kept = second_pass(self._association, self.formulation, self._first, self._capture.n_frames, self._window,
+                               outcomes, unrepaired, progress, stop, learned=self._labeled)
             if kept is None:
                 return None
             kept_outcomes, self.choice = kept
