@@ -8,7 +8,9 @@ import pytest
 from conftest import DATA
 from service_fixtures import generated_capture
 
+import service.labeling.capture_labeling as capture_labeling_module
 import service.labeling.exchanged as exchanged_module
+import service.labeling.rival_reading as rival_module
 import service.labeling.second_pass as second_pass_module
 from service.capture.capture import LabelingOptions
 from service.capture.from_recording import capture_from_span
@@ -104,9 +106,6 @@ def test_the_merges_judge_the_labels_they_merge_and_the_second_pass_learns_from_
     GloveR2 and GloveR3 one point for 568 frames, and the merge then took an exchanged glove
     (refine stage 97.77 -> 95.08 %). Here a repair that marks marker 0 must not reach a judge;
     the spreads the second pass starts from are still learned from the repaired labels."""
-    import service.labeling.capture_labeling as capture_labeling_module
-    import service.labeling.rival_reading as rival_module
-
     def marked(labels: LabeledTrajectories, first: object) -> tuple[LabeledTrajectories, list]:
         labels.point_index = labels.point_index.copy()
         labels.point_index[:, 0] = 10**6
