@@ -102,3 +102,16 @@ def test_frames_no_window_labeled_stay_unlabeled() -> None:
                                  confidence=np.ones((FRAMES, 2)))
     assert (extended(labels, _frames(truth), 25).point_index[25:] == -1).all()
     assert (extended(labels, _frames(truth), FRAMES).point_index[25:] >= 0).all()
+
+
+def test_a_gap_where_the_limb_accelerates_is_walked_from_its_fast_end() -> None:
+    """A serve's arm: slow for 30 frames (g_n from those residuals is ~6 mm), then 10 mm per
+    frame^2. The windows lost it over the strike; the end labeled in the strike walks back."""
+    truth = _walk(6)
+    t = np.arange(FRAMES, dtype=float)
+    truth[:, 0, 0] = 2.0 * t + 5.0 * np.maximum(t - 30, 0) ** 2 + np.random.default_rng(7).normal(0, 0.5, FRAMES)
+    index = np.tile(np.arange(2), (FRAMES, 1))
+    index[31:35, 0] = -1
+    ghosts = [truth[f, :1] + [0.0, 45.0, 0.0] for f in range(FRAMES)]  # beyond 3 residuals of the strike
+    out = extend_tracks(_frames(truth, ghosts), index)
+    assert (out[31:35, 0] == 0).all()

@@ -12,7 +12,14 @@ and takes the point of frame s that no marker holds within g_n of x^ when it is 
 such point; the step is repeated from the point taken. g_n = ``GATE_MEDIANS`` times the median
 of |x(t + 1) - 2 x(t) + x(t - 1)| over the marker's own labeled triples (at least
 ``MIN_TRIPLES``): its own constant-velocity residual, about 4.6 sd per axis for Gaussian
-acceleration, so a ghost is as unlikely to fall inside as the take's noise allows. Every end
+acceleration, so a ghost is as unlikely to fall inside as the take's noise allows. That
+median is the calm motion's. Where the limb accelerates at a gap's end, the end's gate is
+``GATE_MEDIANS`` times the least residual of its own last ``END_TRIPLES`` labeled triples when
+that is larger (a triple not all labeled counts 0): an acceleration every one of the last
+three steps showed, where one noisy or wrong label shows in one. In a tennis serve's strike
+at 50 Hz the upper arm's step left constant velocity by 20-74 mm a frame against g_n = 19 mm,
+and the walk in from the end labeled in the strike stopped at its first frame (accuracy
+matrix, tennis with deletions, seed 0: RUPA's point free and unlabeled for 32 frames). Every end
 moves one frame per round, from both sides; a point two ends want in one round goes to
 neither, nor does a frame that a marker's two ends read differently (nothing here can say
 which is right), so the result does not depend on the markers' order.
@@ -34,6 +41,7 @@ Index = NDArray[np.int64]
 GATE_MEDIANS = 3.0  # the 99.9th percentile of a 3D Gaussian's norm is 2.6 times its median
 MIN_TRIPLES = 10  # fewer labeled triples say nothing of how the marker moves
 _FRAME_APART = 1e9  # mm between frames in the search tree: a query finds its own frame only
+END_TRIPLES = 3  # an acceleration lasts frames; one residual may be noise or a wrong label
 _CHUNK_FRAMES = 4096  # residuals at a time in ``_gates``: over the whole take, 3 kB a frame at 41 markers
 
 
@@ -103,7 +111,8 @@ def _wanted(
         last = flat[offsets[f - step] + taken[f - step, m]]
         prior = flat[offsets[f - 2 * step] + taken[f - 2 * step, m]]
         guess = np.column_stack([2 * last - prior, f * _FRAME_APART])
-        for k, points in zip(new.tolist(), tree.query_ball_point(guess, gate[m])):
+        radius = _end_gates(flat, offsets, taken, f, m, step, gate)
+        for k, points in zip(new.tolist(), tree.query_ball_point(guess, radius)):
             gated[slots[k]] = points
     found = [gated[slot] for slot in slots]
     # every end's points as one flat array: no Python loop over the ends' points
@@ -139,3 +148,19 @@ def _gates(flat: Array, offsets: Index, taken: Index) -> Array:
     enough = np.isfinite(residual).sum(axis=0) >= MIN_TRIPLES
     gate[enough] = GATE_MEDIANS * np.nanmedian(residual[:, enough], axis=0)
     return gate
+
+
+def _end_gates(flat: Array, offsets: Index, taken: Index, f: Index, m: Index, step: int, gate: Array) -> Array:
+    """``(E,)`` each end's gate (module doc): g_n, or ``GATE_MEDIANS`` times the least residual
+    of the marker's last ``END_TRIPLES`` labeled triples before the end, when that is larger."""
+    residual = np.zeros((END_TRIPLES, len(f)))
+    for j in range(END_TRIPLES):
+        frames = f[:, None] - step * (np.arange(3) + 1 + j)  # the triple, nearest the end first
+        inside = ((frames >= 0) & (frames < len(taken))).all(axis=1)
+        held = np.zeros(len(f), bool)
+        held[inside] = (taken[frames[inside], m[inside, None]] >= 0).all(axis=1)
+        if held.any():
+            a, b, c = (flat[offsets[frames[held, k]] + taken[frames[held, k], m[held]]] for k in range(3))
+            residual[j, held] = lengths(a - 2 * b + c)
+    out: Array = np.maximum(gate[m], GATE_MEDIANS * residual.min(axis=0))
+    return out
