@@ -96,7 +96,9 @@ def _wanted(
 
     ``gated`` keeps the points in each end's gate by slot (frame * N + marker) from round to
     round: x^ reads two labeled frames, which no round changes, and most ends wait many
-    rounds (two free points in the gate) while another end moves.
+    rounds (two free points in the gate) while another end moves. The end's gate reads up to
+    five: a frame behind a short labeled run that a later round labels is not read again, so
+    that end keeps the narrower gate (the result still does not depend on the markers' order).
     """
     labeled = taken >= 0
     ends = ~labeled & _shifted(labeled, step) & _shifted(labeled, 2 * step) & np.isfinite(gate)[None]
