@@ -115,3 +115,20 @@ def test_a_gap_where_the_limb_accelerates_is_walked_from_its_fast_end() -> None:
     ghosts = [truth[f, :1] + [0.0, 45.0, 0.0] for f in range(FRAMES)]  # beyond 3 residuals of the strike
     out = extend_tracks(_frames(truth, ghosts), index)
     assert (out[31:35, 0] == 0).all()
+
+
+def test_one_wrong_label_at_an_end_does_not_open_its_gate() -> None:
+    """Marker 0's last label before its gap is a ghost 30 mm off. That residual alone would open
+    the gate to 90 mm and take a point 20 mm from where the jump heads; the least of the last
+    three residuals is the calm motion's, and the point is left."""
+    truth = _walk(8)
+    jump = truth[29, 0] + [0.0, 30.0, 0.0]
+    points = _frames(truth)
+    points[29] = np.vstack([truth[29], jump])
+    points[30:] = [truth[f, 1:] for f in range(30, FRAMES)]  # marker 0's own points gone from 30
+    points[30] = np.vstack([truth[30, 1:], 2 * jump - truth[28, 0] + [20.0, 0.0, 0.0]])
+    index = np.tile(np.arange(2), (FRAMES, 1))
+    index[29, 0] = 2
+    index[30:] = [-1, 0]
+    out = extend_tracks(points, index)
+    assert out[30, 0] == -1
