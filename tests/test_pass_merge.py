@@ -1,5 +1,6 @@
-"""Two passes merged group by group: each group of markers they label differently takes the
-labels of the pass that bends its rigid pairs less off the first frame."""
+"""Two passes merged group by group and run by run: each group of markers they label
+differently takes, over each stretch where they disagree on it, the labels of the pass that
+bends its rigid pairs less off the first frame."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 
 from formulations.markers.first_frame_shape import first_frame_disagreement, pair_offsets
-from formulations.markers.pass_merge import pass_per_marker
+from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 
 FRAMES = 60
@@ -48,10 +49,27 @@ def test_each_pass_keeps_the_plate_it_labels_right() -> None:
     whole = first_frame_disagreement([one[1], two[1]], truth[0], neighbours)
     kept = int(np.argmin(whole))
     assert not np.array_equal((one, two)[kept][0], np.tile(np.arange(8), (FRAMES, 1)))  # a whole pass keeps an exchange
-    take = pass_per_marker((one[0], two[0]), *pair_offsets([one[1], two[1]], truth[0], neighbours))
-    assert take.tolist() == [0, 0, 0, 0, 0, 1, 1, 0]  # only the markers the passes label differently move
-    merged = np.where(take[None] == 1, two[0], one[0])
+    take = labels_taken((one[0], two[0]), *pair_offsets([one[1], two[1]], truth[0], neighbours))
+    assert take.any(axis=0).tolist() == [0, 0, 0, 0, 0, 1, 1, 0]  # only the markers the passes label differently move
+    merged = np.where(take, two[0], one[0])
     assert np.array_equal(merged, np.tile(np.arange(8), (FRAMES, 1)))
+
+
+def test_one_group_right_in_each_pass_in_turn() -> None:
+    """Both passes exchange the same two markers, the first early and the second late: taking
+    either pass's labels for the pair over the whole take keeps one exchange; judged stretch by
+    stretch, the pair is right in every frame."""
+    truth = _two_plates(1)
+    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=7).neighbours
+    right = np.tile(np.arange(8), (FRAMES, 1))
+    one, two = right.copy(), right.copy()
+    one[10:25, [0, 1]] = one[10:25, [1, 0]]
+    two[40:55, [0, 1]] = two[40:55, [1, 0]]
+    positions = [truth[np.arange(FRAMES)[:, None], p] for p in (one, two)]
+    assert not np.array_equal(one, right) and not np.array_equal(two, right)  # the group whole: an exchange either way
+    take = labels_taken((one, two), *pair_offsets(positions, truth[0], neighbours))
+    assert np.array_equal(np.where(take, two, one), right)
+    assert take[:, 2:].sum() == 0 and take[:10].sum() == 0  # nothing moves where the passes agree
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -80,8 +98,8 @@ def test_no_frame_gives_one_point_to_two_markers(seed: int) -> None:
             row[np.flatnonzero(row >= 0)[again]] = -1
     clouds = np.concatenate([truth, truth[:, :2] + 300.0], axis=1)
     positions = [np.where((p >= 0)[..., None], clouds[np.arange(FRAMES)[:, None], np.maximum(p, 0)], np.nan) for p in passes]
-    take = pass_per_marker((passes[0], passes[1]), *pair_offsets(positions, truth[0], neighbours))
-    merged = np.where(take[None] == 1, passes[1], passes[0])
+    take = labels_taken((passes[0], passes[1]), *pair_offsets(positions, truth[0], neighbours))
+    merged = np.where(take, passes[1], passes[0])
     for row in merged:
         held = row[row >= 0]
         assert len(held) == len(np.unique(held))

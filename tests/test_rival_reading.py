@@ -114,7 +114,7 @@ def test_the_merges_judge_the_labels_they_merge_and_the_second_pass_learns_from_
         return labels, []
 
     judged: list[tuple[np.ndarray, np.ndarray]] = []
-    real = second_pass_module.pass_per_marker
+    real = second_pass_module.labels_taken
 
     def spy(points, capped, judged_triples):
         judged.append(points)
@@ -131,7 +131,7 @@ def test_the_merges_judge_the_labels_they_merge_and_the_second_pass_learns_from_
     monkeypatch.setattr(capture_labeling_module, "exchanged_back", marked)
     monkeypatch.setattr(second_pass_module, "doubtful_share", lambda outcomes: 0.5)  # doubtful: both run
     for module in (second_pass_module, rival_module):
-        monkeypatch.setattr(module, "pass_per_marker", spy)
+        monkeypatch.setattr(module, "labels_taken", spy)
     labeling = CaptureLabeling(generated_capture(frames=40, seed=3), LabelingOptions(window=10))
     outcomes = list(labeling.windows())
     kept = labeling.refine(outcomes)

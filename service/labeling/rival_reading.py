@@ -1,4 +1,4 @@
-"""A doubtful take read again frame by frame, and the two readings merged group by group.
+"""A doubtful take read again frame by frame, and the two readings merged group by group, run by run.
 
 A window of frames sums a lost marker's one costly return with the cheap steps after it. When
 the marker's rigid neighbours were lost with it, its shape and prediction are stale, and the
@@ -13,7 +13,8 @@ frame as well (with its own second pass, as ``nn-hungarian`` labels a take), and
 are merged as the passes are (``formulations.markers.pass_merge``): the markers they label
 differently fall into groups that share no point, and each group takes the frame-by-frame
 labels only where they bend its rigid pairs strictly less off the labeled first frame
-(``first_frame_shape``). The windows and their certificates stay the window reading's; the
+(``first_frame_shape``): over the whole take, or over a stretch where the readings disagree
+on it and clearly differ there. The windows and their certificates stay the window reading's; the
 markers taken are counted in the choice (``RivalChoice``).
 """
 
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from formulations.markers.first_frame_shape import disagreement, pair_offsets
-from formulations.markers.pass_merge import pass_per_marker
+from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 from formulations.methods.formulation import Formulation
 from service.io.recording import LabeledTrajectories
@@ -106,7 +107,7 @@ def merged_with_rival(
     mine, theirs = judged_part(labels), judged_part(rival.labels(read))
     capped, judged = pair_offsets([mine.positions, theirs.positions], first.position, first.neighbours)
     # Ties stay with the window reading: its windows, certificates and look-ahead.
-    taken = pass_per_marker((mine.point_index, theirs.point_index), capped, judged) == 1
+    taken = labels_taken((mine.point_index, theirs.point_index), capped, judged)
     window_off, rival_off = (None if np.isnan(v) else float(v) for v in disagreement(capped, judged))
-    choice = RivalChoice(window_off, rival_off, int(taken.sum()))
+    choice = RivalChoice(window_off, rival_off, int(taken.any(axis=0).sum()))
     return merged_readings(kept, read, taken), choice

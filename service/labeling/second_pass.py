@@ -45,7 +45,7 @@ import numpy as np
 
 from formulations.confidence.two_readings import agreed_confidence
 from formulations.markers.first_frame_shape import disagreement, pair_offsets
-from formulations.markers.pass_merge import pass_per_marker
+from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import with_take_spread
 from formulations.methods.formulation import Formulation
@@ -71,9 +71,9 @@ class PassChoice:
         first_off_mm, second_off_mm: Each pass's disagreement with the first frame's rigid
             pairs (``first_frame_disagreement``, mm); None for a second pass not run.
         kept: 1 or 2: the pass whose windows (and certificates) are kept.
-        taken_from_other: Markers whose labels come from the other pass instead, where the
-            passes disagree and the other bends those markers' rigid pairs less
-            (``formulations.markers.pass_merge``).
+        taken_from_other: Markers with labels from the other pass instead, in the runs of
+            frames where the passes disagree and the other bends those markers' rigid pairs
+            less (``formulations.markers.pass_merge``).
     """
 
     first_doubtful: float
@@ -136,12 +136,12 @@ def second_pass(
     kept, taken, off = judged_passes(labeled, relabeled, first)
     mine, theirs = (second, outcomes) if kept == 2 else (outcomes, second)
     first_off, second_off = (None if np.isnan(v) else float(v) for v in off)
-    choice = PassChoice(before, doubtful_share(second), kept, first_off, second_off, int(taken.sum()))
+    choice = PassChoice(before, doubtful_share(second), kept, first_off, second_off, int(taken.any(axis=0).sum()))
     return merged_readings(mine, theirs, taken), choice
 
 
 def merged_readings(mine: list[WindowOutcome], theirs: list[WindowOutcome], taken: np.ndarray) -> list[WindowOutcome]:
-    """``mine`` with the markers ``taken`` (``(N,)`` bool) labeled as in ``theirs``
+    """``mine`` with the labels ``taken`` (``(F, N)`` bool over the take's frames) as in ``theirs``
     (``merged_windows``), each label's confidence judged with the other reading's
     (``with_other_reading``). Both read the same windows of one take."""
     windows = with_other_reading(mine, theirs)
@@ -169,7 +169,7 @@ def judged_passes(
     kept = 2 if off[1] < off[0] else 1
     order = [1, 0] if kept == 2 else [0, 1]
     points = (first_labels.point_index, second_labels.point_index)
-    taken = pass_per_marker((points[order[0]], points[order[1]]), capped[order], judged) == 1
+    taken = labels_taken((points[order[0]], points[order[1]]), capped[order], judged)
     return kept, taken, off
 
 
