@@ -103,3 +103,15 @@ def test_no_frame_gives_one_point_to_two_markers(seed: int) -> None:
     for row in merged:
         held = row[row >= 0]
         assert len(held) == len(np.unique(held))
+
+
+def test_a_reading_that_labels_nothing_is_not_taken() -> None:
+    """A second reading with no label at all (every marker lost) leaves the first's labels;
+    it once raised an IndexError looking for shared points."""
+    truth = _two_plates(2)
+    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=7).neighbours
+    right = np.tile(np.arange(8), (FRAMES, 1))
+    empty = np.full_like(right, -1)
+    positions = [truth, np.full_like(truth, np.nan)]
+    take = labels_taken((right, empty), *pair_offsets(positions, truth[0], neighbours))
+    assert not take.any()

@@ -80,9 +80,12 @@ def _groups(first: NDArray[np.int64], second: NDArray[np.int64]) -> tuple[NDArra
     f2, m2 = np.nonzero(second >= 0)
     key1, key2 = f1 * stride + first[f1, m1], f2 * stride + second[f2, m2]
     order = np.argsort(key2)
-    at = np.minimum(np.searchsorted(key2[order], key1), max(len(key2) - 1, 0))
-    shared = (key2[order][at] == key1) if len(key2) else np.zeros(len(key1), bool)
-    a, b = m1[shared], m2[order][at][shared]
+    if len(key2):
+        at = np.minimum(np.searchsorted(key2[order], key1), len(key2) - 1)
+        shared = key2[order][at] == key1
+        a, b = m1[shared], m2[order][at][shared]
+    else:  # the second labels nothing: no point is shared
+        a = b = np.zeros(0, dtype=np.int64)
     rows, cols = np.r_[a, np.arange(n)], np.r_[b, np.arange(n)]
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
     group: NDArray[np.int64] = connected_components(graph, directed=False)[1]
