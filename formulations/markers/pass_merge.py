@@ -11,7 +11,7 @@ a marker whose labels differ). Each group is judged on its own by the labeled fi
 a pass leaves a pair out), run by run: a run is a stretch of frames in which some member's
 labels differ, between frames where the passes agree on the whole group. The group as a whole
 takes the labels of the pass that bends it less over the take; a run whose own frames say
-clearly otherwise (one pass bends the group there by ``NEAR_TIE`` less than the other) takes
+clearly otherwise (one pass bends the group there less by ``NEAR_TIE`` of the larger bend) takes
 the other pass's. A group is often right in one pass in one stretch and in the other pass in
 the next (a wrist exchanged by the first pass early and by the second late); judged over the
 whole take it kept one of the two errors. A short run's bends are close and noisy, so a near
@@ -29,6 +29,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+
+from formulations.markers.runs import runs
 
 Array = NDArray[np.float64]
 
@@ -56,18 +58,13 @@ def labels_taken(
         apart = (points[0][:, members] != points[1][:, members]).any(axis=1)
         bend = per_label[:, :, members].sum(axis=2)  # (2, F)
         whole = bend[1].sum() < bend[0].sum()
-        for run in _runs(apart):
+        for start, length in runs(apart):
+            run = slice(start, start + length)
             mine, theirs = bend[0, run].sum(), bend[1, run].sum()
             clear = abs(mine - theirs) >= NEAR_TIE * max(mine, theirs)
             if (theirs < mine) if clear else whole:
                 taken[run, members] = True
     return taken
-
-
-def _runs(apart: NDArray[np.bool_]) -> list[slice]:
-    """The stretches of consecutive True frames."""
-    edges = np.flatnonzero(np.diff(np.r_[0, apart.astype(np.int8), 0]))
-    return [slice(start, stop) for start, stop in zip(edges[::2], edges[1::2], strict=True)]
 
 
 def _groups(first: NDArray[np.int64], second: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:

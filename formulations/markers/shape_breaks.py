@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from formulations.markers.lengths import lengths
 from formulations.markers.means import column_nanmedian
+from formulations.markers.runs import runs
 
 REFERENCE_SECONDS = 2.0  # the labeled start's own stretch: short enough that its labels hold
 MIN_REFERENCE_FRAMES = 10  # fewer joint sightings say nothing of a pair's distance
@@ -125,6 +126,4 @@ def _off_runs(off: NDArray[np.bool_], judged: NDArray[np.bool_]) -> list[tuple[i
     """``[start, stop)`` of each run of off frames, frames not judged (too few labeled
     neighbours) bridged; a run ends at the first judged frame that is not off."""
     frames = np.flatnonzero(judged)
-    edges = np.diff(np.concatenate([[0], off[frames].astype(np.int8), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    return [(int(frames[a]), int(frames[b - 1]) + 1) for a, b in zip(starts, ends, strict=True)]
+    return [(int(frames[start]), int(frames[start + length - 1]) + 1) for start, length in runs(off[frames])]

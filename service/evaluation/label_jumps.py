@@ -41,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.runs import runs
 from service.io.recording import Recording
-from service.io.runs import runs
 
 Mask = NDArray[np.bool_]
 Array = NDArray[np.float64]

@@ -14,9 +14,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.typing import ColorType
 
+from formulations.markers.runs import runs
 from service.io.formats.replace_file import replacing
 from service.io.recording import LabeledTrajectories, Recording
-from service.io.runs import runs
 
 _AXIS_LABELS = ("x (mm)", "y (mm)", "z (mm)")
 _COLOURS = matplotlib.color_sequences["tab10"]

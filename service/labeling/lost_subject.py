@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from service.io.runs import runs
+from formulations.markers.runs import runs
 
 MIN_POINTS = 3
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.patches import Patch
 
-from service.io.runs import runs
+from formulations.markers.runs import runs
 from service.web.job_data import Labels
 from service.web.plots.figure import new_figure, svg_bytes
 
