@@ -156,3 +156,47 @@ def test_headings_updated_for_the_two_markers_a_hand_over_moves_equal_fresh_ones
     fresh = _Headings(labels, fill, range(6))
     np.testing.assert_array_equal(headings.owner, fresh.owner)
     np.testing.assert_array_equal(headings.taker, fresh.taker)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_claim_the_windows_undo_once_both_are_seen_is_not_made(seed: int) -> None:
+    """Both lost, the taker back on its own point at 300, and the one plate marker seen beside
+    it moved as a joint moves it, so that the first frame's shape says the point is the owner's
+    (CMU 85_02 under the hard preset: RTOE's points claimed for RMT5 on the ankle marker alone).
+    At 310 the owner is seen again on its own point and the taker goes on along its track: the
+    windows, seeing both, read the track as the taker's, and it stays so. Where the owner comes
+    back on the track instead, the claim stands."""
+    take = _take(seed)
+    labels, fill = take.copy(), np.full_like(take, np.nan)
+    for marker, lost_at in ((TAKER, 150), (OWNER, 200)):
+        labels[lost_at:, marker] = np.nan
+        fill[lost_at:, marker] = take[lost_at:, marker] + np.linspace(0.0, 60.0, FRAMES - lost_at)[:, None]
+    back, witness = slice(HANDED_AT, HANDED_AT + 10), 1
+    labels[HANDED_AT:, TAKER] = take[HANDED_AT:, TAKER]
+    labels[back, 0], labels[back, 2], labels[back, CLOSE] = np.nan, np.nan, np.nan  # the rest of the plate unseen
+    away = labels[back, witness] - labels[back, TAKER]
+    owner_distance = np.linalg.norm(take[0, OWNER] - take[0, witness])
+    labels[back, witness] = labels[back, TAKER] + away / np.linalg.norm(away, axis=1, keepdims=True) * owner_distance
+    labels[HANDED_AT + 10 :, OWNER] = take[HANDED_AT + 10 :, OWNER]
+    assert _handovers(labels, fill) == []
+    labels[HANDED_AT + 10 :, TAKER] = np.nan  # the taker lost again: nothing says the track is its own
+    assert _handovers(labels, fill) == [(OWNER, TAKER, HANDED_AT, HANDED_AT + 10)]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_claim_stands_when_the_windows_then_hold_the_pair_exchanged(seed: int) -> None:
+    """Both lost, the taker back at 300 on the owner's point and on along its track after the
+    owner is seen again at 310, on the taker's own point: the windows hold the pair exchanged
+    (the tennis serve's left wrist markers with ghosts). The plate's distances say so over those
+    frames too, so the claim is made."""
+    take = _take(seed)
+    labels, fill = take.copy(), np.full_like(take, np.nan)
+    for marker, lost_at in ((TAKER, 250), (OWNER, 270)):
+        labels[lost_at:HANDED_AT, marker] = np.nan
+        drift = np.linspace(0.0, 60.0, HANDED_AT - lost_at)[:, None]
+        fill[lost_at:HANDED_AT, marker] = take[lost_at:HANDED_AT, marker] + drift
+    labels[HANDED_AT:HANDED_AT + 10, OWNER] = np.nan
+    exchanged = slice(HANDED_AT + 10, HANDED_AT + 20)  # then each back on its own track
+    labels[HANDED_AT : exchanged.stop, TAKER] = take[HANDED_AT : exchanged.stop, OWNER]
+    labels[exchanged, OWNER] = take[exchanged, TAKER]
+    assert _handovers(labels, fill)[:1] == [(OWNER, TAKER, HANDED_AT, HANDED_AT + 10)]
