@@ -41,6 +41,16 @@ def _lost(take: np.ndarray, marker: int, drift_mm: float) -> tuple[np.ndarray, n
     return labels, fill
 
 
+def _both_lost(take: np.ndarray, lost_at: dict[int, int], until: int) -> tuple[np.ndarray, np.ndarray]:
+    """Labels with each marker of ``lost_at`` unseen from its frame to ``until``, and a fill
+    that drifts 60 mm over that stretch."""
+    labels, fill = take.copy(), np.full_like(take, np.nan)
+    for marker, start in lost_at.items():
+        labels[start:until, marker] = np.nan
+        fill[start:until, marker] = take[start:until, marker] + np.linspace(0.0, 60.0, until - start)[:, None]
+    return labels, fill
+
+
 def _handovers(labels: np.ndarray, fill: np.ndarray) -> list[tuple[int, int, int, int]]:
     neighbours = MarkerState.from_first_frame(labels[0], n_neighbours=5).neighbours
     return [(h.owner, h.taker, h.start, h.stop) for h in take_handovers(labels, labels[0], neighbours, fill)]
@@ -164,13 +174,10 @@ def test_a_claim_the_windows_undo_once_both_are_seen_is_not_made(seed: int) -> N
     it moved as a joint moves it, so that the first frame's shape says the point is the owner's
     (CMU 85_02 under the hard preset: RTOE's points claimed for RMT5 on the ankle marker alone).
     At 310 the owner is seen again on its own point and the taker goes on along its track: the
-    windows, seeing both, read the track as the taker's, and it stays so. Where the owner comes
-    back on the track instead, the claim stands."""
+    windows, seeing both, read the track as the taker's, and it stays so. Where the taker is
+    lost again at 310, nothing says the track is its own, and the claim stands."""
     take = _take(seed)
-    labels, fill = take.copy(), np.full_like(take, np.nan)
-    for marker, lost_at in ((TAKER, 150), (OWNER, 200)):
-        labels[lost_at:, marker] = np.nan
-        fill[lost_at:, marker] = take[lost_at:, marker] + np.linspace(0.0, 60.0, FRAMES - lost_at)[:, None]
+    labels, fill = _both_lost(take, {TAKER: 150, OWNER: 200}, FRAMES)
     back, witness = slice(HANDED_AT, HANDED_AT + 10), 1
     labels[HANDED_AT:, TAKER] = take[HANDED_AT:, TAKER]
     labels[back, 0], labels[back, 2], labels[back, CLOSE] = np.nan, np.nan, np.nan  # the rest of the plate unseen
@@ -190,11 +197,7 @@ def test_a_claim_stands_when_the_windows_then_hold_the_pair_exchanged(seed: int)
     (the tennis serve's left wrist markers with ghosts). The plate's distances say so over those
     frames too, so the claim is made."""
     take = _take(seed)
-    labels, fill = take.copy(), np.full_like(take, np.nan)
-    for marker, lost_at in ((TAKER, 250), (OWNER, 270)):
-        labels[lost_at:HANDED_AT, marker] = np.nan
-        drift = np.linspace(0.0, 60.0, HANDED_AT - lost_at)[:, None]
-        fill[lost_at:HANDED_AT, marker] = take[lost_at:HANDED_AT, marker] + drift
+    labels, fill = _both_lost(take, {TAKER: 250, OWNER: 270}, HANDED_AT)
     labels[HANDED_AT:HANDED_AT + 10, OWNER] = np.nan
     exchanged = slice(HANDED_AT + 10, HANDED_AT + 20)  # then each back on its own track
     labels[HANDED_AT : exchanged.stop, TAKER] = take[HANDED_AT : exchanged.stop, OWNER]
