@@ -184,8 +184,9 @@ def _first_handover(
         for taker in np.flatnonzero(returns[t0 - 1]):
             for owner in np.flatnonzero(lost[t0 - 1] & near[taker]):
                 found = _handed(labeled, int(owner), int(taker), t0)
-                if not _windows_keep_taker(positions, own_miss, gate, shape, found) and shape.claims(
-                    positions, found.owner, found.taker, t0, found.stop,
+                # the stand-down only where a claim is made: most candidate pairs make none
+                if shape.claims(positions, found.owner, found.taker, t0, found.stop) and not _windows_keep_taker(
+                    positions, own_miss, gate, shape, found,
                 ):
                     return found
     return None
@@ -238,11 +239,10 @@ class FirstShape:
     def exchanged(self, positions: Array, a: int, b: int, start: int, stop: int) -> bool:
         """Whether markers a and b over [start, stop) fit the first frame better each on the
         other's points (summed over the frames where all four costs are known)."""
-        x_a, x_b = positions[start:stop, a], positions[start:stop, b]
-        kept = self._cost(positions, a, x_a, start, (a, b)) + self._cost(positions, b, x_b, start, (a, b))
-        swapped = self._cost(positions, a, x_b, start, (a, b)) + self._cost(positions, b, x_a, start, (a, b))
-        known = np.isfinite(kept) & np.isfinite(swapped)
-        return bool(known.any() and swapped[known].sum() < kept[known].sum())
+        b_as_a, b_as_b, b_known = self._costs(positions, a, b, start, stop)
+        a_as_b, a_as_a, a_known = self._costs(positions, b, a, start, stop)
+        known = a_known & b_known
+        return bool(known.any() and (b_as_a + a_as_b)[known].sum() < (a_as_a + b_as_b)[known].sum())
 
     def _costs(self, positions: Array, owner: int, taker: int, start: int, stop: int) -> tuple[Array, Array, NDArray[np.bool_]]:
         """The taker's points over [start, stop) costed as the owner's and as its own (``_cost``),
