@@ -19,13 +19,15 @@ over the witnesses rigid with all three, sd_mj^2 = var_mj + var_pi(m)j. It may s
 where the rotated labels step nearer to where each marker was heading (its track continued
 over gaps by the windows' fill) than the labels do, or after a frame labeling at most one of
 the three (135_02's foot: two of them unlabeled for three frames, the fill heading where the
-rotated labels went); it is made where the best run's sum reaches
-``PER_PAIR`` times the exchange's ``EXCHANGE_NATS`` and ``MIN_RATE`` a frame (its bars are
-for two markers' costs, a rotation sums three: the wheelchair racing take with 10 ghosts a
+rotated labels went); it is made where the best run's sum reaches n / 2 times the exchange's
+``EXCHANGE_NATS`` and ``MIN_RATE`` a frame for a permutation of n markers (the exchange's bars
+are for two markers' costs, a rotation sums three: the wheelchair racing take with 10 ghosts a
 frame, seed 1, rotated a wrist triangle on 86 nats over 362 frames at the exchange's bars,
 77.56 -> 72.25 %), and where the rotated labels fit as right ones do in the run, and the labels
 as they are outside it (mean capped cost per marker under ``FIT_COST``, as the exchange asks).
-Pair exchanges go first; a rotation is looked for in what they leave.
+Pair exchanges go first; a rotation is looked for in what they leave. The judge
+(``judged_permutation``) takes any permutation of a rigid set: ``take_flip`` judges a plate
+of four read turned half round with it.
 """
 
 from __future__ import annotations
@@ -53,9 +55,6 @@ from formulations.markers.take_spread import MIN_FRAMES, SPREAD_FLOOR_MM2
 
 Array = NDArray[np.float64]
 
-PER_PAIR = 1.5  # the exchange's bars are for two markers' costs; a rotation sums three
-
-
 @dataclass(frozen=True)
 class TakeRotation:
     """Over frames [start, stop) each of ``markers`` takes the labels of the next one (the
@@ -78,8 +77,8 @@ def take_rotations(positions: Array, first: Array, neighbours: NDArray[np.int64]
     working, done = np.stack([positions, continued]), []
     triangles = [t for t in _triangles(near) if _rigid_sides(positions, t)]
     while triangles:
-        found = [r for t in triangles for order in (t, (t[0], t[2], t[1]))
-                 if (r := _judged(working, order, neighbours, d0)) is not None]
+        found = [TakeRotation(order, *run) for t in triangles for order in (t, (t[0], t[2], t[1]))
+                 if (run := judged_permutation(working, list(order), list(order[1:] + order[:1]), neighbours, d0))]
         if not found:
             break
         best = max(found, key=lambda r: r.nats)
@@ -129,11 +128,12 @@ def _rigid_sides(positions: Array, triangle: tuple[int, int, int]) -> bool:
     return bool(rigid[0, 1] and rigid[0, 2] and rigid[1, 2])
 
 
-def _judged(tracks: Array, order: tuple[int, int, int], neighbours: NDArray[np.int64], d0: Array,
-            ) -> TakeRotation | None:
-    """The rotation ``order`` over its best frames, None when it does not clear (module doc)."""
-    positions, markers = tracks[0], list(order)
-    taken = markers[1:] + markers[:1]  # marker markers[k] takes the labels of taken[k]
+def judged_permutation(tracks: Array, markers: list[int], taken: list[int], neighbours: NDArray[np.int64], d0: Array,
+                       ) -> tuple[int, int, float] | None:
+    """Frames [start, stop) and the nats of the best run where ``markers[k]`` takes the labels
+    of ``taken[k]`` (a permutation of ``markers``), None when it does not clear (module doc).
+    ``tracks``: the labeled positions and the same continued over gaps by the prediction."""
+    positions = tracks[0]
     near = [int(j) for j in np.unique(neighbours[markers]) if j not in markers]
     witness = [j for j, ok in zip(near, np.asarray(_rigid(positions, markers, near).all(axis=0))) if ok]
     judges = witness + markers  # the triangle's own sides judge too
@@ -154,20 +154,20 @@ def _judged(tracks: Array, order: tuple[int, int, int], neighbours: NDArray[np.i
     start, stop, nats = best_run(gain, _may_turn(tracks, markers, taken))
     inside = np.zeros(len(every), bool)
     inside[start:stop] = True
-    if nats < PER_PAIR * max(EXCHANGE_NATS, MIN_RATE * every[inside].sum()) or not (every & inside).any():
+    if nats < len(markers) / 2 * max(EXCHANGE_NATS, MIN_RATE * every[inside].sum()) or not (every & inside).any():
         return None
     outside = every & ~inside
     outside[0] = False  # the first frame is d0 itself
     # the rotated labels fit as right ones do, and so do the labels outside the run (as the
     # exchange asks: a triangle whose right labels do not keep the first frame is no judge)
-    if _fit(rotated[every & inside]) > FIT_COST or _fit(right[outside]) > FIT_COST:
+    if _fit(rotated[every & inside], len(markers)) > FIT_COST or _fit(right[outside], len(markers)) > FIT_COST:
         return None
-    return TakeRotation((order[0], order[1], order[2]), start, stop, nats)
+    return start, stop, nats
 
 
-def _fit(cost: Array) -> float:
-    """Mean cost per marker over the frames given (the three markers' sum), 0 for none."""
-    return float(np.mean(cost)) / 3 if len(cost) else 0.0
+def _fit(cost: Array, n: int) -> float:
+    """Mean cost per marker over the frames given (the ``n`` markers' sum), 0 for none."""
+    return float(np.mean(cost)) / n if len(cost) else 0.0
 
 
 def _may_turn(tracks: Array, markers: list[int], taken: list[int]) -> NDArray[np.bool_]:
@@ -176,6 +176,6 @@ def _may_turn(tracks: Array, markers: list[int], taken: list[int]) -> NDArray[np
     heading = {m: track_heading(continued[:, m]) for m in markers}
     kept = sum(label_distance(labels[:, m], heading[m]) for m in markers)
     crossed = sum(label_distance(labels[:, t], heading[m]) for m, t in zip(markers, taken))
-    # the pair's "neither labeled": with two of three unseen, nothing seen says which came back where
-    lost = (~np.isfinite(labels[:, markers]).all(axis=2)).sum(axis=1) >= 2
+    # the pair's "neither labeled": with all but one unseen, nothing seen says which came back where
+    lost = (~np.isfinite(labels[:, markers]).all(axis=2)).sum(axis=1) >= len(markers) - 1
     return np.append((crossed < kept) | np.append(False, lost[:-1]), True)

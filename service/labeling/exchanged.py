@@ -1,5 +1,6 @@
-"""A labeling with the exchanges (and rotations of three markers) the labeled first frame finds
-over the whole take given back (``formulations.markers.take_exchange``, ``take_rotation``), and
+"""A labeling with the exchanges (rotations of three markers, plates of four turned half round)
+the labeled first frame finds over the whole take given back (``formulations.markers.take_exchange``,
+``take_rotation``, ``take_flip``), and
 the tracks other markers took over handed back to the markers they continue
 (``formulations.markers.take_handover``).
 
@@ -16,6 +17,7 @@ import numpy as np
 
 from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, take_exchanges
+from formulations.markers.take_flip import take_flips
 from formulations.markers.take_handover import Handover, held_fill, take_handovers
 from formulations.markers.take_rotation import TakeRotation, take_rotations
 from service.io.recording import LabeledTrajectories
@@ -27,7 +29,8 @@ def exchanged_back(
     labels: LabeledTrajectories, first: MarkerState,
 ) -> tuple[LabeledTrajectories, list[TakeExchange | TakeRotation]]:
     """``labels`` with each exchange of ``take_exchanges``, then each rotation of three markers
-    of ``take_rotations`` in what they leave, applied to every per-label array; and both."""
+    of ``take_rotations`` and each half-turned plate of four of ``take_flips`` (two exchanges)
+    in what they leave, applied to every per-label array; and all of them."""
     arrays = _per_label(labels)
     exchanges = take_exchanges(labels.positions, first.position, first.neighbours, _predicted(labels))
     for e in exchanges:
@@ -35,7 +38,10 @@ def exchanged_back(
     rotations = take_rotations(arrays["positions"], first.position, first.neighbours, arrays.get("filled"))
     for r in rotations:
         _given_back(arrays, r)
-    given: list[TakeExchange | TakeRotation] = [*exchanges, *rotations]
+    flips = take_flips(arrays["positions"], first.position, first.neighbours, arrays.get("filled"))
+    for f in flips:
+        _given_back(arrays, f)
+    given: list[TakeExchange | TakeRotation] = [*exchanges, *rotations, *flips]
     return (replace(labels, **arrays) if given else labels), given
 
 
