@@ -136,7 +136,7 @@ def judged_permutation(tracks: Array, markers: list[int], taken: list[int], neig
     positions = tracks[0]
     near = [int(j) for j in np.unique(neighbours[markers]) if j not in markers]
     witness = [j for j, ok in zip(near, np.asarray(_rigid(positions, markers, near).all(axis=0))) if ok]
-    judges = witness + markers  # the triangle's own sides judge too
+    judges = witness + markers  # the set's own distances judge too
     var = _spread(positions, markers, judges)
     right, rotated = np.zeros(len(positions)), np.zeros(len(positions))
     for k, (m, t) in enumerate(zip(markers, taken)):
@@ -159,7 +159,7 @@ def judged_permutation(tracks: Array, markers: list[int], taken: list[int], neig
     outside = every & ~inside
     outside[0] = False  # the first frame is d0 itself
     # the rotated labels fit as right ones do, and so do the labels outside the run (as the
-    # exchange asks: a triangle whose right labels do not keep the first frame is no judge)
+    # exchange asks: a set whose right labels do not keep the first frame is no judge)
     if _fit(rotated[every & inside], len(markers)) > FIT_COST or _fit(right[outside], len(markers)) > FIT_COST:
         return None
     return start, stop, nats
