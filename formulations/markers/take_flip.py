@@ -26,6 +26,7 @@ from itertools import combinations
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.pair_spread import PairSpreads
 from formulations.markers.take_exchange import NEAREST, TakeExchange, near_pairs, rigid_pairs
 from formulations.markers.take_rotation import judged_permutation
 
@@ -42,13 +43,15 @@ def take_flips(positions: Array, first: Array, neighbours: NDArray[np.int64], pr
     _, rigid = rigid_pairs(positions, first, neighbours)
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
+    spreads = PairSpreads(working[0])
     plates = _plates(near_pairs(neighbours, NEAREST) & rigid)
     while plates:
-        found = [(run, plate) for plate in plates if (run := _judged(working, plate, neighbours, d0))]
+        found = [(run, plate) for plate in plates if (run := _judged(working, plate, neighbours, d0, spreads))]
         if not found:
             break
         (start, stop, nats), ((a, b), (c, d)) = max(found, key=lambda f: f[0][2])
         working[:, start:stop, [a, b, c, d]] = working[:, start:stop, [b, a, d, c]]
+        spreads = PairSpreads(working[0])
         done += [TakeExchange(a, b, start, stop, nats / 2), TakeExchange(c, d, start, stop, nats / 2)]
         plates = [p for p in plates if {*p[0], *p[1]} != {a, b, c, d}]
     return done
@@ -62,7 +65,8 @@ def _plates(linked: NDArray[np.bool_]) -> list[Plate]:
             if not {*p} & {*q} and all(linked[i, j] for i in p for j in q)]
 
 
-def _judged(tracks: Array, plate: Plate, neighbours: NDArray[np.int64], d0: Array) -> tuple[int, int, float] | None:
+def _judged(tracks: Array, plate: Plate, neighbours: NDArray[np.int64], d0: Array, spreads: PairSpreads,
+            ) -> tuple[int, int, float] | None:
     """The plate's half turn over its best frames, None when it does not clear."""
     (a, b), (c, d) = plate
-    return judged_permutation(tracks, [a, b, c, d], [b, a, d, c], neighbours, d0)
+    return judged_permutation(tracks, [a, b, c, d], [b, a, d, c], neighbours, d0, spreads)

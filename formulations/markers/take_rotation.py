@@ -39,8 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.markers.heading import track_heading
-from formulations.markers.noise import MAD_TO_SIGMA
-from formulations.markers.rigid import RIGID_SD_MM
+from formulations.markers.pair_spread import PairSpreads
 from formulations.markers.take_exchange import (
     EXCHANGE_NATS,
     FIT_COST,
@@ -51,7 +50,6 @@ from formulations.markers.take_exchange import (
     label_distance,
     near_pairs,
 )
-from formulations.markers.take_spread import MIN_FRAMES, SPREAD_FLOOR_MM2
 
 Array = NDArray[np.float64]
 
@@ -75,15 +73,17 @@ def take_rotations(positions: Array, first: Array, neighbours: NDArray[np.int64]
     near = near_pairs(neighbours, NEAREST) & known[:, None] & known[None, :]
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
-    triangles = [t for t in _triangles(near) if _rigid_sides(positions, t)]
+    spreads = PairSpreads(working[0])
+    triangles = [t for t in _triangles(near) if _rigid_sides(spreads, t)]
     while triangles:
         found = [TakeRotation(order, *run) for t in triangles for order in (t, (t[0], t[2], t[1]))
-                 if (run := judged_permutation(working, list(order), list(order[1:] + order[:1]), neighbours, d0))]
+                 if (run := judged_permutation(working, list(order), list(order[1:] + order[:1]), neighbours, d0, spreads))]
         if not found:
             break
         best = max(found, key=lambda r: r.nats)
         moved = list(best.markers)
         working[:, best.start : best.stop, moved] = working[:, best.start : best.stop, moved[1:] + moved[:1]]
+        spreads = PairSpreads(working[0])  # the rotated labels' pairs spread otherwise
         done.append(best)
         triangles = [t for t in triangles if set(t) != set(moved)]
     return done
@@ -98,46 +98,23 @@ def _triangles(linked: NDArray[np.bool_]) -> list[tuple[int, int, int]]:
     return out
 
 
-def _spread(positions: Array, rows: list[int], columns: list[int]) -> Array:
-    """``(R, C)`` robust variance of each distance over the frames labeling both, the squared
-    median absolute deviation (``MAD_TO_SIGMA``): near right while well under half of those frames
-    are wrong (a rotation over 40 % of a take; ``take_spread``'s deciles hold to a tenth, and the
-    first frame's distance is one pose: CMU 135_02's ankle to fifth metatarsal 109 mm there, 103
-    over the take); floored at ``SPREAD_FLOOR_MM2``; inf where too few frames (``MIN_FRAMES``)
-    or the same marker."""
-    d = np.linalg.norm(positions[:, rows][:, :, None] - positions[:, columns][:, None], axis=3)  # (F, R, C)
-    enough = np.isfinite(d).sum(axis=0) >= MIN_FRAMES
-    with np.errstate(all="ignore"):
-        d = np.where(enough, d, 0.0)
-        off = np.nanmedian(np.abs(d - np.nanmedian(d, axis=0)), axis=0)
-    var: Array = np.maximum((MAD_TO_SIGMA * off) ** 2, SPREAD_FLOOR_MM2)
-    var[~enough | (np.array(rows)[:, None] == np.array(columns)[None])] = np.inf
-    return var
-
-
-def _rigid(positions: Array, rows: list[int], columns: list[int]) -> NDArray[np.bool_]:
-    """``(R, C)`` pairs whose distance spread (``_spread``) is a rigid one's (``RIGID_SD_MM``);
-    False on the diagonal."""
-    rigid: NDArray[np.bool_] = np.asarray(_spread(positions, rows, columns) <= RIGID_SD_MM**2)
-    return rigid
-
-
-def _rigid_sides(positions: Array, triangle: tuple[int, int, int]) -> bool:
-    """The triangle's three sides keep their lengths as a rigid pair's do (``_rigid``)."""
-    rigid = _rigid(positions, list(triangle), list(triangle))
+def _rigid_sides(spreads: PairSpreads, triangle: tuple[int, int, int]) -> bool:
+    """The triangle's three sides keep their lengths as a rigid pair's do (``PairSpreads.rigid``)."""
+    rigid = spreads.rigid(list(triangle), list(triangle))
     return bool(rigid[0, 1] and rigid[0, 2] and rigid[1, 2])
 
 
 def judged_permutation(tracks: Array, markers: list[int], taken: list[int], neighbours: NDArray[np.int64], d0: Array,
-                       ) -> tuple[int, int, float] | None:
+                       spreads: PairSpreads) -> tuple[int, int, float] | None:
     """Frames [start, stop) and the nats of the best run where ``markers[k]`` takes the labels
     of ``taken[k]`` (a permutation of ``markers``), None when it does not clear (module doc).
-    ``tracks``: the labeled positions and the same continued over gaps by the prediction."""
+    ``tracks``: the labeled positions and the same continued over gaps by the prediction;
+    ``spreads``: of the labeled positions."""
     positions = tracks[0]
     near = [int(j) for j in np.unique(neighbours[markers]) if j not in markers]
-    witness = [j for j, ok in zip(near, np.asarray(_rigid(positions, markers, near).all(axis=0))) if ok]
+    witness = [j for j, ok in zip(near, np.asarray(spreads.rigid(markers, near).all(axis=0))) if ok]
     judges = witness + markers  # the set's own distances judge too
-    var = _spread(positions, markers, judges)
+    var = spreads.var(markers, judges)
     right, rotated = np.zeros(len(positions)), np.zeros(len(positions))
     for k, (m, t) in enumerate(zip(markers, taken)):
         others = [i for i, j in enumerate(judges) if j != m]
