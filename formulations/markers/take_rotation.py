@@ -53,6 +53,7 @@ from formulations.markers.take_exchange import (
 
 Array = NDArray[np.float64]
 
+
 @dataclass(frozen=True)
 class TakeRotation:
     """Over frames [start, stop) each of ``markers`` takes the labels of the next one (the
