@@ -25,13 +25,14 @@ are for two markers' costs, a rotation sums three: the wheelchair racing take wi
 frame, seed 1, rotated a wrist triangle on 86 nats over 362 frames at the exchange's bars,
 77.56 -> 72.25 %), and where the rotated labels fit as right ones do in the run, and the labels
 as they are outside it (mean capped cost per marker under ``FIT_COST``, as the exchange asks).
-Pair exchanges go first; a rotation is looked for in what they leave. The judge
-(``judged_permutation``) takes any permutation of a rigid set: ``take_flip`` judges a plate
-of four read turned half round with it.
+Pair exchanges go first; a rotation is looked for in what they leave. The search
+(``permutations_given_back``) takes any permutation of a rigid set: ``take_flip`` gives a
+plate of four read turned half round back with it.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -69,24 +70,40 @@ def take_rotations(positions: Array, first: Array, neighbours: NDArray[np.int64]
                    ) -> list[TakeRotation]:
     """The rotations that give a labeling back its first frame's shape (module doc), best
     first, each judged on the labels the ones before left; arguments as ``take_exchanges``."""
-    d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
     known = np.asarray(np.isfinite(first).all(axis=1))
     near = near_pairs(neighbours, NEAREST) & known[:, None] & known[None, :]
+    spreads = PairSpreads(positions)
+    sets = [[(t, t[1:] + t[:1]), (order := (t[0], t[2], t[1]), order[1:] + order[:1])]
+            for t in _triangles(near) if _rigid_sides(spreads, t)]
+    given = permutations_given_back(positions, first, neighbours, predicted, sets, spreads)
+    return [TakeRotation((markers[0], markers[1], markers[2]), start, stop, nats) for (markers, _), start, stop, nats in given]
+
+
+Permutation = tuple[tuple[int, ...], tuple[int, ...]]  # markers, and whose labels each takes
+
+
+def permutations_given_back(
+    positions: Array, first: Array, neighbours: NDArray[np.int64], predicted: Array | None,
+    sets: Sequence[Sequence[Permutation]], spreads: PairSpreads,
+) -> list[tuple[Permutation, int, int, float]]:
+    """The permutations that give a labeling back its first frame's shape, with their frames
+    [start, stop) and nats: of ``sets`` (each the permutations tried of one set of markers) the
+    best that clears (``judged_permutation``) is made and the sets of its markers dropped, then
+    the rest are judged again on the labels it left, until none clears. ``spreads``: of
+    ``positions``."""
+    d0 = np.linalg.norm(first[:, None] - first[None], axis=2)
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
-    spreads = PairSpreads(working[0])
-    triangles = [t for t in _triangles(near) if _rigid_sides(spreads, t)]
-    while triangles:
-        found = [TakeRotation(order, *run) for t in triangles for order in (t, (t[0], t[2], t[1]))
-                 if (run := judged_permutation(working, list(order), list(order[1:] + order[:1]), neighbours, d0, spreads))]
+    while sets:
+        found = [((markers, taken), run) for tried in sets for markers, taken in tried
+                 if (run := judged_permutation(working, list(markers), list(taken), neighbours, d0, spreads))]
         if not found:
             break
-        best = max(found, key=lambda r: r.nats)
-        moved = list(best.markers)
-        working[:, best.start : best.stop, moved] = working[:, best.start : best.stop, moved[1:] + moved[:1]]
-        spreads = PairSpreads(working[0])  # the rotated labels' pairs spread otherwise
-        done.append(best)
-        triangles = [t for t in triangles if set(t) != set(moved)]
+        (markers, taken), (start, stop, nats) = max(found, key=lambda f: f[1][2])
+        working[:, start:stop, list(markers)] = working[:, start:stop, list(taken)]
+        spreads = PairSpreads(working[0])  # the permuted labels' pairs spread otherwise
+        done.append(((markers, taken), start, stop, nats))
+        sets = [tried for tried in sets if {*tried[0][0]} != {*markers}]
     return done
 
 
@@ -121,7 +138,7 @@ def judged_permutation(tracks: Array, markers: list[int], taken: list[int], neig
         others = [i for i, j in enumerate(judges) if j != m]
         sd = np.sqrt(var[k, others] + var[markers.index(t), others])
         jud = [judges[i] for i in others]
-        # the triangle's other markers, in the rotated labeling, sit on the points they take
+        # the set's other markers, in the permuted labeling, sit on the points they take
         where = np.stack([positions[:, taken[markers.index(j)]] if j in markers else positions[:, j] for j in jud], axis=1)
         right = right + capped_cost((np.linalg.norm(positions[:, m][:, None] - positions[:, jud], axis=2) - d0[m, jud]) / sd)
         rotated = rotated + capped_cost((np.linalg.norm(positions[:, t][:, None] - where, axis=2) - d0[m, jud]) / sd)
