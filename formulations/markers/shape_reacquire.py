@@ -119,20 +119,27 @@ def chi_square_gate(quantile: float, most: int) -> np.ndarray:
 def _claimed_by_another(
     guess: np.ndarray, state: MarkerState, looked_for: np.ndarray, free: np.ndarray, settings: ShapeReacquisition,
 ) -> np.ndarray:
-    """``(L, P)`` the free point is another unseen marker's: predicted within ``claim_mm`` of
-    it, and inside that marker's own chi-square gate (at least one rigid neighbour seen)."""
+    """``(L, P)`` the free point is the claim of another unseen marker (``point_claims``)."""
+    claims = point_claims(guess, state, free, settings)
+    by_others: np.ndarray = (claims.sum(axis=0)[None] - claims[looked_for]) > 0
+    return by_others
+
+
+def point_claims(
+    guess: np.ndarray, state: MarkerState, free: np.ndarray, settings: ShapeReacquisition = SHAPE_REACQUISITION,
+) -> np.ndarray:
+    """``(N, P)`` unseen marker n claims free point p: it is predicted (``guess``) within
+    ``claim_mm`` of p, and p is inside its own chi-square gate (at least one rigid neighbour seen)."""
     unseen = np.flatnonzero(~state.visible)
     near = lengths(free[None] - guess[unseen][:, None]) <= settings.claim_mm  # (U, P)
-    claim = np.zeros_like(near)
+    claims = np.zeros((len(state.visible), len(free)), bool)
     close = np.flatnonzero(near.any(axis=1))
     if len(close):
         judges = _judges(state, unseen[close], settings)
         gate = chi_square_gate(settings.quantile, settings.rigid)[np.maximum(judges.count, 1)][:, None]
         fits = (judges.chi_square(guess, free) <= gate) & (judges.count >= 1)[:, None]
-        claim[close] = near[close] & fits
-    other = unseen[None, :] != looked_for[:, None]  # (L, U)
-    contested: np.ndarray = (other.astype(int) @ claim.astype(int)) > 0
-    return contested
+        claims[unseen[close]] = near[close] & fits
+    return claims
 
 
 @dataclass(frozen=True)
