@@ -190,6 +190,12 @@ def test_a_point_another_lost_marker_is_predicted_at_and_fits_is_not_taken():
     # a prediction near the point is not enough: when 1's own distances reject it, 2 takes it
     rejected = replace(lost, distance_mean=lost.distance_mean + np.where(np.arange(len(BODY))[:, None] == 1, 40.0, 0.0))
     assert np.allclose(repair_exchanges(rejected, reappearing[None])[0].position[2], reappearing)
+    # nor is a marker carried less than three times as far from the point as the claimant
+    rivals = lost.position.copy()
+    rivals[1], rivals[2] = reappearing + [20.0, 0.0, 0.0], reappearing + [0.0, 45.0, 0.0]
+    assert np.allclose(repair_exchanges(replace(lost, position=rivals), reappearing[None])[0].position[2], reappearing)
+    rivals[2] = reappearing + [0.0, 65.0, 0.0]
+    assert repair_exchanges(replace(lost, position=rivals), reappearing[None])[0].unseen[2] == 26
     # nor is it a bar to a marker that claims the point too (a cluster 30 mm across): the shape decides
     near = lost.position.copy()
     near[2] = reappearing + [10.0, 0.0, 0.0]

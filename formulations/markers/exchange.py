@@ -49,18 +49,23 @@ Nor does an unseen marker take a free point whose track was seen beside it
 (``coexistence``): a track followed back to the frame the marker was last seen in, and
 somewhere else then, is another object, however well it fits the marker's distances.
 
-Nor does a marker take a free point another lost marker claims, unless it claims the point
-too: the claim the shape re-acquisition honours (``shape_reacquire.point_claims``: predicted
-within 30 mm of the point, and the point inside that marker's own chi-square shape gate).
-Distances to neighbours across a joint cannot tell apart two markers a few cm apart: on
-03_rolling (default condition, seed 0) the left ulnar styloid, lost for 26 frames and
-carried 75 mm from the point, was handed at template 323 the point of the radial styloid,
-lost one frame and carried 6 mm from it (deviations 11.0 against 12.9 mm: pronation bends
-the radius's distances to the epicondyles); the two traded the point from window to window
-for 190 frames (98.63 -> 99.44 % with the claim). A marker that claims the point too is not
-barred: in the wheelchair racing take's clusters, 30 mm across, every lost mate's prediction
-reaches every mate's point, and barring all but one kept right repairs from being made
-(racing with ghosts 86.21 -> 85.21 %, 86.59 % as it is).
+Nor does a marker take a free point another lost marker claims (``claimed_from``), unless it
+claims the point too or is carried less than ``FAR_RATIO`` (3, the hand-over repair's) times
+as far from it as the claimant. The claim is the one the shape re-acquisition honours
+(``shape_reacquire.point_claims``: carried within 30 mm of the point, and the point inside
+the marker's own chi-square shape gate). Distances to neighbours across a joint cannot tell
+apart two markers a few cm apart: on 03_rolling (default condition, seed 0) the left ulnar
+styloid, lost for 26 frames and carried 75 mm from the point, was handed at template 323 the
+point of the radial styloid, lost one frame and carried 6 mm from it (deviations 11.0
+against 12.9 mm: pronation bends the radius's distances to the epicondyles); the two traded
+the point from window to window for 190 frames (98.63 -> 99.44 % with the claim). A marker
+that claims the point too is not barred: in the wheelchair racing take's clusters, 30 mm
+across, every lost mate is carried within 30 mm of every mate's point, and barring all but
+the claimants kept right repairs from being made (racing with ghosts 86.21 -> 85.21 %,
+86.59 % as it is). Nor is one carried nearly as near: two right metacarpals of the real
+03_rolling, lost and carried 23-38 mm from both their points, were handed each other's
+points at frame 2215 when the one 38 mm from its own (no claim) was barred by the other's
+claim at 25 mm.
 
 Each marker is judged above against its neighbours where they are now, the partner left
 out; a change that also moves the partner can break their own distance, which that test
@@ -87,6 +92,7 @@ from scipy.spatial.distance import cdist
 from formulations.markers.lengths import lengths
 from formulations.markers.shape_reacquire import point_claims
 from formulations.markers.state import MarkerState
+from formulations.markers.take_handover import FAR_RATIO
 
 SHAPE_CAP_MM = 50.0  # c, as the shape term of ``cloud_candidates``
 EXCHANGE_GAIN_MM = 20.0  # a change must explain the shape by this much per marker (weighted mean mm) ...
@@ -140,8 +146,7 @@ def repair_exchanges(
         cost[np.ix_(~state.visible, len(visible) + np.flatnonzero(~continued))] = 1e6
     if coexisting is not None:
         cost[:, len(visible):len(tracks)][coexisting] = 1e6
-    claims = point_claims(state.position, state, unclaimed.reshape(-1, 3))
-    cost[:, len(visible):len(tracks)][(claims.sum(axis=0) > 0) & ~claims] = 1e6
+    cost[:, len(visible):len(tracks)][claimed_from(state, unclaimed.reshape(-1, 3))] = 1e6
     np.fill_diagonal(cost[:, len(tracks):], NONE_MM)
     rows, cols = linear_sum_assignment(cost)
     before = np.full(n, -1)
@@ -158,6 +163,17 @@ def repair_exchanges(
     if not accept.any():
         return state, 0
     return reassigned(state, visible, tracks, np.where(accept, after, before)), int(accept.sum())
+
+
+def claimed_from(state: MarkerState, unclaimed: np.ndarray) -> np.ndarray:
+    """``(N, U)`` markers barred from free points another lost marker claims (module doc): one
+    that claims the point too is not, nor one carried less than ``FAR_RATIO`` times as far
+    from it as the nearest claimant."""
+    claims = point_claims(state.position, state, unclaimed)
+    apart = lengths(unclaimed[None] - state.position[:, None])  # (N, U)
+    claimant = np.where(claims, apart, np.inf).min(axis=0)  # (U,) inf where none claims
+    barred: np.ndarray = ~claims & (apart >= FAR_RATIO * claimant[None])
+    return barred
 
 
 def continued_points(points: np.ndarray, following: np.ndarray, reach: float) -> np.ndarray:
