@@ -73,8 +73,8 @@ def take_rotations(positions: Array, first: Array, neighbours: NDArray[np.int64]
     known = np.asarray(np.isfinite(first).all(axis=1))
     near = near_pairs(neighbours, NEAREST) & known[:, None] & known[None, :]
     spreads = PairSpreads(positions)
-    sets = [[(t, t[1:] + t[:1]), (order := (t[0], t[2], t[1]), order[1:] + order[:1])]
-            for t in _triangles(near) if _rigid_sides(spreads, t)]
+    # each triangle turned either way: its markers in both orders, each taking the next one's labels
+    sets = [[(o, o[1:] + o[:1]) for o in (t, (t[0], t[2], t[1]))] for t in _triangles(near) if _rigid_sides(spreads, t)]
     given = permutations_given_back(positions, first, neighbours, predicted, sets, spreads)
     return [TakeRotation((markers[0], markers[1], markers[2]), start, stop, nats) for (markers, _), start, stop, nats in given]
 
