@@ -48,6 +48,8 @@ def test_the_line_names_the_markers_and_the_figures_serialise():
     line = fast_motion_warning(fast)
     assert line is not None and line.startswith("warning: 3 markers") and "28 mm/frame, 30 mm from" in line
     assert fast_motion_warning([]) is None
+    one = fast_motion_warning(fast[:1])
+    assert one is not None and one.startswith("warning: 1 marker moves") and "its label may swap" in one
     json.dumps([vars(f) for f in fast], allow_nan=False)
 
 
