@@ -16,6 +16,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from formulations.markers.cluster_search import search_lost_clusters
 from formulations.markers.first_step import coherent_steps, first_velocities
 from formulations.markers.reacquire import REACQUISITION, Reacquisition, realign_lost, refine_by_segment
 from formulations.markers.shape_reacquire import reacquire_by_shape
@@ -109,7 +110,8 @@ def guide_track(
     A marker counts as tracked once seen ``trust_after`` frames in a row: a marker just
     re-acquired may have been re-acquired wrongly, and others should not lean on it.
     Markers lost together are looked for where their group registers to the cloud
-    (``realign_lost``).
+    (``realign_lost``), and each rigid cluster of four or more of them by its own shape,
+    whatever pose it comes back in (``search_lost_clusters``).
     """
     m, n = len(frames), len(state.position)
     predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
@@ -125,6 +127,7 @@ def guide_track(
         guess = state.predict()
         if lost.any():
             guess = realign_lost(guess, lost, state.visible, points, reacquisition)
+            guess = search_lost_clusters(guess, state, lost, points)
             guess = refine_by_segment(guess, lost, state.neighbours, state.distance_var, points, reacquisition)
         guess = reacquire_by_shape(guess, state, points)
         carriers[f] = state.carriers

@@ -80,8 +80,8 @@ def fast_motion_warning(fast: list[FastMarker]) -> str | None:
         f"{f.marker} {f.step_mm:.0f} mm/frame, {f.neighbour_mm:.0f} mm from {f.neighbour}" for f in fast[:LISTED]
     )
     more = f" and {len(fast) - LISTED} more" if len(fast) > LISTED else ""
-    one = len(fast) == 1
-    subject, its, labels = ("1 marker moves", "its", "its label") if one else (f"{len(fast)} markers move", "their", "their labels")
+    plural = (f"{len(fast)} markers move", "their", "their labels")
+    subject, its, labels = ("1 marker moves", "its", "its label") if len(fast) == 1 else plural
     return (f"warning: {subject} more per frame than half the distance to {its} nearest "
             f"neighbour (medians: {named}{more}); {labels} may swap at this frame rate")
 

@@ -1,0 +1,180 @@
+"""Lost rigid clusters found again by their shape alone, whatever pose they come back in.
+
+``realign_lost`` registers a lost group to the cloud by ICP from two translations: it finds
+a subject who comes back in the posture and heading it left in. The wheelchair basketball
+sprint (kineticstoolkit, from frame 1632) loses every marker at frame 2181; the points come
+back from frame 2880 a metre away, the chair turned by about 140 degrees, the wheel turned on
+it and the arm moved, and no one rigid fit of the whole group is within 26 mm of them. Its
+markers sit in plates of four (chair, wheel, upper arm, forearm), and a plate's distances do
+not depend on pose.
+
+So each cluster of ``min_members`` or more lost markers rigid with each other (learned sd of
+every pair at most ``max_sd_mm``, a clique of the neighbour tables) is looked for by its
+three markers spread widest, a, b, c: every triple (i, j, l) of free points with
+
+    | ||x_i - x_j|| - d_ab | <= tol,  | ||x_i - x_l|| - d_ac | <= tol,  | ||x_j - x_l|| - d_bc | <= tol,
+
+tol = 3 times the cluster's largest learned sd plus ``noise_mm``, places the whole cluster by
+the Kabsch fit of its shape onto the triple. The shape is the members' learned mean distances
+d_mj laid out by classical MDS (``learned_shape``), not their last-seen positions: the
+sprint's chair was last seen with one marker on another's point (two markers 342 mm apart
+against 211), and every fit of that shape missed. Distances do not tell a shape from its
+mirror image, so both images are fitted; the wrong one leaves the fourth marker off its point.
+
+The fit that brings the most members within ``tol`` of a free point is taken when it
+explains ``min_members`` of them or more and no other fit explains as many with another
+point for any member: a symmetric plate (a square) fits several ways and is left where it
+was, and so are two lost clusters of one shape that both fit the same points. Three members
+are not enough: some triangle of free points nearly always matches three distances (the
+sprint's forearm, three markers within 3 mm of each other, fitted the wheel's points, and
+the head's three the wheel's and the sync marker's). A member no point explains (a marker
+absent when its plate comes back) keeps its prediction. The members explained have their
+predictions moved onto their points; the window then decides what they take.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.distance import cdist
+
+from formulations.markers.reacquire import REACQUISITION, free_points
+from formulations.markers.rigid import rigid_transform
+from formulations.markers.state import MarkerState
+
+
+@dataclass(frozen=True)
+class ClusterSearch:
+    """Which lost clusters are looked for by shape, and how closely they must fit.
+
+    Attributes:
+        max_sd_mm: A pair whose learned distance sd is above this is not one plate.
+        noise_mm: Added to a cluster's tolerance: the noise of two points.
+        min_members: Fewer lost markers than this make no cluster, and a fit must explain this many
+            (three distances of three members nearly always match some triangle of points: module doc).
+    """
+
+    max_sd_mm: float = 3.0
+    noise_mm: float = 3.0
+    min_members: int = 4
+
+
+CLUSTER_SEARCH = ClusterSearch()
+
+
+def search_lost_clusters(
+    guess: np.ndarray, state: MarkerState, lost: np.ndarray, points: np.ndarray,
+    settings: ClusterSearch = CLUSTER_SEARCH,
+) -> np.ndarray:
+    """``(N, 3)`` predictions with each lost cluster found by its shape moved onto its points
+    (those no seen marker's prediction claims, ``Reacquisition.claim_mm``)."""
+    points = free_points(points, guess[state.visible], REACQUISITION.claim_mm)
+    if len(points) < settings.min_members:
+        return guess
+    found, claimed = guess.copy(), []
+    for cluster in rigid_clusters(state, lost, settings):
+        tol = 3 * np.sqrt(_pair_var(state, cluster).max()) + settings.noise_mm
+        placed = _placed(learned_shape(state, cluster), points, tol, settings.min_members)
+        if placed is not None:
+            kept = np.isfinite(placed).all(axis=1)
+            found[cluster[kept]] = placed[kept]
+            claimed.append((cluster[kept], placed[kept]))
+    # Two clusters on one point: one of them is a lookalike, and nothing says which.
+    for cluster, placed in claimed:
+        others = [p for c, p in claimed if c is not cluster]
+        if others and (cdist(placed, np.vstack(others)) < 1e-9).any():
+            found[cluster] = guess[cluster]
+    return found
+
+
+def rigid_clusters(state: MarkerState, lost: np.ndarray, settings: ClusterSearch = CLUSTER_SEARCH) -> list[NDArray[np.int64]]:
+    """Cliques of lost markers whose every pair is a learned rigid neighbour pair, greedily
+    from each lost marker in turn (a marker joins one cluster)."""
+    n = len(state.position)
+    rigid = np.zeros((n, n), bool)
+    rows = np.repeat(np.arange(n), state.neighbours.shape[1])
+    rigid[rows, state.neighbours.ravel()] = state.distance_var.ravel() <= settings.max_sd_mm**2
+    rigid = (rigid | rigid.T) & lost[:, None] & lost[None]
+    free, clusters = lost.copy(), []
+    for m in np.flatnonzero(lost):
+        if not free[m]:
+            continue
+        members = [m]
+        for j in np.flatnonzero(rigid[m] & free):
+            if rigid[j, members].all():
+                members.append(j)
+        if len(members) >= settings.min_members:
+            clusters.append(np.array(members))
+            free[members] = False
+    return clusters
+
+
+def learned_shape(state: MarkerState, cluster: NDArray[np.int64]) -> np.ndarray:
+    """``(k, 3)`` the members placed by classical MDS of their learned mean distances (any
+    pose, one of its two mirror images): a member last seen on another's point would bend
+    the last-seen positions, not the means learned over the take."""
+    k = len(cluster)
+    apart = np.zeros((k, k))
+    table = state.neighbours[cluster]
+    rows, cols = np.nonzero(np.isin(table, cluster))
+    slot = np.searchsorted(cluster, table[rows, cols], sorter=np.argsort(cluster))
+    other = np.argsort(cluster)[slot]
+    apart[rows, other] = state.distance_mean[cluster][rows, cols]
+    apart = np.where(apart > 0, apart, apart.T)
+    apart = (apart + apart.T) / 2
+    centre = np.eye(k) - 1.0 / k
+    value, vector = np.linalg.eigh(-0.5 * centre @ apart**2 @ centre)
+    top = np.argsort(value)[::-1][:3]
+    shape: np.ndarray = vector[:, top] * np.sqrt(np.maximum(value[top], 0.0))
+    return shape
+
+
+def _pair_var(state: MarkerState, cluster: NDArray[np.int64]) -> np.ndarray:
+    """The learned distance variances among ``cluster``'s members (as the neighbour table has them)."""
+    table = state.neighbours[cluster]
+    inside = np.isin(table, cluster)
+    var: np.ndarray = state.distance_var[cluster][inside]
+    return var
+
+
+def _placed(shape: np.ndarray, points: np.ndarray, tol: float, min_explained: int) -> np.ndarray | None:
+    """``(k, 3)`` the members on the points of the one fit of ``shape`` that explains them all
+    (module doc); None when none does, or two do with different points."""
+    mirror = shape * np.array([1.0, 1.0, -1.0])
+    a, b, c = _widest(shape)
+    d_shape, d_points = cdist(shape, shape), cdist(points, points)
+    near = [np.abs(d_points - d_shape[u, v]) <= tol for u, v in ((a, b), (a, c), (b, c))]
+    i, j = np.nonzero(near[0])
+    triples = [(p, q, r) for p, q in zip(i, j) for r in np.flatnonzero(near[1][p] & near[2][q])]
+    if not triples:
+        return None
+    target = np.tile(points[np.array(triples)], (2, 1, 1))  # (2T, 3, 3): each triple, each mirror image
+    shapes = np.repeat(np.stack([shape, mirror]), len(triples), axis=0)  # (2T, k, 3)
+    rotation, c_s, c_t = rigid_transform(shapes[:, [a, b, c]], target, np.ones(target.shape[:2]))
+    moved = np.einsum("tij,tkj->tki", rotation, shapes - c_s[:, None]) + c_t[:, None]
+    distance = cdist(moved.reshape(-1, 3), points).reshape(len(target), len(shape), len(points))
+    nearest, within = distance.argmin(axis=2), distance.min(axis=2) <= tol
+    explained = within.sum(axis=1)
+    if explained.max() < min_explained:
+        return None
+    tops = np.flatnonzero(explained == explained.max())
+    readings = {tuple(np.where(within[t], nearest[t], -1)) for t in tops}
+    if len(readings) > 1:  # the plate fits another way as well: its symmetry, or a lookalike
+        return None
+    placed: np.ndarray = np.where(within[tops[0]][:, None], points[nearest[tops[0]]], np.nan)
+    return placed
+
+
+def _widest(shape: np.ndarray) -> tuple[int, int, int]:
+    """The three members spanning the largest triangle: the best-conditioned fit."""
+    k = len(shape)
+    best, area = (0, 1, 2), -1.0
+    for u in range(k):
+        for v in range(u + 1, k):
+            for w in range(v + 1, k):
+                spread = float(np.linalg.norm(np.cross(shape[v] - shape[u], shape[w] - shape[u])))
+                if spread > area:
+                    best, area = (u, v, w), spread
+    return best
