@@ -8,6 +8,7 @@ import numpy as np
 from scipy.spatial.distance import pdist
 from scipy.spatial.transform import Rotation
 
+from formulations.markers import cluster_search
 from formulations.markers.cluster_search import search_lost_clusters
 from formulations.markers.reacquire import REACQUISITION, realign_lost, refine_by_segment
 from formulations.markers.state import MarkerState
@@ -146,3 +147,20 @@ def test_a_member_seen_again_leaves_too_few_lost_mates_to_search():
     found = search_lost_clusters(guess, state, lost, back)
     assert np.allclose(found[CHAIR], guess[CHAIR])
     assert np.allclose(found[WHEEL], back[WHEEL])
+
+
+def test_a_member_absent_from_the_widest_three_does_not_keep_its_plate_unfound(monkeypatch):
+    """The basket sprint's upper arm: its cluster holds the elbow marker, which spans the widest
+    triangle with two plate markers and is absent while the arm is back in view."""
+    elbow = len(BODY)
+    body = np.vstack([BODY, [-250.0, 320.0, 90.0]])  # still with the chair: rigid with it
+    state = _away(_learned_state(body))
+    back = _returned([np.r_[CHAIR, elbow], WHEEL, HEAD], body)
+    seen = np.delete(back, elbow, axis=0)
+    lost = np.ones(len(body), bool)
+    guess = state.predict()
+    found = search_lost_clusters(guess, state, lost, seen)
+    assert np.allclose(found[CHAIR], back[CHAIR]) and np.allclose(found[elbow], guess[elbow])
+    # Fitted by the widest three alone (the elbow among them), the plate is not found.
+    monkeypatch.setattr(cluster_search, "_spanning_triples", lambda shape: [cluster_search._widest(shape, set())])
+    assert np.allclose(search_lost_clusters(guess, state, lost, seen)[CHAIR], guess[CHAIR])

@@ -2,15 +2,19 @@
 
 ``realign_lost`` registers a lost group to the cloud by ICP from two translations: it finds
 a subject who comes back in the posture and heading it left in. The wheelchair basketball
-sprint (kineticstoolkit, from frame 1632) loses every marker at frame 2181; the points come
-back from frame 2880 a metre away, the chair turned by about 140 degrees, the wheel turned on
-it and the arm moved, and no one rigid fit of the whole group is within 26 mm of them. Its
+sprint (kineticstoolkit, from frame 1632) loses every marker at frame 2181; its upper arm is
+in view again on and off soon after, and the rest from frame 2880 a metre away, the chair
+turned by about 140 degrees and the wheel turned on it: no one rigid fit of the whole group
+is within 26 mm of them. Its
 markers sit in plates of four (chair, wheel, upper arm, forearm), and a plate's distances do
 not depend on pose.
 
 So each cluster of ``min_members`` or more lost markers rigid with each other (learned sd of
 every pair at most ``max_sd_mm``, a clique of the neighbour tables) is looked for by its
-three markers spread widest, a, b, c: every triple (i, j, l) of free points with
+three markers spread widest, a, b, c, and again by the widest three without each of them (a
+member may be absent when its plate comes back: the sprint's upper arm came back into view
+for 700 frames without the elbow marker of its cluster): every triple (i, j, l) of free
+points with
 
     | ||x_i - x_j|| - d_ab | <= tol,  | ||x_i - x_l|| - d_ac | <= tol,  | ||x_j - x_l|| - d_bc | <= tol,
 
@@ -35,6 +39,7 @@ predictions moved onto their points; the window then decides what they take.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import combinations
 
 import numpy as np
 from numpy.typing import NDArray
@@ -140,21 +145,15 @@ def _pair_var(state: MarkerState, cluster: NDArray[np.int64]) -> np.ndarray:
 
 
 def _placed(shape: np.ndarray, points: np.ndarray, tol: float, min_explained: int) -> np.ndarray | None:
-    """``(k, 3)`` the members on the points of the one fit of ``shape`` that explains them all
-    (module doc); None when none does, or two do with different points."""
-    mirror = shape * np.array([1.0, 1.0, -1.0])
-    a, b, c = _widest(shape)
-    d_shape, d_points = cdist(shape, shape), cdist(points, points)
-    near = [np.abs(d_points - d_shape[u, v]) <= tol for u, v in ((a, b), (a, c), (b, c))]
-    i, j = np.nonzero(near[0])
-    triples = [(p, q, r) for p, q in zip(i, j) for r in np.flatnonzero(near[1][p] & near[2][q])]
-    if not triples:
+    """``(k, 3)`` the members on the points of the one fit of ``shape`` that explains the most
+    of them, NaN for a member it does not (module doc); None when it explains fewer than
+    ``min_explained``, or another fit explains as many with other points."""
+    d_points = cdist(points, points)
+    fits = [f for triple in _spanning_triples(shape) if (f := _fits(shape, points, d_points, triple, tol)) is not None]
+    if not fits:
         return None
-    target = np.tile(points[np.array(triples)], (2, 1, 1))  # (2T, 3, 3): each triple, each mirror image
-    shapes = np.repeat(np.stack([shape, mirror]), len(triples), axis=0)  # (2T, k, 3)
-    rotation, c_s, c_t = rigid_transform(shapes[:, [a, b, c]], target, np.ones(target.shape[:2]))
-    moved = np.einsum("tij,tkj->tki", rotation, shapes - c_s[:, None]) + c_t[:, None]
-    distance = cdist(moved.reshape(-1, 3), points).reshape(len(target), len(shape), len(points))
+    moved = np.concatenate(fits)
+    distance = cdist(moved.reshape(-1, 3), points).reshape(len(moved), len(shape), len(points))
     nearest, within = distance.argmin(axis=2), distance.min(axis=2) <= tol
     explained = within.sum(axis=1)
     if explained.max() < min_explained:
@@ -167,14 +166,40 @@ def _placed(shape: np.ndarray, points: np.ndarray, tol: float, min_explained: in
     return placed
 
 
-def _widest(shape: np.ndarray) -> tuple[int, int, int]:
-    """The three members spanning the largest triangle: the best-conditioned fit."""
-    k = len(shape)
+def _fits(
+    shape: np.ndarray, points: np.ndarray, d_points: np.ndarray, triple: tuple[int, int, int], tol: float,
+) -> np.ndarray | None:
+    """``(2T, k, 3)`` ``shape`` and its mirror image moved by the Kabsch fit of members
+    ``triple`` onto each of the T triples of points with their three distances; None if none."""
+    a, b, c = triple
+    d_shape = cdist(shape, shape)
+    near = [np.abs(d_points - d_shape[u, v]) <= tol for u, v in ((a, b), (a, c), (b, c))]
+    i, j = np.nonzero(near[0])
+    pair, r = np.nonzero(near[1][i] & near[2][j])
+    if not len(pair):
+        return None
+    triples = np.column_stack([i[pair], j[pair], r])
+    target = np.tile(points[triples], (2, 1, 1))  # (2T, 3, 3): each triple, each mirror image
+    mirror = shape * np.array([1.0, 1.0, -1.0])
+    shapes = np.repeat(np.stack([shape, mirror]), len(triples), axis=0)  # (2T, k, 3)
+    rotation, c_s, c_t = rigid_transform(shapes[:, [a, b, c]], target, np.ones(target.shape[:2]))
+    moved: np.ndarray = np.einsum("tij,tkj->tki", rotation, shapes - c_s[:, None]) + c_t[:, None]
+    return moved
+
+
+def _spanning_triples(shape: np.ndarray) -> list[tuple[int, int, int]]:
+    """The three members spanning the largest triangle (the best-conditioned fit), and for each
+    of them the widest three without it: a member absent when its plate comes back (the
+    basket sprint's elbow marker, in the upper arm's cluster) must not keep the plate unfound."""
+    widest = _widest(shape, set())
+    return [widest] + [_widest(shape, {m}) for m in widest]
+
+
+def _widest(shape: np.ndarray, without: set[int]) -> tuple[int, int, int]:
+    """The three members not in ``without`` spanning the largest triangle."""
     best, area = (0, 1, 2), -1.0
-    for u in range(k):
-        for v in range(u + 1, k):
-            for w in range(v + 1, k):
-                spread = float(np.linalg.norm(np.cross(shape[v] - shape[u], shape[w] - shape[u])))
-                if spread > area:
-                    best, area = (u, v, w), spread
+    for u, v, w in combinations(sorted(set(range(len(shape))) - without), 3):
+        spread = float(np.linalg.norm(np.cross(shape[v] - shape[u], shape[w] - shape[u])))
+        if spread > area:
+            best, area = (u, v, w), spread
     return best
