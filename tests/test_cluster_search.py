@@ -162,5 +162,6 @@ def test_a_member_absent_from_the_widest_three_does_not_keep_its_plate_unfound(m
     found = search_lost_clusters(guess, state, lost, seen)
     assert np.allclose(found[CHAIR], back[CHAIR]) and np.allclose(found[elbow], guess[elbow])
     # Fitted by the widest three alone (the elbow among them), the plate is not found.
-    monkeypatch.setattr(cluster_search, "_spanning_triples", lambda shape: [cluster_search._widest(shape, set())])
+    widest_only = cluster_search._spanning_triples
+    monkeypatch.setattr(cluster_search, "_spanning_triples", lambda shape: widest_only(shape)[:1])
     assert np.allclose(search_lost_clusters(guess, state, lost, seen)[CHAIR], guess[CHAIR])

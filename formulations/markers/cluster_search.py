@@ -191,15 +191,9 @@ def _spanning_triples(shape: np.ndarray) -> list[tuple[int, int, int]]:
     """The three members spanning the largest triangle (the best-conditioned fit), and for each
     of them the widest three without it: a member absent when its plate comes back (the
     basket sprint's elbow marker, in the upper arm's cluster) must not keep the plate unfound."""
-    widest = _widest(shape, set())
-    return [widest] + [_widest(shape, {m}) for m in widest]
-
-
-def _widest(shape: np.ndarray, without: set[int]) -> tuple[int, int, int]:
-    """The three members not in ``without`` spanning the largest triangle."""
-    best, area = (0, 1, 2), -1.0
-    for u, v, w in combinations(sorted(set(range(len(shape))) - without), 3):
-        spread = float(np.linalg.norm(np.cross(shape[v] - shape[u], shape[w] - shape[u])))
-        if spread > area:
-            best, area = (u, v, w), spread
-    return best
+    triples = np.array(list(combinations(range(len(shape)), 3)))
+    u, v, w = shape[triples].transpose(1, 0, 2)
+    area = np.linalg.norm(np.cross(v - u, w - u), axis=1)
+    widest = triples[area.argmax()]
+    chosen = [widest] + [triples[np.where((triples != m).all(axis=1), area, -1.0).argmax()] for m in widest]
+    return [(int(a), int(b), int(c)) for a, b, c in chosen]
