@@ -5,9 +5,8 @@ a subject who comes back in the posture and heading it left in. The wheelchair b
 sprint (kineticstoolkit, from frame 1632) loses every marker at frame 2181; its upper arm is
 in view again on and off soon after, and the rest from frame 2880 a metre away, the chair
 turned by about 140 degrees and the wheel turned on it: no one rigid fit of the whole group
-is within 26 mm of them. Its
-markers sit in plates of four (chair, wheel, upper arm, forearm), and a plate's distances do
-not depend on pose.
+is within 26 mm of them. Its markers sit in plates of four (chair, wheel, upper arm,
+forearm), and a plate's distances do not depend on pose.
 
 So each cluster of ``min_members`` or more lost markers rigid with each other (learned sd of
 every pair at most ``max_sd_mm``, a clique of the neighbour tables) is looked for by its
