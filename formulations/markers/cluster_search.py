@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.distance import cdist
 
+from formulations.markers.mirror import LearnedPairs
 from formulations.markers.reacquire import REACQUISITION, free_points
 from formulations.markers.rigid import rigid_transform
 from formulations.markers.state import MarkerState
@@ -77,10 +78,11 @@ def search_lost_clusters(
     points = free_points(points, guess[state.visible], REACQUISITION.claim_mm)
     if len(points) < settings.min_members:
         return guess
-    found, claimed = guess.copy(), []
-    for cluster in rigid_clusters(state, lost, settings):
-        tol = 3 * np.sqrt(_pair_var(state, cluster).max()) + settings.noise_mm
-        placed = _placed(learned_shape(state, cluster), points, tol, settings.min_members)
+    found, claimed, learned = guess.copy(), [], LearnedPairs.of(state)
+    for cluster in rigid_clusters(learned, lost, settings):
+        inside = np.ix_(cluster, cluster)
+        tol = 3 * np.sqrt(np.where(np.eye(len(cluster), dtype=bool), 0.0, learned.var[inside]).max()) + settings.noise_mm
+        placed = _placed(learned_shape(learned.mean[inside]), points, tol, settings.min_members)
         if placed is not None:
             kept = np.isfinite(placed).all(axis=1)
             found[cluster[kept]] = placed[kept]
@@ -93,14 +95,12 @@ def search_lost_clusters(
     return found
 
 
-def rigid_clusters(state: MarkerState, lost: np.ndarray, settings: ClusterSearch = CLUSTER_SEARCH) -> list[NDArray[np.int64]]:
-    """Cliques of lost markers whose every pair is a learned rigid neighbour pair, greedily
-    from each lost marker in turn (a marker joins one cluster)."""
-    n = len(state.position)
-    rigid = np.zeros((n, n), bool)
-    rows = np.repeat(np.arange(n), state.neighbours.shape[1])
-    rigid[rows, state.neighbours.ravel()] = state.distance_var.ravel() <= settings.max_sd_mm**2
+def rigid_clusters(learned: LearnedPairs, lost: np.ndarray, settings: ClusterSearch = CLUSTER_SEARCH) -> list[NDArray[np.int64]]:
+    """Cliques of lost markers whose every pair is learned rigid (in either marker's table),
+    greedily from each lost marker in turn (a marker joins one cluster)."""
+    rigid = learned.var <= settings.max_sd_mm**2
     rigid = (rigid | rigid.T) & lost[:, None] & lost[None]
+    np.fill_diagonal(rigid, False)
     free, clusters = lost.copy(), []
     for m in np.flatnonzero(lost):
         if not free[m]:
@@ -115,32 +115,18 @@ def rigid_clusters(state: MarkerState, lost: np.ndarray, settings: ClusterSearch
     return clusters
 
 
-def learned_shape(state: MarkerState, cluster: NDArray[np.int64]) -> np.ndarray:
-    """``(k, 3)`` the members placed by classical MDS of their learned mean distances (any
-    pose, one of its two mirror images): a member last seen on another's point would bend
-    the last-seen positions, not the means learned over the take."""
-    k = len(cluster)
-    apart = np.zeros((k, k))
-    table = state.neighbours[cluster]
-    rows, cols = np.nonzero(np.isin(table, cluster))
-    slot = np.searchsorted(cluster, table[rows, cols], sorter=np.argsort(cluster))
-    other = np.argsort(cluster)[slot]
-    apart[rows, other] = state.distance_mean[cluster][rows, cols]
-    apart = np.where(apart > 0, apart, apart.T)
-    apart = (apart + apart.T) / 2
+def learned_shape(mean: np.ndarray) -> np.ndarray:
+    """``(k, 3)`` the members placed by classical MDS of their ``(k, k)`` learned mean distances
+    (either marker's, averaged where both keep the pair; any pose, one of its two mirror
+    images): a member last seen on another's point would bend the last-seen positions, not
+    the means learned over the take."""
+    k = len(mean)
+    apart = np.where(np.eye(k, dtype=bool), 0.0, (mean + mean.T) / 2)
     centre = np.eye(k) - 1.0 / k
     value, vector = np.linalg.eigh(-0.5 * centre @ apart**2 @ centre)
     top = np.argsort(value)[::-1][:3]
     shape: np.ndarray = vector[:, top] * np.sqrt(np.maximum(value[top], 0.0))
     return shape
-
-
-def _pair_var(state: MarkerState, cluster: NDArray[np.int64]) -> np.ndarray:
-    """The learned distance variances among ``cluster``'s members (as the neighbour table has them)."""
-    table = state.neighbours[cluster]
-    inside = np.isin(table, cluster)
-    var: np.ndarray = state.distance_var[cluster][inside]
-    return var
 
 
 def _placed(shape: np.ndarray, points: np.ndarray, tol: float, min_explained: int) -> np.ndarray | None:
