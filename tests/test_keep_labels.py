@@ -130,3 +130,30 @@ def test_the_take_relearns_the_model_only_when_nothing_is_labeled(tmp_path: Path
     assert learned == []
     _labeled_right(tmp_path, source, subject, names, given)
     assert learned == [1]
+
+
+def test_a_model_that_lumps_segments_does_not_steer_the_kept_labels(tmp_path: Path) -> None:
+    """A model fitted where the subject barely moved joins segments the take then bends apart;
+    with the labels kept it only names the marker absent at the start (steered, 71 % right)."""
+    names, calm, _ = chain(3, frames=200, motion=0.06)
+    _, moving, _ = chain(3, frames=300, motion=0.6)  # the same markers, joints turning freely
+    model = fit_subject(names, calm).model
+    assert sorted(len(s.markers) for s in model.segments) == [8, 8]  # the setup: two segments lumped in each
+    subject = tmp_path / "subject.json"
+    subject.write_text(model.to_json())
+    given, rng = moving.copy(), np.random.default_rng(0)
+    for m in rng.choice(len(names), 6, replace=False):
+        start = int(rng.integers(20, 260))
+        given[start:start + 20, m] = np.nan
+    absent = 5
+    given[:30, absent] = np.nan
+    source, out = tmp_path / "take.c3d", tmp_path / "out.csv"
+    _write(source, names, given)
+    result = CliRunner().invoke(app, ["track", str(source), "--model", str(subject), "--start", "0", "--keep-labels",
+                                      "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    written = read_labeled(out)
+    right = np.linalg.norm(written.positions[:, [written.names.index(n) for n in names]] - given, axis=2) < 0.01
+    present = np.isfinite(given).all(axis=2)
+    assert right[present].mean() > 0.99
+    assert right[present[:, absent], absent].mean() > 0.95

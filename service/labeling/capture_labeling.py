@@ -84,7 +84,8 @@ class CaptureLabeling:
         self.n_windows = len(self._spans)
         self._capture, self._options, self._window = capture, options, options.window
         self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
-        self._second_pass = options.second_pass and capture.model is None and capture.points is not None
+        labeled = bool(np.isfinite(capture.first_frame).any())  # kept labels: the model only names (``ModelChain.steer``)
+        self._second_pass = options.second_pass and (capture.model is None or labeled) and capture.points is not None
         self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
             "nn-hungarian"), partial(self._labeled, repaired=False),
         ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
@@ -110,7 +111,7 @@ class CaptureLabeling:
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
             inner = association_chain(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
-            self._association: Association = ModelChain(inner, model, capture.points)
+            self._association: Association = ModelChain(inner, model, capture.points, steer=not labeled)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
             self._association = association_chain(capture, options, self.formulation.look_ahead)

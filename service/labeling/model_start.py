@@ -18,6 +18,13 @@ Before each window, at its template frame:
 After each window, an occluded marker's fill is where its segment's pose in that frame puts
 it (``segment_poses``: three labeled markers on the segment, else the joint chain); the
 inner chain's fill stays where the model poses nothing (single markers, unposed segments).
+
+With the user's labels kept (``steer`` False) only acquisition runs, and the take is labeled
+as without a model otherwise (``CaptureLabeling``: its second pass too; the start state keeps
+segment-mates as neighbours): the labels already name what they name, and a model fitted
+where the subject barely moved lumps segments whose recovery and following carry labeled
+markers wrongly (03_rolling from frame 562, a model of frames 0-561: 59.50 % steered, 82.88 %
+acquiring only; docs/subject-model.md).
 """
 
 from __future__ import annotations
@@ -97,6 +104,7 @@ class ModelChain:
     inner: Any  # CloudChain or Joint3dChain: pose, invert, assemble, views
     model: SubjectModel
     points: list[np.ndarray]
+    steer: bool = True  # recovery, segment-following, layout and fill; False: acquisition only
 
     def __post_init__(self) -> None:
         self._geometry = ModelGeometry.of(self.model)
@@ -114,6 +122,8 @@ class ModelChain:
         points = self.points[template]
         found = cache(partial(identify, self._geometry, points))  # recovery's, only when a segment contradicts
         state = self._acquired(state, points)
+        if not self.steer:
+            return self.inner.pose(state, template, last)
         state, repaired = recover(self._geometry, state, points, found)
         self.repaired.extend((template, s) for s in repaired)
         problem, inverse = self.inner.pose(follow_segments(self._geometry, state), template, last)
@@ -123,6 +133,8 @@ class ModelChain:
         return problem, (inverse, state, template)
 
     def invert(self, solution: WindowSolution, inverse: Any) -> WindowLabels:
+        if not self.steer:
+            return self.inner.invert(solution, inverse)
         inner, state, template = inverse
         labels: WindowLabels = self.inner.invert(solution, inner)
         return replace(labels, filled=self._filled(labels, state, template))
