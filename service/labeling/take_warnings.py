@@ -214,5 +214,5 @@ def model_misfit_warning(misfits: list[SegmentMisfit], frame: int) -> str | None
     worst = ", ".join(f"{m.segment} {m.off_mm:.0f} mm (tolerance {m.tolerance_mm:.0f})" for m in misfits[:4])
     return (f"warning: the labels of frame {frame} do not fit {len(misfits)} of the model's segments ({worst}"
             f"{' ...' if len(misfits) > 4 else ''}): the model may not describe this take (markers placed "
-            "otherwise, or segments lumped by a trial with little motion) and its steering can cost labels; "
-            "compare with a labeling without the model")
+            "otherwise, or segments lumped by a trial with little motion) and may name the markers the labels "
+            "leave out wrongly; compare with a labeling without the model")
