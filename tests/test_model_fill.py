@@ -162,3 +162,21 @@ def test_no_marker_is_acquired_from_a_reading_that_moves_a_seen_mate() -> None:
     turned.point[segment[[1, 2]]] = found.point[segment[[2, 1]]]  # the reading exchanges two seen mates
     kept = chain._acquired(state, frame, turned)
     assert not kept.visible[unseen] and np.array_equal(kept.position, state.position)
+
+
+def test_a_segment_the_labels_contradict_gives_its_markers_their_nearest_neighbours() -> None:
+    model, geometry, held = _held_out()
+    found = identify(geometry, held[0])
+    segment = geometry.segments[1]
+    trusted = model_start_state(geometry, found, held[0], lost_after=3)
+    doubted = model_start_state(geometry, found, held[0], lost_after=3, misfit=frozenset({segment.name}))
+    k = trusted.neighbours.shape[1]
+    position = doubted.position
+    for marker in segment.markers:
+        mates = set(segment.markers) - {marker}
+        assert set(trusted.neighbours[marker, : len(mates)]) == mates  # segment-mates first
+        gap = np.linalg.norm(position - position[marker], axis=1)
+        gap[marker] = np.inf
+        assert list(doubted.neighbours[marker]) == list(np.argsort(gap)[:k])  # the nearest, brute force
+    other = geometry.segments[0].markers[0]
+    assert (doubted.neighbours[other] == trusted.neighbours[other]).all()  # other segments keep their mates

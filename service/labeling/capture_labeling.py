@@ -106,10 +106,10 @@ class CaptureLabeling:
             # their segments; relearning beside them cost 03_rolling's second half (labels of
             # frame 1152 kept, model of 0-1151) 10 points (69.45 % without, 59.48 % with) and
             # changed no label of the basket sprint, racing, BTS or the OpenSim walks (docs/subject-model.md).
-            if not np.isfinite(capture.first_frame).any():
-                model = learn_from_take(model, capture.points[: options.window])
+            model = model if labeled else learn_from_take(model, capture.points[: options.window])
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
-            self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame)
+            self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame,
+                                                         frozenset(m.segment for m in self.model_misfits))
             inner = association_chain(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
             self._association: Association = ModelChain(inner, model, capture.points, steer=not labeled)
         else:

@@ -60,12 +60,13 @@ LABEL_GATE_MM = 60.0  # a labeled first-frame position takes the point within th
 
 
 def model_first_frame(
-    model: SubjectModel, points: np.ndarray, labeled: np.ndarray | None = None,
+    model: SubjectModel, points: np.ndarray, labeled: np.ndarray | None = None, misfit: frozenset[str] = frozenset(),
 ) -> tuple[MarkerState, np.ndarray]:
     """The first marker state and ``(N, 3)`` the named markers' points (NaN where unnamed).
 
     ``labeled`` ``(N, 3)`` (model order, NaN where not labeled) are the user's labels of this
-    frame: they are kept, and the model names only the markers they leave out.
+    frame: they are kept, and the model names only the markers they leave out; ``misfit`` the
+    segments they contradict (``model_start_state``).
 
     Raises:
         InputError: The model names no point of the first frame.
@@ -75,7 +76,7 @@ def model_first_frame(
     if labeled is not None and np.isfinite(labeled).all(axis=1).any():
         found = _with_labels(geometry, found, points, np.asarray(labeled, dtype=float))
     try:
-        state = model_start_state(geometry, found, points, REACQUISITION.lost_after)
+        state = model_start_state(geometry, found, points, REACQUISITION.lost_after, misfit=misfit)
     except ValueError as error:
         hint = "; start where the subject is in view (track --start, or an upload's start=)" if len(points) < 3 else ""
         raise InputError(f"the start frame ({len(points)} points): {error}{hint}") from None
