@@ -21,10 +21,10 @@ inner chain's fill stays where the model poses nothing (single markers, unposed 
 
 With the user's labels kept (``steer`` False) only acquisition runs, and the take is labeled
 as without a model otherwise (``CaptureLabeling``: its second pass too; the start state keeps
-segment-mates as neighbours): the labels already name what they name, and a model fitted
-where the subject barely moved lumps segments whose recovery and following carry labeled
-markers wrongly (03_rolling from frame 562, a model of frames 0-561: 59.50 % steered, 82.88 %
-acquiring only; docs/subject-model.md).
+segment-mates as neighbours where the labels fit the segment): the labels already name what
+they name, and a model fitted where the subject barely moved lumps segments whose recovery
+and following carry labeled markers wrongly (03_rolling from frame 562, a model of frames
+0-561: 59.50 % steered, 82.88 % acquiring only; docs/subject-model.md).
 """
 
 from __future__ import annotations
