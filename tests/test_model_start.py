@@ -121,3 +121,22 @@ def test_a_capture_json_whose_markers_the_model_lacks_is_refused() -> None:
             "markers": names, "first_frame": positions[FIT, :4].tolist()}
     with pytest.raises(InputError, match=r"^c.json: markers: only 0 of its 4 markers are in the model \(not in it: OTHER0"):
         read_capture_document(json.dumps(body), "c.json")
+
+
+def test_the_frame_by_frame_reading_of_an_identified_take_acquires_from_the_model_too() -> None:
+    """An identified take is read frame by frame as well (``rival_reading``), with the model
+    naming late markers there too: a reading that never names them could not be merged in."""
+    names, positions, model = _take()
+    order = [names.index(n) for n in model_names(model)]
+    held = positions[FIT:, order]
+    absent = np.zeros(held.shape[:2], bool)
+    late = 5
+    absent[:30, late] = True
+    frames, owner = _cloud(held, absent)
+    capture = Capture(model_names(model), np.full((len(order), 3), np.nan), 100.0, points=frames, model=model)
+    labeling = CaptureLabeling(capture, LabelingOptions(window=10))
+    outcomes = labeling.read_frame_by_frame()
+    assert outcomes is not None
+    took = labeling.assembled(outcomes, repaired=False).point_index
+    right = [owner[f][took[f, late]] == late for f in range(40, len(frames)) if took[f, late] >= 0]
+    assert len(right) > 0.9 * (len(frames) - 40) and np.mean(right) > 0.95

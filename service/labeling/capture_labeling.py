@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import nullcontext
-from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -50,7 +49,7 @@ from service.labeling.extension import extended
 from service.labeling.joint_3d import Joint3dChain
 from service.labeling.leftover_points import with_leftover_points
 from service.labeling.loop import Observer, Progress, first_marker_state, label_windows
-from service.labeling.model_start import ModelChain, model_first_frame
+from service.labeling.model_start import model_chains, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
@@ -85,11 +84,7 @@ class CaptureLabeling:
         self._capture, self._options, self._window = capture, options, options.window
         self.fingerprint = capture_fingerprint(capture)  # what its outcomes carry, so they resume only this take
         labeled = bool(np.isfinite(capture.first_frame).any())  # kept labels: the model only names (``ModelChain.steer``)
-        self._second_pass = options.second_pass and (capture.model is None or labeled) and capture.points is not None
-        self._rival = RivalReading(association_chain(capture, options, look_ahead=False), resolve_formulation(
-            "nn-hungarian"), partial(self._labeled, repaired=False),
-        ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
-        self._early = None if self._rival is None else EarlyStart(capture, options)  # the reading beside, started early
+        self._second_pass = options.second_pass and capture.points is not None
         self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
@@ -100,21 +95,23 @@ class CaptureLabeling:
         self.shape_breaks: list[ShapeBreak] = []  # labels off their rigid neighbours in the last result (``shape_doubt``)
         self.model_misfits: list[SegmentMisfit] = []  # segments the user's labels say the model gets wrong
         self.detections_taken: np.ndarray | None = None  # camera mode: per camera, the share a marker took
+        self._association: Association
         model = capture.model
         if model is not None and capture.points is not None:
-            # Identified, nothing labeled: the take may correct the model. Labels already place
-            # their segments; relearning beside them cost 03_rolling's second half (labels of
-            # frame 1152 kept, model of 0-1151) 10 points (69.45 % without, 59.48 % with) and
-            # changed no label of the basket sprint, racing, BTS or the OpenSim walks (docs/subject-model.md).
+            # Identified, nothing labeled: the take may correct the model. Labels already place their
+            # segments (relearning beside them cost 03_rolling's second half 10 points, docs/subject-model.md).
             model = model if labeled else learn_from_take(model, capture.points[: options.window])
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame,
                                                          frozenset(m.segment for m in self.model_misfits))
-            inner = association_chain(replace(capture, first_frame=first_frame), options, self.formulation.look_ahead)
-            self._association: Association = ModelChain(inner, model, capture.points, steer=not labeled)
+            self._association, rival = model_chains(capture, model, first_frame, options, self.formulation.look_ahead)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
             self._association = association_chain(capture, options, self.formulation.look_ahead)
+            rival = association_chain(capture, options, look_ahead=False)
+        self._rival = RivalReading(rival, resolve_formulation("nn-hungarian"), partial(self._labeled, repaired=False),
+                                   ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+        self._early = None if self._rival is None else EarlyStart(capture, options)  # the reading beside, started early
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(
