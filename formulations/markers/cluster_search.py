@@ -79,10 +79,11 @@ def search_lost_clusters(
     if len(points) < settings.min_members:
         return guess
     found, claimed, learned = guess.copy(), [], LearnedPairs.of(state)
+    d_points = cdist(points, points)  # once for every cluster's triples
     for cluster in rigid_clusters(learned, lost, settings):
         inside = np.ix_(cluster, cluster)
         tol = 3 * np.sqrt(np.where(np.eye(len(cluster), dtype=bool), 0.0, learned.var[inside]).max()) + settings.noise_mm
-        placed = _placed(learned_shape(learned.mean[inside]), points, tol, settings.min_members)
+        placed = _placed(learned_shape(learned.mean[inside]), points, d_points, tol, settings.min_members)
         if placed is not None:
             kept = np.isfinite(placed).all(axis=1)
             found[cluster[kept]] = placed[kept]
@@ -129,12 +130,14 @@ def learned_shape(mean: np.ndarray) -> np.ndarray:
     return shape
 
 
-def _placed(shape: np.ndarray, points: np.ndarray, tol: float, min_explained: int) -> np.ndarray | None:
+def _placed(
+    shape: np.ndarray, points: np.ndarray, d_points: np.ndarray, tol: float, min_explained: int,
+) -> np.ndarray | None:
     """``(k, 3)`` the members on the points of the one fit of ``shape`` that explains the most
     of them, NaN for a member it does not (module doc); None when it explains fewer than
-    ``min_explained``, or another fit explains as many with other points."""
-    d_points = cdist(points, points)
-    fits = [f for triple in _spanning_triples(shape) if (f := _fits(shape, points, d_points, triple, tol)) is not None]
+    ``min_explained``, or another fit explains as many with other points; ``d_points`` their distances."""
+    d_shape = cdist(shape, shape)
+    fits = [f for triple in _spanning_triples(shape) if (f := _fits(shape, d_shape, points, d_points, triple, tol)) is not None]
     if not fits:
         return None
     moved = np.concatenate(fits)
@@ -152,12 +155,12 @@ def _placed(shape: np.ndarray, points: np.ndarray, tol: float, min_explained: in
 
 
 def _fits(
-    shape: np.ndarray, points: np.ndarray, d_points: np.ndarray, triple: tuple[int, int, int], tol: float,
+    shape: np.ndarray, d_shape: np.ndarray, points: np.ndarray, d_points: np.ndarray, triple: tuple[int, int, int],
+    tol: float,
 ) -> np.ndarray | None:
     """``(2T, k, 3)`` ``shape`` and its mirror image moved by the Kabsch fit of members
     ``triple`` onto each of the T triples of points with their three distances; None if none."""
     a, b, c = triple
-    d_shape = cdist(shape, shape)
     near = [np.abs(d_points - d_shape[u, v]) <= tol for u, v in ((a, b), (a, c), (b, c))]
     i, j = np.nonzero(near[0])
     pair, r = np.nonzero(near[1][i] & near[2][j])

@@ -104,7 +104,8 @@ class CaptureLabeling:
             self.model_misfits = labeled_misfits(ModelGeometry.of(model), np.asarray(capture.first_frame, dtype=float))
             self._first, first_frame = model_first_frame(model, capture.points[0], capture.first_frame,
                                                          frozenset(m.segment for m in self.model_misfits))
-            self._association, rival = model_chains(capture, model, first_frame, options, self.formulation.look_ahead)
+            self._association, rival = model_chains(capture, model, first_frame, options, self.formulation.look_ahead,
+                                                    labeled)
         else:
             self._first = first_marker_state(capture.names, capture.first_frame)
             self._association = association_chain(capture, options, self.formulation.look_ahead)

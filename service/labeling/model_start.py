@@ -89,16 +89,16 @@ def model_first_frame(
 
 def model_chains(
     capture: Capture, model: SubjectModel, first_frame: np.ndarray, options: LabelingOptions, look_ahead: bool,
+    labeled: bool,
 ) -> tuple[Association, Association]:
     """The window chain of a 3D-point ``capture`` with a model, named at its start as in
     ``first_frame``, and the chain its frame-by-frame reading (``rival_reading``) takes.
 
-    With the user's labels kept the model only names (``steer`` False) and the reading is one
+    With the user's labels kept (``labeled``) the model only names (``steer`` False) and the reading is one
     without a model. Identified, both are steered: read without the model, a take the model
     started is read from a state it cannot follow (second halves from a model of the first,
     ``bench/model_start.py``: 03_rolling 44.81 against 60.87 % steered, BTS 93.74 against 99.41).
     """
-    labeled = bool(np.isfinite(capture.first_frame).any())
     points = list(capture.points or [])
     named = replace(capture, first_frame=first_frame)
     windows = ModelChain(association_chain(named, options, look_ahead), model, points, steer=not labeled)
