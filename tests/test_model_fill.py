@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 from test_model_start import FIT, _cloud, _take
 
@@ -19,6 +20,7 @@ from formulations.subject.segment_pose import RIGID_WITHIN, segment_poses
 from formulations.subject.start_state import model_start_state
 from service.capture.capture import Capture, LabelingOptions
 from service.capture.model_input import model_names, with_model
+from service.labeling import model_start
 from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.model_start import ModelChain, segment_layout
 
@@ -162,6 +164,25 @@ def test_no_marker_is_acquired_from_a_reading_that_moves_a_seen_mate() -> None:
     turned.point[segment[[1, 2]]] = found.point[segment[[2, 1]]]  # the reading exchanges two seen mates
     kept = chain._acquired(state, frame, turned)
     assert not kept.visible[unseen] and np.array_equal(kept.position, state.position)
+
+
+
+def test_acquisition_searches_the_cloud_only_when_a_point_is_free(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A marker is acquired only on a point no seen marker holds: with its own point missing
+    and every other point held there is nothing to name, and the model's search (most of a
+    dense take's time with a model) is not run; with its point back it is acquired there."""
+    model, geometry, held = _held_out()
+    frame = held[50]
+    state = model_start_state(geometry, identify(geometry, frame), frame, lost_after=3)
+    unseen = geometry.segments[2].markers[0]
+    state = replace(state, unseen=np.where(np.arange(len(frame)) == unseen, 5, state.unseen))
+    chain = ModelChain(inner=None, model=model, points=[frame])
+    searched: list[int] = []
+    monkeypatch.setattr(model_start, "identify", lambda *args: searched.append(1) or identify(*args))
+    without = np.delete(frame, unseen, axis=0)
+    assert chain._acquired(state, without) is state and not searched
+    acquired = chain._acquired(state, frame)
+    assert searched and acquired.visible[unseen] and np.allclose(acquired.position[unseen], frame[unseen])
 
 
 def test_a_segment_the_labels_contradict_gives_its_markers_their_nearest_neighbours() -> None:

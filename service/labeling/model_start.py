@@ -184,12 +184,16 @@ class ModelChain:
     def _acquired(self, state: MarkerState, points: np.ndarray, found: Identification | None = None) -> MarkerState:
         """Unseen markers named in the template's cloud by ``found``: by default an identification
         that searches only for the segments with a marker unseen, the others read from their
-        labels where those fit (``labeled_reading``)."""
+        labels where those fit (``labeled_reading``), and none at all when seen markers hold
+        every point (a marker is acquired only on a free point; 03_rolling with labels kept:
+        half its windows' template frames, the search most of the labeling's time)."""
         unseen = ~state.visible
         if not unseen.any() or len(points) == 0:
             return state
         holder = point_holders(state, points)  # (P,) the seen marker on each point, -1 none
         held = holder >= 0
+        if held.all():  # a marker is acquired only on a point no seen marker holds
+            return state
         point_of = np.full(len(unseen), -1, dtype=np.int64)  # (N,) the point each seen marker holds
         point_of[holder[held]] = np.flatnonzero(held)
         if found is None:
