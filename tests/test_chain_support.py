@@ -83,9 +83,9 @@ def test_a_reading_with_fewer_inliers_than_the_best_is_not_credited() -> None:
     points = _frame(1)
     distance = cdist(points, points)
     by_segment = [segment_hypotheses(s, segment, points, distance) for s, segment in enumerate(geometry.segments)]
-    true = next(h for h in by_segment[0] if np.array_equal(h.point, np.arange(3)))
-    short = Hypothesis(0, true.pose, np.array([0, 1, -1]), 0.0)  # the true pose, one inlier short
+    at = next(i for i, h in enumerate(by_segment[0]) if np.array_equal(h.point, np.arange(3)))  # rows are distinct
+    short = Hypothesis(0, by_segment[0][at].pose, np.array([0, 1, -1]), 0.0)  # the true pose, one inlier short
     by_segment[0] = [*by_segment[0], short]
     support = chain_support(geometry, by_segment, points)[0]
-    assert support[next(i for i, h in enumerate(by_segment[0]) if h is true)] == 2  # by identity: == compares arrays
+    assert support[at] == 2
     assert support[-1] == 0

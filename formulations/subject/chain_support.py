@@ -24,6 +24,8 @@ in view, and crediting a reading with one inlier fewer turned a pelvis over.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -34,7 +36,7 @@ from formulations.subject.joint_place import place_by_joint
 Array = NDArray[np.float64]
 
 
-def chain_support(geometry: ModelGeometry, by_segment: list[list[Hypothesis]], points: Array) -> list[Array]:
+def chain_support(geometry: ModelGeometry, by_segment: Sequence[Sequence[Hypothesis]], points: Array) -> list[Array]:
     """Per segment, ``(|H_s|,)`` markers of hypothesis-less jointed segments each hypothesis places."""
     support = [np.zeros(len(h)) for h in by_segment]
     unclaimed = np.ones(len(points), bool)  # points no segment's best reading takes

@@ -14,8 +14,10 @@ base, so a segment is found with any three of its markers visible.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import combinations
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,7 +56,31 @@ class Hypothesis:
         return int((self.point >= 0).sum())
 
 
-def segment_hypotheses(segment: int, geometry: SegmentGeometry, points: Array, distance: Array) -> list[Hypothesis]:
+@dataclass(frozen=True)
+class Hypotheses(Sequence[Hypothesis]):
+    """A segment's hypotheses as arrays, best first; a ``Hypothesis`` is made only when one is
+    read (a dense cloud's segments have thousands, and the tree choice reads the arrays)."""
+
+    segment: int
+    rotation: Array  # (H, 3, 3)
+    origin: Array  # (H, 3)
+    point: Index  # (H, S)
+    rms: Array  # (H,)
+
+    def __len__(self) -> int:
+        return len(self.rms)
+
+    @overload
+    def __getitem__(self, k: int) -> Hypothesis: ...
+    @overload
+    def __getitem__(self, k: slice) -> Sequence[Hypothesis]: ...
+    def __getitem__(self, k: int | slice) -> Hypothesis | Sequence[Hypothesis]:
+        if isinstance(k, slice):
+            return [self[i] for i in range(len(self))[k]]
+        return Hypothesis(self.segment, Pose(self.rotation[k], self.origin[k]), self.point[k], float(self.rms[k]))
+
+
+def segment_hypotheses(segment: int, geometry: SegmentGeometry, points: Array, distance: Array) -> Sequence[Hypothesis]:
     """Distinct hypotheses with at least three inliers, best first.
 
     Args:
@@ -80,12 +106,12 @@ def segment_hypotheses(segment: int, geometry: SegmentGeometry, points: Array, d
     return _refined(segment, u, tau, placed, points)
 
 
-def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -> list[Hypothesis]:
+def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -> Sequence[Hypothesis]:
     """Inliers of each placed constellation, refitted on them; duplicates dropped, best first.
 
     Vectorised over the hypotheses (a frame's segments have hundreds each): the nearest point
-    of every placed marker by one k-d tree query, every refit at once, and Python objects only
-    for the survivors.
+    of every placed marker by one k-d tree query, every refit at once, and no Python object
+    per hypothesis (``Hypotheses``).
     """
     gap, nearest = cKDTree(points).query(placed.reshape(-1, 3))
     gap, nearest = gap.reshape(placed.shape[:2]), nearest.reshape(placed.shape[:2])
@@ -108,5 +134,4 @@ def _refined(segment: int, u: Array, tau: Array, placed: Array, points: Array) -
     rms = np.sqrt((np.where(ok, residual, 0.0) ** 2).sum(axis=1) / np.maximum(count, 1))
     good = np.flatnonzero((count >= 3) & distinct)
     good = good[np.lexsort((rms[good], -count[good]))]
-    point, rms_of = np.where(ok, taken, -1), rms.tolist()  # once, not per hypothesis
-    return [Hypothesis(segment, Pose(rotation[h], origin[h]), point[h], rms_of[h]) for h in good]
+    return Hypotheses(segment, rotation[good], origin[good], np.where(ok, taken, -1)[good], rms[good])

@@ -15,13 +15,14 @@ where ``none`` is compatible with everything (an unseen segment does not constra
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.distance import cdist
 
-from formulations.subject.constellation import Hypothesis
+from formulations.subject.constellation import Hypotheses, Hypothesis
 from formulations.subject.geometry import ModelGeometry
 
 Array = NDArray[np.float64]
@@ -29,7 +30,7 @@ Mask = NDArray[np.bool_]
 
 
 def choose_hypotheses(
-    geometry: ModelGeometry, by_segment: list[list[Hypothesis]], points: int, support: list[Array] | None = None,
+    geometry: ModelGeometry, by_segment: Sequence[Sequence[Hypothesis]], points: int, support: list[Array] | None = None,
 ) -> dict[int, Hypothesis]:
     """The jointly best hypothesis of each segment that gets one.
 
@@ -81,15 +82,18 @@ class _Stacked:
     rms: Array  # (H,)
 
     @classmethod
-    def of(cls, hypotheses: list[Hypothesis], points: int) -> _Stacked:
+    def of(cls, hypotheses: Sequence[Hypothesis], points: int) -> _Stacked:
         if not hypotheses:
             return cls(np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, points), bool), np.zeros(0), np.zeros(0))
-        taken = np.stack([h.point for h in hypotheses])
+        if isinstance(hypotheses, Hypotheses):
+            rotation, origin, taken, rms = hypotheses.rotation, hypotheses.origin, hypotheses.point, hypotheses.rms
+        else:
+            rotation, origin = np.stack([h.pose.rotation for h in hypotheses]), np.stack([h.pose.origin for h in hypotheses])
+            taken, rms = np.stack([h.point for h in hypotheses]), np.array([h.rms for h in hypotheses])
         rows, cols = np.nonzero(taken >= 0)
         uses = np.zeros((len(hypotheses), points), bool)
         uses[rows, taken[rows, cols]] = True
-        return cls(np.stack([h.pose.rotation for h in hypotheses]), np.stack([h.pose.origin for h in hypotheses]),
-                   uses, (taken >= 0).sum(axis=1).astype(float), np.array([h.rms for h in hypotheses]))
+        return cls(rotation, origin, uses, (taken >= 0).sum(axis=1).astype(float), rms)
 
     def place(self, local: Array) -> Array:
         """``(H, 3)`` where each hypothesis puts the point ``local`` of the segment frame."""
