@@ -56,7 +56,7 @@ class Hypothesis:
         return int((self.point >= 0).sum())
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # arrays: compared by identity, never element by element
 class Hypotheses(Sequence[Hypothesis]):
     """A segment's hypotheses as arrays, best first; a ``Hypothesis`` is made only when one is
     read (a dense cloud's segments have thousands, and the tree choice reads the arrays)."""
