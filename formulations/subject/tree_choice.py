@@ -77,14 +77,15 @@ class _Stacked:
 
     rotation: Array  # (H, 3, 3)
     origin: Array  # (H, 3)
-    uses: Mask  # (H, points): the points each hypothesis takes
+    uses: NDArray[np.uint8]  # (H, ceil(points / 8)): the points each hypothesis takes, as packed bit rows
     inliers: Array  # (H,)
     rms: Array  # (H,)
 
     @classmethod
     def of(cls, hypotheses: Sequence[Hypothesis], points: int) -> _Stacked:
         if not hypotheses:
-            return cls(np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, points), bool), np.zeros(0), np.zeros(0))
+            return cls(np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, (points + 7) // 8), np.uint8), np.zeros(0),
+                       np.zeros(0))
         if isinstance(hypotheses, Hypotheses):
             rotation, origin, taken, rms = hypotheses.rotation, hypotheses.origin, hypotheses.point, hypotheses.rms
         else:
@@ -93,7 +94,7 @@ class _Stacked:
         rows, cols = np.nonzero(taken >= 0)
         uses = np.zeros((len(hypotheses), points), bool)
         uses[rows, taken[rows, cols]] = True
-        return cls(rotation, origin, uses, (taken >= 0).sum(axis=1).astype(float), rms)
+        return cls(rotation, origin, np.packbits(uses, axis=1), (taken >= 0).sum(axis=1).astype(float), rms)
 
     def place(self, local: Array) -> Array:
         """``(H, 3)`` where each hypothesis puts the point ``local`` of the segment frame."""
@@ -114,8 +115,8 @@ def _compatible(a: _Stacked, b: _Stacked, centre_a: Array, centre_b: Array, tole
         return allowed
     close = np.nonzero(cdist(a.place(centre_a), b.place(centre_b)) <= tolerance)
     # Shared points looked for only in the pairs that meet at the joint (a few in a thousand
-    # on 03_rolling, whose segments have hundreds of hypotheses each), as packed bit rows.
-    shared = (np.packbits(a.uses, axis=1)[close[0]] & np.packbits(b.uses, axis=1)[close[1]]).any(axis=1)
+    # on 03_rolling, whose segments have hundreds of hypotheses each).
+    shared = (a.uses[close[0]] & b.uses[close[1]]).any(axis=1)
     allowed[:-1, :-1] = False
     allowed[close[0][~shared], close[1][~shared]] = True
     return allowed
