@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from formulations.markers.first_frame_shape import first_frame_disagreement
+from formulations.markers.first_frame_shape import CAP_MM, first_frame_disagreement, pair_offsets
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import take_spread
 
@@ -102,3 +102,26 @@ def test_nothing_labeled_together_is_nan_and_a_labeling_without_pairs_pays_the_c
     off = first_frame_disagreement([lonely, right], right[0], neighbours)
     assert off[0] == 50.0 and off[1] < 5.0
     assert np.isnan(first_frame_disagreement([lonely, lonely], right[0], neighbours)).all()
+
+
+
+
+def test_a_label_on_a_close_neighbours_point_costs_the_cap_though_it_bends_its_pairs_less() -> None:
+    """Marker 0 put on marker 1's point, 30 mm away, bends its pairs to markers 2 and 4 (60 and
+    57 mm off the other side) by 30 and 24 mm: under the 50 mm cap, so it cost less than
+    leaving 0 out did. Past the tolerance (half its nearest-neighbour distance, as 5 spreads of
+    pairs this rigid are less) they cost the cap; the pairs it bends by less keep their offsets."""
+    rng = np.random.default_rng(7)
+    cloud = np.array([[0, 0, 0], [30, 0, 0], [-60, 0, 0], [0, 0, 60], [-40, 40, 0], [0, 400, 400]], float)
+    right = cloud + rng.normal(0, 0.3, (60, 6, 3))
+    wrong = right.copy()
+    wrong[20:, 0], wrong[20:, 1] = right[20:, 1], np.nan
+    neighbours = MarkerState.from_first_frame(right[0], n_neighbours=5).neighbours
+    capped, _ = pair_offsets([right, wrong], right[0], neighbours, partners=5)
+    rest = np.linalg.norm(right[0, 0] - right[0, 2:], axis=1)
+    bent = np.abs(np.linalg.norm(right[30, 1] - right[30, 2:], axis=1) - rest)  # markers 2 .. 5 from 1's point
+    assert bent[[0, 2]].min() > 20.0 and bent[[0, 2]].max() < CAP_MM and bent[[1, 3]].max() < 10.0
+    wrong_row = np.sort(capped[1, 30, 0])
+    assert wrong_row[-3:].tolist() == [CAP_MM] * 3  # the pairs to 2 and 4, and to 1, which it left out
+    assert np.allclose(wrong_row[:2], np.sort(bent[[1, 3]]))
+    assert capped[0, 30, 0].max() < 3.0
