@@ -115,3 +115,22 @@ def test_a_reading_that_labels_nothing_is_not_taken() -> None:
     positions = [truth, np.full_like(truth, np.nan)]
     take = labels_taken((right, empty), *pair_offsets(positions, truth[0], neighbours))
     assert not take.any()
+
+
+def test_two_disagreements_at_once_are_judged_apart() -> None:
+    """Pass one exchanges two markers of the first plate while pass two exchanges two of the
+    second, over the same frames; an earlier exchange across the plates in pass one alone puts
+    all four in one group. Judged as one stretch, the two exchanges tie and one stays; as two
+    events (labels that differ, joined by a point or by one marker's consecutive frames), each
+    plate is right."""
+    truth = _two_plates(3)
+    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=7).neighbours
+    right = np.tile(np.arange(8), (FRAMES, 1))
+    one, two = right.copy(), right.copy()
+    one[5:9, [1, 5]] = one[5:9, [5, 1]]
+    one[30:50, [0, 1]] = one[30:50, [1, 0]]
+    two[30:50, [4, 5]] = two[30:50, [5, 4]]
+    positions = [truth[np.arange(FRAMES)[:, None], p] for p in (one, two)]
+    take = labels_taken((one, two), *pair_offsets(positions, truth[0], neighbours))
+    merged = np.where(take, two, one)
+    assert np.array_equal(merged, right)

@@ -1,26 +1,32 @@
-"""Two labelings of one take, merged where they disagree, group by group.
+"""Two labelings of one take, merged where they disagree, event by event.
 
 Two passes over a take (``service.labeling.second_pass``) mostly agree; where they do not,
 each is often right somewhere the other is wrong (CMU Hamner running, default condition,
 seed 0: the first pass had the right wrist's two markers right and the left wrist's
 exchanged, the second the reverse; keeping either whole kept one exchange for 500 frames).
-What the passes disagree on falls apart into groups that share no point: markers a and b
-are joined when, in some frame, one pass gives a the point the other gives b (a = b too:
-a marker whose labels differ). Each group is judged on its own by the labeled first frame
-(``first_frame_shape``: its markers' distances to their rigid mates, capped, the cap where
-a pass leaves a pair out), run by run: a run is a stretch of frames in which some member's
-labels differ, between frames where the passes agree on the whole group. The group as a whole
-takes the labels of the pass that bends it less over the take; a run whose own frames say
-clearly otherwise (one pass bends the group there less by ``NEAR_TIE`` of the larger bend) takes
-the other pass's. A group is often right in one pass in one stretch and in the other pass in
-the next (a wrist exchanged by the first pass early and by the second late); judged over the
-whole take it kept one of the two errors. A short run's bends are close and noisy, so a near
-tie keeps the whole take's verdict (every run judged alone: on the seed-0 accuracy matrix 12
-rows up and 9 down, racing at 2 mm -1.4 and 03_rolling with ghosts -1.0 points).
+What the passes disagree on falls apart into *events*: the (frame, marker) cells whose labels
+differ, two cells joined when, in one frame, one pass gives one the point the other gives
+the other, or when they are one marker's in consecutive frames. An event is judged on its own
+by the labeled first frame (``first_frame_shape``: its markers' distances to their rigid
+mates, the cap where a pass leaves a pair out or bends it past the tolerance), over its
+frames and markers, and takes the labels of the pass that bends it less by ``NEAR_TIE`` of
+the larger bend. A near tie is close and noisy, so it keeps the verdict of the event's
+*group*, the markers joined by a shared point anywhere in the take, judged over the whole
+take (every event judged alone: on the seed-0 accuracy matrix 12 rows up and 9 down, racing
+at 2 mm -1.4 and 03_rolling with ghosts -1.0 points, when events were still runs).
+
+Each label's bend is R times the mean capped offset of its judged pairs, R times the cap
+where it is left out: a marker left out costs the same whoever it is. Summed over its pairs,
+a leave-out cost the cap per pair judged, so leaving out a marker with three partners seen
+outweighed leaving out one with one (03_rolling with ghosts, seed 0: LL_USP, absent, put on
+LL_RSP's point for 94 frames with LL_RSP left out, kept over the right labels).
+
+Events, not groups: a group joined across the body by one shared point (an acromion, a heel,
+thigh and shank markers on 03_rolling) was judged as a whole over every frame where any
+member differed, so two exchanges at once, one in each pass, tied and one stayed.
 
 No frame then gives one point to two markers: a point taken by a in one pass and by b in
-the other joins a and b into one group, which takes both labels from one pass in each
-frame (outside its runs the passes give the group the same labels).
+the other joins the two cells into one event, which takes both labels from one pass.
 """
 
 from __future__ import annotations
@@ -30,11 +36,12 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from formulations.markers.runs import runs
+from formulations.markers.first_frame_shape import CAP_MM
 
 Array = NDArray[np.float64]
+Cells = tuple[NDArray[np.int64], NDArray[np.int64]]
 
-NEAR_TIE = 0.1  # of the larger bend: a run's two readings closer than this are a tie
+NEAR_TIE = 0.1  # of the larger bend: an event's two readings closer than this are a tie
 
 
 def labels_taken(
@@ -44,46 +51,83 @@ def labels_taken(
 
     Args:
         points: Each pass's ``(F, N)`` point index per frame and marker, -1 unlabeled: those of
-            the labels merged, or the groups do not keep one point to one marker.
+            the labels merged, or the events do not keep one point to one marker.
         capped, judged: The passes' offsets off the labeled first frame, in the order of
             ``points`` (``first_frame_shape.pair_offsets``).
     """
-    group, differs = _groups(*points)
     taken = np.zeros(points[0].shape, dtype=bool)
-    if not differs.any():
+    (frame, marker), event = _events(*points)
+    if not len(frame):
         return taken
-    per_label = np.where(judged, capped, 0.0).sum(axis=3)  # (2, F, N)
-    for g in np.unique(group[differs]):
-        members = np.flatnonzero(differs & (group == g))
-        apart = (points[0][:, members] != points[1][:, members]).any(axis=1)
-        bend = per_label[:, :, members].sum(axis=2)  # (2, F)
-        whole = bend[1].sum() < bend[0].sum()
-        for start, length in runs(apart):
-            run = slice(start, start + length)
-            mine, theirs = bend[0, run].sum(), bend[1, run].sum()
-            clear = abs(mine - theirs) >= NEAR_TIE * max(mine, theirs)
-            if (theirs < mine) if clear else whole:
-                taken[run, members] = True
+    bend = _label_bends(points, capped, judged)
+    group = _groups(*points)
+    differs = np.zeros(points[0].shape[1], dtype=bool)
+    differs[marker] = True
+    whole = {g: bend[1][:, differs & (group == g)].sum() < bend[0][:, differs & (group == g)].sum()
+             for g in np.unique(group[marker])}
+    order = np.argsort(event, kind="stable")
+    for cells in np.split(order, np.flatnonzero(np.diff(event[order])) + 1):
+        frames, markers = frame[cells], marker[cells]
+        box = np.ix_(np.unique(frames), np.unique(markers))
+        mine, theirs = bend[0][box].sum(), bend[1][box].sum()
+        clear = abs(mine - theirs) >= NEAR_TIE * max(mine, theirs)
+        if (theirs < mine) if clear else whole[group[markers[0]]]:
+            taken[frames, markers] = True
     return taken
 
 
-def _groups(first: NDArray[np.int64], second: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:
-    """Each marker's group, and which markers' labels differ between the passes."""
-    n = first.shape[1]
-    differs = (first != second).any(axis=0)
-    # Join the marker holding each (frame, point) in the first pass with its holder in the second.
-    stride = int(max(first.max(initial=0), second.max(initial=0))) + 1
+def _label_bends(points: tuple[NDArray[np.int64], NDArray[np.int64]], capped: Array, judged: NDArray[np.bool_]) -> Array:
+    """``(2, F, N)`` each label's bend (module doc): R times its mean capped offset over its
+    judged pairs, R times the cap where it is left out or has no pair judged."""
+    partners = capped.shape[3]
+    count = judged.sum(axis=2)
+    mean = np.where(judged, capped, 0.0).sum(axis=3) / np.maximum(count, 1)
+    bends: Array = partners * np.where((np.stack(points) >= 0) & (count > 0), mean, CAP_MM)
+    return bends
+
+
+def _events(first: NDArray[np.int64], second: NDArray[np.int64]) -> tuple[Cells, NDArray[np.int64]]:
+    """The (frame, marker) cells whose labels differ, and each one's event (module doc)."""
+    frame, marker = np.nonzero(first != second)
+    cell = np.full(first.shape, -1)
+    cell[frame, marker] = np.arange(len(frame))
+    has_next = frame + 1 < first.shape[0]
+    following = cell[frame[has_next] + 1, marker[has_next]]
+    a, b = np.flatnonzero(has_next)[following >= 0], following[following >= 0]
+    stride = _stride(first, second)
+    one, two = first[frame, marker], second[frame, marker]
+    i, j = _same_point(np.where(one >= 0, frame * stride + one, -1), np.where(two >= 0, frame * stride + two, -2))
+    rows, cols = np.r_[a, i, np.arange(len(frame))], np.r_[b, j, np.arange(len(frame))]
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(frame), len(frame)))
+    event: NDArray[np.int64] = connected_components(graph, directed=False)[1]
+    return (frame, marker), event
+
+
+def _groups(first: NDArray[np.int64], second: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Each marker's group: markers joined when one pass gives one the point the other gives
+    the other in some frame."""
+    stride = _stride(first, second)
     f1, m1 = np.nonzero(first >= 0)
     f2, m2 = np.nonzero(second >= 0)
-    key1, key2 = f1 * stride + first[f1, m1], f2 * stride + second[f2, m2]
-    order = np.argsort(key2)
-    if len(key2):
-        at = np.minimum(np.searchsorted(key2[order], key1), len(key2) - 1)
-        shared = key2[order][at] == key1
-        a, b = m1[shared], m2[order][at][shared]
-    else:  # the second labels nothing: no point is shared
-        a = b = np.zeros(0, dtype=np.int64)
-    rows, cols = np.r_[a, np.arange(n)], np.r_[b, np.arange(n)]
+    i, j = _same_point(f1 * stride + first[f1, m1], f2 * stride + second[f2, m2])
+    n = first.shape[1]
+    rows, cols = np.r_[m1[i], np.arange(n)], np.r_[m2[j], np.arange(n)]
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
     group: NDArray[np.int64] = connected_components(graph, directed=False)[1]
-    return group, differs
+    return group
+
+
+def _stride(first: NDArray[np.int64], second: NDArray[np.int64]) -> int:
+    """More than any point index: ``frame * stride + point`` numbers every frame's points apart."""
+    return int(max(first.max(initial=0), second.max(initial=0))) + 1
+
+
+def _same_point(key1: NDArray[np.int64], key2: NDArray[np.int64]) -> Cells:
+    """The pairs (i, j) with ``key1[i] == key2[j]`` (a pass holds a point once a frame, so
+    ``key2``'s keys are distinct)."""
+    if not len(key2):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    order = np.argsort(key2)
+    at = np.minimum(np.searchsorted(key2[order], key1), len(key2) - 1)
+    found = key2[order][at] == key1
+    return np.flatnonzero(found), order[at][found]
