@@ -40,6 +40,12 @@ def _labeling(truth: np.ndarray, swapped: tuple[int, int], after: int) -> tuple[
     return points, truth[np.arange(len(truth))[:, None], points]
 
 
+def _taken(truth: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
+    """``labels_taken`` for two passes' point indices (point i of each frame is marker i's)."""
+    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=7).neighbours
+    positions = [truth[np.arange(FRAMES)[:, None], p] for p in (one, two)]
+    return labels_taken((one, two), *pair_offsets(positions, truth[0], neighbours))
+
 def test_each_pass_keeps_the_plate_it_labels_right() -> None:
     """Pass one exchanges two markers of the second plate, pass two two of the first: neither
     pass is right whole, and the merge takes each plate from the pass that has it right."""
@@ -59,15 +65,12 @@ def test_one_group_right_in_each_pass_in_turn() -> None:
     """Both passes exchange the same two markers, the first early and the second late: taking
     either pass's labels for the pair over the whole take keeps one exchange; judged stretch by
     stretch, the pair is right in every frame."""
-    truth = _two_plates(1)
-    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=7).neighbours
     right = np.tile(np.arange(8), (FRAMES, 1))
     one, two = right.copy(), right.copy()
     one[10:25, [0, 1]] = one[10:25, [1, 0]]
     two[40:55, [0, 1]] = two[40:55, [1, 0]]
-    positions = [truth[np.arange(FRAMES)[:, None], p] for p in (one, two)]
     assert not np.array_equal(one, right) and not np.array_equal(two, right)  # the group whole: an exchange either way
-    take = labels_taken((one, two), *pair_offsets(positions, truth[0], neighbours))
+    take = _taken(_two_plates(1), one, two)
     assert np.array_equal(np.where(take, two, one), right)
     assert take[:, 2:].sum() == 0 and take[:10].sum() == 0  # nothing moves where the passes agree
 
@@ -123,14 +126,10 @@ def test_two_disagreements_at_once_are_judged_apart() -> None:
     all four in one group. Judged as one stretch, the two exchanges tie and one stays; as two
     events (labels that differ, joined by a point or by one marker's consecutive frames), each
     plate is right."""
-    truth = _two_plates(3)
-    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=7).neighbours
     right = np.tile(np.arange(8), (FRAMES, 1))
     one, two = right.copy(), right.copy()
     one[5:9, [1, 5]] = one[5:9, [5, 1]]
     one[30:50, [0, 1]] = one[30:50, [1, 0]]
     two[30:50, [4, 5]] = two[30:50, [5, 4]]
-    positions = [truth[np.arange(FRAMES)[:, None], p] for p in (one, two)]
-    take = labels_taken((one, two), *pair_offsets(positions, truth[0], neighbours))
-    merged = np.where(take, two, one)
+    merged = np.where(_taken(_two_plates(3), one, two), two, one)
     assert np.array_equal(merged, right)
