@@ -20,8 +20,8 @@ accuracy kept is 96.69 % by the doubt, 96.92 % by the first frame, 96.96 % keepi
 pass each time; over the hard preset's 9 runs (3 takes, seeds 0-2) 88.65 %, 89.98 % and 89.98 %.
 
 Where the passes disagree, each is often right somewhere the other is not, so the pass kept
-is kept whole only where the other does no better: the markers they label differently fall
-into groups that share no point, and each group takes the labels of the pass that bends its
+is kept whole only where the other does no better: the labels they give differently fall
+into events that share no point, and each event takes the labels of the pass that bends its
 rigid pairs less off the first frame (``formulations.markers.pass_merge``).
 
 The kept windows' confidences are then judged with the other pass's labels
@@ -71,9 +71,8 @@ class PassChoice:
         first_off_mm, second_off_mm: Each pass's disagreement with the first frame's rigid
             pairs (``first_frame_disagreement``, mm); None for a second pass not run.
         kept: 1 or 2: the pass whose windows (and certificates) are kept.
-        taken_from_other: Markers with labels from the other pass instead, in the runs of
-            frames where the passes disagree and the other bends those markers' rigid pairs
-            less (``formulations.markers.pass_merge``).
+        taken_from_other: Markers with labels from the other pass instead, in the events
+            where the passes disagree and the other bends those markers' rigid pairs less (``formulations.markers.pass_merge``).
     """
 
     first_doubtful: float
