@@ -46,6 +46,7 @@ NEAR_TIE = 0.1  # of the larger bend: an event's two readings closer than this a
 
 def labels_taken(
     points: tuple[NDArray[np.int64], NDArray[np.int64]], capped: Array, judged: NDArray[np.bool_],
+    cap_mm: float = CAP_MM,
 ) -> NDArray[np.bool_]:
     """``(F, N)`` True where a marker's label is taken from the second pass (module doc).
 
@@ -54,12 +55,13 @@ def labels_taken(
             the labels merged, or the events do not keep one point to one marker.
         capped, judged: The passes' offsets off the labeled first frame, in the order of
             ``points`` (``first_frame_shape.pair_offsets``).
+        cap_mm: The cap those offsets were computed with: a leave-out costs it per partner.
     """
     taken = np.zeros(points[0].shape, dtype=bool)
     (frame, marker), event = _events(*points)
     if not len(frame):
         return taken
-    bend = _label_bends(points, capped, judged)
+    bend = _label_bends(points, capped, judged, cap_mm)
     group = _groups(*points)
     differs = np.zeros(points[0].shape[1], dtype=bool)
     differs[marker] = True
@@ -76,13 +78,15 @@ def labels_taken(
     return taken
 
 
-def _label_bends(points: tuple[NDArray[np.int64], NDArray[np.int64]], capped: Array, judged: NDArray[np.bool_]) -> Array:
+def _label_bends(
+    points: tuple[NDArray[np.int64], NDArray[np.int64]], capped: Array, judged: NDArray[np.bool_], cap_mm: float,
+) -> Array:
     """``(2, F, N)`` each label's bend (module doc): R times its mean capped offset over its
     judged pairs, R times the cap where it is left out or has no pair judged."""
     partners = capped.shape[3]
     count = judged.sum(axis=2)
     mean = np.where(judged, capped, 0.0).sum(axis=3) / np.maximum(count, 1)
-    bends: Array = partners * np.where((np.stack(points) >= 0) & (count > 0), mean, CAP_MM)
+    bends: Array = partners * np.where((np.stack(points) >= 0) & (count > 0), mean, cap_mm)
     return bends
 
 
