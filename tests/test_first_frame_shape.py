@@ -104,8 +104,6 @@ def test_nothing_labeled_together_is_nan_and_a_labeling_without_pairs_pays_the_c
     assert np.isnan(first_frame_disagreement([lonely, lonely], right[0], neighbours)).all()
 
 
-
-
 def test_a_label_on_a_close_neighbours_point_costs_the_cap_though_it_bends_its_pairs_less() -> None:
     """Marker 0 put on marker 1's point, 30 mm away, bends its pairs to markers 2 and 4 (60 and
     57 mm off the other side) by 30 and 24 mm: under the 50 mm cap, so it cost less than

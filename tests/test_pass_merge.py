@@ -46,6 +46,7 @@ def _taken(truth: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
     positions = [truth[np.arange(FRAMES)[:, None], p] for p in (one, two)]
     return labels_taken((one, two), *pair_offsets(positions, truth[0], neighbours))
 
+
 def test_each_pass_keeps_the_plate_it_labels_right() -> None:
     """Pass one exchanges two markers of the second plate, pass two two of the first: neither
     pass is right whole, and the merge takes each plate from the pass that has it right."""

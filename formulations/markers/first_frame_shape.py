@@ -40,13 +40,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.shape_breaks import NEAREST_SHARE, SPREADS
 from formulations.markers.take_spread import take_spread
 
 Array = NDArray[np.float64]
 
 PARTNERS = 3  # a foot's or a head's plate: three mates fix a marker's place on its segment
-SPREADS = 5.0  # of a pair's spread: skin motion and noise stay within it (``shape_breaks``)
-NEAREST_SHARE = 0.5  # of the nearest-neighbour distance: half a marker spacing (``shape_breaks``)
 CAP_MM = 50.0  # about a marker spacing: beyond it a label is wrong, by how much does not matter
 
 

@@ -63,17 +63,17 @@ def labels_taken(
         return taken
     bend = _label_bends(points, capped, judged, cap_mm)
     group = _groups(*points)
-    differs = np.zeros(points[0].shape[1], dtype=bool)
-    differs[marker] = True
-    whole = {g: bend[1][:, differs & (group == g)].sum() < bend[0][:, differs & (group == g)].sum()
-             for g in np.unique(group[marker])}
+    differs = np.unique(marker)
+    # Each group's bend over the take, summed over its markers whose labels differ somewhere.
+    whole = [np.bincount(group[differs], bend[p][:, differs].sum(axis=0), len(group)) for p in (0, 1)]
     order = np.argsort(event, kind="stable")
     for cells in np.split(order, np.flatnonzero(np.diff(event[order])) + 1):
         frames, markers = frame[cells], marker[cells]
         box = np.ix_(np.unique(frames), np.unique(markers))
         mine, theirs = bend[0][box].sum(), bend[1][box].sum()
         clear = abs(mine - theirs) >= NEAR_TIE * max(mine, theirs)
-        if (theirs < mine) if clear else whole[group[markers[0]]]:
+        g = group[markers[0]]
+        if (theirs < mine) if clear else whole[1][g] < whole[0][g]:
             taken[frames, markers] = True
     return taken
 

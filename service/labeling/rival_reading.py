@@ -10,11 +10,12 @@ of its named markers' samples right and the frame-by-frame one 86.9 %; on the se
 matrix the window reading (one pass) is at or above it on 71 of 85 rows. Neither is right
 everywhere, so a take doubtful enough for a second pass (``second_pass``) is read frame by
 frame as well (with its own second pass, as ``nn-hungarian`` labels a take), and the readings
-are merged as the passes are (``formulations.markers.pass_merge``): the labels they give differently fall into
-events that share no point, and each event takes the frame-by-frame labels only where they
-bend its rigid pairs clearly less off the labeled first frame (``first_frame_shape``), or,
-on a near tie, where they bend the markers' group less over the whole take. The windows and
-their certificates stay the window reading's; the markers taken are counted in the choice (``RivalChoice``).
+are merged as the passes are (``formulations.markers.pass_merge``): the labels they give
+differently fall into events that share no point, and each event takes the frame-by-frame
+labels only where they bend its rigid pairs clearly less off the labeled first frame
+(``first_frame_shape``), or, on a near tie, where they bend the markers' group less over the
+whole take. The windows and their certificates stay the window reading's; the markers taken
+are counted in the choice (``RivalChoice``).
 """
 
 from __future__ import annotations

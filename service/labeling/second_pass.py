@@ -72,7 +72,8 @@ class PassChoice:
             pairs (``first_frame_disagreement``, mm); None for a second pass not run.
         kept: 1 or 2: the pass whose windows (and certificates) are kept.
         taken_from_other: Markers with labels from the other pass instead, in the events
-            where the passes disagree and the other bends those markers' rigid pairs less (``formulations.markers.pass_merge``).
+            where the passes disagree and the other bends those markers' rigid pairs less
+            (``formulations.markers.pass_merge``).
     """
 
     first_doubtful: float
