@@ -28,9 +28,7 @@ from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.shape_breaks import ShapeBreak
-from formulations.markers.take_exchange import TakeExchange
 from formulations.markers.take_handover import Handover
-from formulations.markers.take_rotation import TakeRotation
 from formulations.subject.contradiction import SegmentMisfit, labeled_misfits
 from formulations.subject.geometry import ModelGeometry
 from formulations.subject.joint_tracks import joint_tracks
@@ -44,7 +42,7 @@ from service.errors import InputError
 from service.io.recording import LabeledTrajectories
 from service.labeling.associations import Association, association_chain
 from service.labeling.camera_usage import detections_taken, unused_camera_warning
-from service.labeling.exchanged import exchanged_back, handed_back
+from service.labeling.exchanged import GivenBack, exchanged_back, handed_back
 from service.labeling.extension import extended
 from service.labeling.joint_3d import Joint3dChain
 from service.labeling.leftover_points import with_leftover_points
@@ -88,7 +86,7 @@ class CaptureLabeling:
         self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
-        self.exchanges: list[TakeExchange | TakeRotation] = []  # given back in the last labels assembled (``exchanged``)
+        self.exchanges: list[GivenBack] = []  # given back in the last labels assembled (``exchanged``)
         self.handovers: list[Handover] = []  # tracks given back to their owners, likewise
         self._view_choice = None if capture.cameras is None or capture.points is not None else MarkerViewChoice(
             capture.cameras, options.best_view_switch_cost, options.best_view_window)

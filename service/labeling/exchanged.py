@@ -1,6 +1,7 @@
 """A labeling with the exchanges (rotations of three markers, plates of four turned half round)
 the labeled first frame finds over the whole take given back (``formulations.markers.take_exchange``,
-``take_rotation``, ``take_flip``), and
+``take_rotation``, ``take_flip``), the exchanges inside plates with equal sides that how far
+each plate turned finds (``formulations.markers.plate_turns``), and
 the tracks other markers took over handed back to the markers they continue
 (``formulations.markers.take_handover``).
 
@@ -15,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from formulations.markers.plate_turns import PlateTurn, plate_turns
 from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, take_exchanges
 from formulations.markers.take_flip import take_flips
@@ -22,15 +24,17 @@ from formulations.markers.take_handover import Handover, held_fill, take_handove
 from formulations.markers.take_rotation import TakeRotation, take_rotations
 from service.io.recording import LabeledTrajectories
 
+GivenBack = TakeExchange | TakeRotation | PlateTurn
 EXCHANGED_CONFIDENCE = 0.5  # the windows and the first frame's shape read these labels otherwise
 
 
 def exchanged_back(
     labels: LabeledTrajectories, first: MarkerState,
-) -> tuple[LabeledTrajectories, list[TakeExchange | TakeRotation]]:
+) -> tuple[LabeledTrajectories, list[GivenBack]]:
     """``labels`` with each exchange of ``take_exchanges``, then each rotation of three markers
-    of ``take_rotations`` and each half-turned plate of four of ``take_flips`` (two exchanges)
-    in what they leave, applied to every per-label array; and all of them."""
+    of ``take_rotations``, each half-turned plate of four of ``take_flips`` (two exchanges)
+    and each plate with equal sides read exchanged (``plate_turns``) in what they leave,
+    applied to every per-label array; and all of them."""
     arrays = _per_label(labels)
     exchanges = take_exchanges(labels.positions, first.position, first.neighbours, _predicted(labels))
     for e in exchanges:
@@ -41,11 +45,14 @@ def exchanged_back(
     flips = take_flips(arrays["positions"], first.position, first.neighbours, arrays.get("filled"))
     for f in flips:
         _given_back(arrays, f)
-    given: list[TakeExchange | TakeRotation] = [*exchanges, *rotations, *flips]
+    turns = plate_turns(arrays["positions"], first.position)
+    for t in turns:
+        _given_back(arrays, t)
+    given: list[GivenBack] = [*exchanges, *rotations, *flips, *turns]
     return (replace(labels, **arrays) if given else labels), given
 
 
-def _given_back(arrays: dict[str, Any], given: TakeExchange | TakeRotation) -> None:
+def _given_back(arrays: dict[str, Any], given: GivenBack) -> None:
     """Each of ``given.markers`` takes the next one's labels (the last the first's) over its
     frames, in every array; marked doubtful (``EXCHANGED_CONFIDENCE``)."""
     run, markers = slice(given.start, given.stop), list(given.markers)
@@ -89,7 +96,7 @@ def _per_label(labels: LabeledTrajectories) -> dict[str, Any]:
     return {name: getattr(labels, name).copy() for name in names if getattr(labels, name).size}
 
 
-def exchange_summary(exchanges: list[TakeExchange | TakeRotation], names: list[str]) -> list[dict]:
+def exchange_summary(exchanges: list[GivenBack], names: list[str]) -> list[dict]:
     """Each exchange (two markers) or rotation (three) as ``{"markers": [a, b, ...], "frames":
     [start, stop]}`` (frames from 0, stop exclusive; each marker took the next one's labels), for a summary."""
     return [{"markers": [names[m] for m in e.markers], "frames": [e.start, e.stop]} for e in exchanges]
