@@ -76,6 +76,17 @@ def test_a_slow_plate_lost_whole_and_read_exchanged_is_given_back_exactly(readin
     assert np.allclose(given[seen], plate[seen])
 
 
+def test_the_change_goes_where_a_labels_track_jumps_not_where_the_plate_was_lost() -> None:
+    """Lost whole over 68-79, the first marker back alone and right at 80-81, the labels
+    exchanged from 82 (its label jumping to the second's point): given back from 82, and 80-81
+    kept (the racing take, right scapula plate: the change put at the first frame back cost a label)."""
+    plate = _turning_plate(200, 1.5)
+    labels = _exchanged(plate, (1, 0, 2), 80, 150, 12)
+    labels[80:82] = np.nan
+    labels[80:82, 0] = plate[80:82, 0]
+    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0])] == [(82, 150)]
+
+
 def test_a_right_labeling_is_left_alone_however_fast_the_plate_turns() -> None:
     for degrees in (0.5, 5.0, 40.0, 75.0):
         plate = _turning_plate(300, degrees, seed=3)

@@ -21,9 +21,10 @@ nothing. The readings over the full frames are the cheapest path (Viterbi): six 
 labeled first frame's own to start, a change of reading costing ``CHANGE_DEGREES``. A step
 too long to tell leaves the reading after it free: the frames it links are read as most of
 them are labeled (``OTHER_READING`` a frame breaks that tie; nothing ties them to the first
-frame). Between two full frames read differently the change goes where it cuts the fewest
-tracks the labels hold (a label holding a point in both frames whose point would change
-owner), the latest such frame.
+frame). Between two full frames read differently the change goes where the labels' own steps
+from the frame before are longest against the steps the change makes (a label's track jumping
+where the changed reading continues it; never cutting a track the labels hold smoothly), the
+latest of equals.
 
 It runs after the take-wide exchanges, rotations and half turns (``service.labeling.exchanged``).
 Measured (lp-l1, 600 frames): the wheelchair racing take's 15 rows of seeds 0-2 all higher or
@@ -112,11 +113,10 @@ def plate_readings(points: Array) -> NDArray[np.int64]:
         return reading
     at_full = _cheapest_path(points, full, lag)
     reading[full] = at_full
-    held = np.asarray(np.isfinite(points).all(axis=2))
     reading[:full[0]] = at_full[0]
     for k in range(len(full) - 1):
         was, becomes = at_full[k], at_full[k + 1]
-        change = full[k + 1] if was == becomes else _change_frame(held, full[k], full[k + 1], READINGS[was],
+        change = full[k + 1] if was == becomes else _change_frame(points, full[k], full[k + 1], READINGS[was],
                                                                   READINGS[becomes])
         reading[full[k]:change] = was
         reading[change:full[k + 1]] = becomes
@@ -167,15 +167,16 @@ def _index(reading: NDArray[np.int64]) -> int:
     return next(i for i, r in enumerate(READINGS) if np.array_equal(r, reading))
 
 
-def _change_frame(held: NDArray[np.bool_], before: int, after: int, was: NDArray[np.int64],
-                  becomes: NDArray[np.int64]) -> int:
-    """The frame in (before, after] where the reading ``was`` becomes ``becomes``: the latest
-    that cuts the fewest tracks, a label's point held in the frame and the one before whose
-    owner the change moves (module doc)."""
-    moved = np.argsort(was) != np.argsort(becomes)  # the labels' own label l goes to was^-1(l)
+def _change_frame(points: Array, before: int, after: int, was: NDArray[np.int64], becomes: NDArray[np.int64]) -> int:
+    """The frame in (before, after] where the reading ``was`` becomes ``becomes``: where the
+    labels' own steps are longest against the steps the change makes (module doc); the latest
+    of equals. Every other step is the same under either reading: a reading moves whole tracks."""
     frames = np.arange(before + 1, after + 1)
-    cuts = (held[frames - 1] & held[frames] & moved).sum(axis=1)
-    return int(frames[::-1][np.argmin(cuts[::-1])])
+    last, now = points[frames - 1], points[frames]
+    own = np.nansum(np.linalg.norm(now - last, axis=2), axis=1)
+    changed = np.nansum(np.linalg.norm(now[:, becomes] - last[:, was], axis=2), axis=1)
+    gain = own - changed
+    return int(frames[::-1][np.argmax(gain[::-1])])
 
 
 def equal_plates(positions: Array, first: Array) -> list[tuple[int, int, int]]:
