@@ -88,7 +88,7 @@ def result_warnings(capture: Capture, result: LabeledTrajectories, breaks: list[
         fast_motion_warning(fast_markers(result.names, result.positions)),
         scale_warning(first, result.positions, capture.rate, unit, spacing=not spacing_judged, names=list(capture.names)),
         coincident_warning(coincident_pairs(result.names, result.positions)),
-        symmetric_plate_warning(symmetric_plates(list(capture.names), first)),
+        symmetric_plate_warning(symmetric_plates(list(result.names), result.positions, first)),
     ]
     if capture.points is not None:  # camera mode has no count of points per frame to hold the labels against
         counts = np.array([len(p) for p in capture.points])

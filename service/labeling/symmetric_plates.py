@@ -8,31 +8,25 @@ Only a marker rigid with the plate outside it, or how far the plate turned, tell
 a plate lost whole and coming back where nothing rigid carried it may come back exchanged
 (the racing take under the accuracy matrix's deletions: its scapula and forearm plates).
 
-A plate here is three labeled markers, each among the other two's two nearest in the labeled
-frame (``plate_turns.mutual_triples``), whose longest side exceeds the shortest by at most
-``EQUAL_SHARE`` of their mean. Where the plate was seen whole in frames near enough for its
-turn to tell, ``plate_turns`` gives such exchanges back; the warning stays for the rest.
+A plate here is what ``plate_turns.equal_plates`` finds: three markers each among the other
+two's nearest in the first frame, their median sides over the take within ``EQUAL_SHARE``
+of one another and rigid. Where the plate was seen whole in frames near enough for its turn
+to tell, ``plate_turns`` gives such exchanges back; the warning stays for the rest.
 """
 
 from __future__ import annotations
 
-from itertools import combinations
-
 import numpy as np
 
-from formulations.markers.plate_turns import EQUAL_SHARE, mutual_triples
+from formulations.markers.plate_turns import equal_plates
 
 LISTED = 3  # plates named in the warning line
 
 
-def symmetric_plates(names: list[str], frame: np.ndarray) -> list[tuple[str, str, str]]:
-    """The plates of labeled ``frame`` ``(N, 3)`` (NaN rows unlabeled) with equal sides (module doc)."""
-    found = []
-    for plate in mutual_triples(frame):
-        sides = [float(np.linalg.norm(frame[i] - frame[j])) for i, j in combinations(plate, 2)]
-        if max(sides) - min(sides) <= EQUAL_SHARE * float(np.mean(sides)):
-            found.append((names[plate[0]], names[plate[1]], names[plate[2]]))
-    return found
+def symmetric_plates(names: list[str], positions: np.ndarray, first: np.ndarray) -> list[tuple[str, str, str]]:
+    """The plates with equal sides (module doc) of labeled ``positions`` ``(F, N, 3)`` (NaN
+    unlabeled) with labeled first frame ``first`` ``(N, 3)``, by name."""
+    return [(names[a], names[b], names[c]) for a, b, c in equal_plates(positions, first)]
 
 
 def symmetric_plate_warning(plates: list[tuple[str, str, str]]) -> str | None:
