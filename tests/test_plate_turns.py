@@ -87,6 +87,20 @@ def test_the_change_goes_where_a_labels_track_jumps_not_where_the_plate_was_lost
     assert [(t.start, t.stop) for t in plate_turns(labels, labels[0])] == [(82, 150)]
 
 
+def test_the_labeled_first_frame_is_never_read_otherwise() -> None:
+    """The first frame's third marker 15 mm off (no full frame there), the plate lost whole over
+    frames 1-3, the third marker unlabeled to frame 99, the first two exchanged over 10-139: the
+    full frames from 100 are read by the turn (the exchange ends in view at 140), and the change
+    goes back to where the labels jumped, frame 10, not to the labeled first frame."""
+    plate = _turning_plate(300, 1.5)
+    labels = plate.copy()
+    labels[10:140] = labels[10:140][:, [1, 0, 2]]
+    labels[1:4] = np.nan
+    labels[1:100, 2] = np.nan
+    labels[0, 2] += [15.0, 0.0, 0.0]
+    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0])] == [(10, 140)]
+
+
 def test_a_right_labeling_is_left_alone_however_fast_the_plate_turns() -> None:
     for degrees in (0.5, 5.0, 40.0, 75.0):
         plate = _turning_plate(300, degrees, seed=3)

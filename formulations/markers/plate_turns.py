@@ -18,7 +18,8 @@ The take's labels say how far the plate turns in d frames: the ``QUANTILE`` of t
 pairs of full frames d apart. A pair d apart tells readings apart only where that stays under
 ``TURN_LIMIT``, half the least turn an exchange adds; there it costs theta, farther apart
 nothing. The readings over the full frames are the cheapest path (Viterbi): six states, the
-labeled first frame's own to start, a change of reading costing ``CHANGE_DEGREES``. A step
+labeled first frame's own to start (frame 0 is never read otherwise), a change of reading
+costing ``CHANGE_DEGREES``. A step
 too long to tell leaves the reading after it free: the frames it links are read as most of
 them are labeled (``OTHER_READING`` a frame breaks that tie; nothing ties them to the first
 frame). Between two full frames read differently the change goes where the labels' own steps
@@ -113,8 +114,8 @@ def plate_readings(points: Array) -> NDArray[np.int64]:
     if lag == 0:
         return reading
     at_full = _cheapest_path(points, full, lag)
-    reading[full] = at_full
-    reading[:full[0]] = at_full[0]
+    if at_full[0]:  # the labeled first frame keeps its labels: the change goes after it
+        reading[_change_frame(points, 0, full[0], READINGS[0], READINGS[at_full[0]]):full[0]] = at_full[0]
     for k in range(len(full) - 1):
         was, becomes = at_full[k], at_full[k + 1]
         change = full[k + 1] if was == becomes else _change_frame(points, full[k], full[k + 1], READINGS[was],
@@ -150,7 +151,7 @@ def _cheapest_path(points: Array, full: NDArray[np.int64], lag: int) -> NDArray[
     told = np.diff(full) <= lag
     turns = np.zeros((len(full) - 1, n))
     turns[told] = np.stack([turn_angles(points[full[:-1][told]], points[full[1:][told]][:, r]) for r in READINGS], axis=1)
-    cost = (change[0] if full[0] == 0 else 0.0) + other  # the labeled first frame's own reading
+    cost = np.where(np.arange(n) == 0, 0.0, np.inf if full[0] == 0 else 0.0) + other  # the labeled first frame's own
     back = np.zeros((len(full), n), dtype=np.int64)
     for k in range(1, len(full)):
         total = cost[:, None] + (turns[k - 1][relative] + change if told[k - 1] else np.zeros((n, n)))
