@@ -67,7 +67,7 @@ def test_a_slow_plate_lost_whole_and_read_exchanged_is_given_back_exactly(readin
     and ends where the labels turn right again; the frames around it untouched."""
     plate = _turning_plate(200, 1.5)
     labels = _exchanged(plate, reading, 80, 150, 12)
-    turns = plate_turns(labels[:, :, :], labels[0])
+    turns = plate_turns(labels, labels[0])
     assert [(t.start, t.stop) for t in turns] == [(80, 150)]
     given = labels.copy()
     markers = list(turns[0].markers)

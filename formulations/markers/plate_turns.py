@@ -58,6 +58,9 @@ MIN_SIDE_SD = 0.01  # of the side: a floor, so that a noiseless take's rounding 
 CHANGE_DEGREES = 30.0  # a change of reading: well under the 120 degrees an exchange adds
 OTHER_READING = 1e-3  # degrees a full frame read otherwise than labeled: breaks ties only
 READINGS = [np.array(p) for p in permutations(range(3))]
+# readings p before and q after turn the plate as the labels' X_s against X_t[q[p^-1]]: its index
+RELATIVE = np.array([[next(i for i, r in enumerate(READINGS) if np.array_equal(r, q[np.argsort(p)])) for q in READINGS]
+                     for p in READINGS])
 
 
 @dataclass(frozen=True)
@@ -75,9 +78,7 @@ def turn_angles(a: Array, b: Array) -> Array:
     a = a - a.mean(axis=-2, keepdims=True)
     b = b - b.mean(axis=-2, keepdims=True)
     u, _, vt = np.linalg.svd(np.swapaxes(a, -1, -2) @ b)
-    turn = np.swapaxes(vt, -1, -2) @ np.swapaxes(u, -1, -2)
-    flip = np.linalg.det(turn) < 0  # the best orthogonal map is a reflection: turn it into a rotation
-    vt[flip, -1] *= -1
+    vt[np.linalg.det(u @ vt) < 0, -1] *= -1  # the best orthogonal map is a reflection: turn it into a rotation
     turn = np.swapaxes(vt, -1, -2) @ np.swapaxes(u, -1, -2)
     cosine = (np.trace(turn, axis1=-2, axis2=-1) - 1) / 2
     return np.asarray(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))))
@@ -146,15 +147,13 @@ def _cheapest_path(points: Array, full: NDArray[np.int64], lag: int) -> NDArray[
     n = len(READINGS)
     change = CHANGE_DEGREES * (1 - np.eye(n))
     other = OTHER_READING * (np.arange(n) != 0)
-    # readings p before and q after turn the plate as the labels' X_s against X_t[q[p^-1]]
-    relative = np.array([[_index(q[np.argsort(p)]) for q in READINGS] for p in READINGS])
     told = np.diff(full) <= lag
     turns = np.zeros((len(full) - 1, n))
     turns[told] = np.stack([turn_angles(points[full[:-1][told]], points[full[1:][told]][:, r]) for r in READINGS], axis=1)
     cost = np.where(np.arange(n) == 0, 0.0, np.inf if full[0] == 0 else 0.0) + other  # the labeled first frame's own
     back = np.zeros((len(full), n), dtype=np.int64)
     for k in range(1, len(full)):
-        total = cost[:, None] + (turns[k - 1][relative] + change if told[k - 1] else np.zeros((n, n)))
+        total = cost[:, None] + (turns[k - 1][RELATIVE] + change if told[k - 1] else np.zeros((n, n)))
         back[k] = np.argmin(total, axis=0)
         cost = total[back[k], np.arange(n)] + other
     path = np.zeros(len(full), dtype=np.int64)
@@ -162,11 +161,6 @@ def _cheapest_path(points: Array, full: NDArray[np.int64], lag: int) -> NDArray[
     for k in range(len(full) - 1, 0, -1):
         path[k - 1] = back[k, path[k]]
     return path
-
-
-def _index(reading: NDArray[np.int64]) -> int:
-    """The index of ``reading`` in ``READINGS``."""
-    return next(i for i, r in enumerate(READINGS) if np.array_equal(r, reading))
 
 
 def _change_frame(points: Array, before: int, after: int, was: NDArray[np.int64], becomes: NDArray[np.int64]) -> int:
