@@ -45,6 +45,7 @@ from scipy.spatial import cKDTree
 
 from formulations.markers.noise import MAD_TO_SIGMA
 from formulations.markers.pair_spread import PairSpreads
+from formulations.markers.rigid import rigid_transform
 
 Array = NDArray[np.float64]
 
@@ -74,12 +75,9 @@ class PlateTurn:
 
 
 def turn_angles(a: Array, b: Array) -> Array:
-    """Degrees of the proper rotation best taking each plate ``a[k]`` ``(3, 3)`` onto ``b[k]`` (Kabsch)."""
-    a = a - a.mean(axis=-2, keepdims=True)
-    b = b - b.mean(axis=-2, keepdims=True)
-    u, _, vt = np.linalg.svd(np.swapaxes(a, -1, -2) @ b)
-    vt[np.linalg.det(u @ vt) < 0, -1] *= -1  # the best orthogonal map is a reflection: turn it into a rotation
-    turn = np.swapaxes(vt, -1, -2) @ np.swapaxes(u, -1, -2)
+    """Degrees of the proper rotation best taking each plate ``a[k]`` ``(3, 3)`` onto ``b[k]``
+    (``rigid.rigid_transform``, every corner weighed alike)."""
+    turn, _, _ = rigid_transform(a, b, np.ones(a.shape[:2]))
     cosine = (np.trace(turn, axis1=-2, axis2=-1) - 1) / 2
     return np.asarray(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))))
 
