@@ -6,7 +6,7 @@ one table per half, a summary, and issue 11's goals on the validation rows. Tune
 tuning half only. Takes with real gaps keep them: they add to the simulated deletions.
 
     .venv/bin/python bench/accuracy_matrix.py [--half both] [--recordings ...] [--conditions ...]
-        [--seeds 0 1 2] [--formulations lp-l1 nn-hungarian] [--frames 0] [--jobs 2] [--json cells.json]
+        [--seeds 0 1 2] [--formulations lp-l1 nn-hungarian] [--frames 0] [--jobs 2] [--json cells.json] [--mht-reading]
 
 Columns per formulation: acc % (pooled over seeds), known (the same without the marker-frames
 where the file's own label jumps to another marker, ``service/evaluation/label_jumps.py``:
@@ -83,6 +83,7 @@ def _arguments() -> argparse.Namespace:
     parser.add_argument("--block", type=int, default=1000, help="frames per accuracy block")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")
     parser.add_argument("--json", type=Path, help="write every cell here")
+    parser.add_argument("--mht-reading", action="store_true", help="read doubtful takes by mht too (LabelingOptions.mht_reading)")
     parser.add_argument("--data", type=Path, default=DATA, help="the shared data folder")
     return parser.parse_args()
 
@@ -103,7 +104,8 @@ def _attempt(work: Callable[[CellKey], Cell], key: CellKey) -> Cell | _Failed:
 
 def _run(keys: list[CellKey], args: argparse.Namespace) -> tuple[list[Cell], list[_Failed]]:
     """Every cell, with one progress line per cell on stderr."""
-    work = partial(_attempt, partial(run_cell, frames_cap=args.frames, data=args.data, block_frames=args.block))
+    work = partial(_attempt, partial(run_cell, frames_cap=args.frames, data=args.data, block_frames=args.block,
+                                     mht_reading=args.mht_reading))
     done: list[Cell | _Failed] = []
     start = time.perf_counter()
     with Pool(args.jobs) if args.jobs > 1 else nullcontext() as pool:

@@ -18,7 +18,7 @@ share of labels left out so.
 
     .venv/bin/python bench/cloud_accuracy.py [--seeds 6] [--mu 0 0.05 0.2] [--formulations lp-l1 nn-hungarian]
         [--scenario configs/scenarios/hard.toml] [--recordings cmu-85_02 cmu-135_02 numediart-rolling]
-        [--frames 600]
+        [--frames 600] [--mht-reading]
 """
 
 from __future__ import annotations
@@ -56,6 +56,7 @@ def main() -> None:
     parser.add_argument("--scenario", type=Path, help="a cloud scenario TOML (default: the issue's)")
     parser.add_argument("--recordings", nargs="+", default=[RECORDING], help="accuracy-matrix take names")
     parser.add_argument("--frames", type=int, default=0, help="frames per take (0: the whole take)")
+    parser.add_argument("--mht-reading", action="store_true", help="read doubtful takes by mht too (LabelingOptions.mht_reading)")
     args = parser.parse_args()
     scenario = Scenario.from_toml(args.scenario) if args.scenario else ISSUE_SCENARIO
     print(f"{'recording':18s} {'formulation':13s} {'mu':>4s} {'accuracy per seed':{8 * args.seeds}s} {'median':>7s} "
@@ -68,15 +69,17 @@ def main() -> None:
                                                                       frames=frames)) for s in range(args.seeds)]
         jumps = label_jumps(take.truth)[take.start : take.start + frames]
         for name, mu in [(f, m) for f in args.formulations for m in args.mu]:
-            print(_row(recording, name, mu, simulations, jumps, scenario.window), flush=True)
+            print(_row(recording, name, mu, simulations, jumps, scenario.window, args.mht_reading), flush=True)
 
 
-def _row(recording: str, name: str, mu: float, simulations: list[SimulatedCapture], jumps: np.ndarray, window: int) -> str:
+def _row(
+    recording: str, name: str, mu: float, simulations: list[SimulatedCapture], jumps: np.ndarray, window: int, mht: bool,
+) -> str:
     accuracy, swaps, integral, gaps, speed = [], 0, [], [], []
     doubt, known = DoubtCounts(0, 0, 0, 0), DoubtCounts(0, 0, 0, 0)
     for simulated in simulations:
         start = time.perf_counter()
-        options = LabelingOptions(formulation=name, layout_weight=mu, window=window)
+        options = LabelingOptions(formulation=name, layout_weight=mu, window=window, mht_reading=mht)
         result, windows = CaptureLabeling(simulated.capture(), options).label()
         speed.append((time.perf_counter() - start) / simulated.cloud.n_frames)
         scores = label_scores(simulated, result)

@@ -57,6 +57,11 @@ class LabelingOptions:
             looks ahead: read the take frame by frame as well, and take the marker groups whose
             rigid pairs that reading bends less (``service.labeling.rival_reading``); about a
             third more time.
+        mht_reading: Where the frame-by-frame reading runs, on 3D points without a subject
+            model: read the take by ``mht`` as well and take, after it, the marker groups whose
+            rigid pairs that reading bends less (``service.labeling.hypothesis_reading``). Off
+            by default: it about doubles the time of a doubtful take (real 03_rolling from
+            frame 562: 31-38 -> 71-78 s).
     """
 
     formulation: str | dict | Formulation = "lp-l1"
@@ -67,6 +72,7 @@ class LabelingOptions:
     best_view_window: int = 30
     second_pass: bool = True
     rival_reading: bool = True
+    mht_reading: bool = False
 
     def __post_init__(self) -> None:
         for option in fields(self):  # a notebook's np.float32(1.0) or np.bool_(False) is a plain value
@@ -83,7 +89,7 @@ class LabelingOptions:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
                 raise InputError(f"{name} must be a finite number of at least 0, got {value!r}")
-        for name in ("second_pass", "rival_reading"):
+        for name in ("second_pass", "rival_reading", "mht_reading"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"{name} must be True or False, got {getattr(self, name)!r}")
 

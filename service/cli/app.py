@@ -82,6 +82,10 @@ def track(
         "three times the time). Default: on, "
         "or a capture document's own second_pass.", show_default=False,
     )] = None,
+    mht_reading: Annotated[bool, typer.Option(
+        "--mht-reading", help="Where the frame-by-frame reading runs, read the take by mht as well and take the "
+        "markers that reading labels better (about twice the time of a doubtful take).",
+    )] = False,
 ) -> None:
     """Label INPUT and write the named trajectories.
 
@@ -90,7 +94,7 @@ def track(
     from service.cli.track import run_track
 
     _guard(lambda: run_track(
-        input, out, formulation, _window(window), shuffle, as_json, subject, start, end, second_pass, keep_labels,
+        input, out, formulation, _window(window), shuffle, as_json, subject, start, end, second_pass, keep_labels, mht_reading,
     ))
 
 

@@ -1,5 +1,6 @@
-"""What ``track``'s summary line says of the labelings beyond the first: the second pass and
-the frame-by-frame reading (``service.labeling.second_pass``, ``service.labeling.rival_reading``)."""
+"""What ``track``'s summary line says of the labelings beyond the first: the second pass, the
+frame-by-frame reading and the ``mht`` reading (``service.labeling.second_pass``,
+``service.labeling.rival_reading``, ``service.labeling.hypothesis_reading``)."""
 
 from __future__ import annotations
 
@@ -19,9 +20,9 @@ def second_pass_note(choice: PassChoice | None) -> str:
     return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
 
 
-def rival_note(rival: RivalChoice | None) -> str:
-    """What the summary line says of a frame-by-frame reading that ran (``rival_reading``)."""
+def rival_note(rival: RivalChoice | None, reading: str = "a frame-by-frame reading") -> str:
+    """What the summary line says of a reading that ran (``rival_reading``; ``reading`` names it)."""
     if rival is None:
         return ""
-    return f"; {counted(rival.markers, 'marker')}' labels from a frame-by-frame reading" if rival.markers else (
-        "; a frame-by-frame reading changed no label")
+    return f"; {counted(rival.markers, 'marker')}' labels from {reading}" if rival.markers else (
+        f"; {reading} changed no label")

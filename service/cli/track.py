@@ -41,7 +41,7 @@ from service.labeling.take_warnings import (
 def run_track(
     input: Path, output: Path, formulation: str | None, window: int | None, shuffle: bool, as_json: bool = False,
     model: Path | None = None, start: int | None = None, end: int | None = None, second_pass: bool | None = None,
-    keep_labels: bool = False,
+    keep_labels: bool = False, mht_reading: bool = False,
 ) -> None:
     """Label ``input`` (capture .json, or labeled .c3d/.trc/.csv) and write ``output``.
 
@@ -57,7 +57,8 @@ def run_track(
     numbering; a .c3d of a .c3d that has every model marker is the input with those points replaced.
 
     ``formulation``, ``window`` and ``second_pass`` (``LabelingOptions.second_pass``)
-    override a JSON document's own options when given.
+    override a JSON document's own options when given; ``mht_reading`` turns on
+    ``LabelingOptions.mht_reading``.
     A .c3d/.trc output of a .c3d/.trc input keeps the input's unit and frame numbering;
     a .c3d of a .c3d keeps everything but the points (``write_labeled``).
     Prints one line, or with ``as_json`` one JSON object (``track_summary``), on stdout,
@@ -95,6 +96,8 @@ def run_track(
         options = replace(options, window=window)
     if second_pass is not None:
         options = replace(options, second_pass=second_pass)
+    if mht_reading:
+        options = replace(options, mht_reading=True)
     labeling = CaptureLabeling(capture, options)
     unit = source.unit if source else ("the document's units" if input.suffix.lower() == ".json" else "mm")
     warn(early_scale_warning(capture, unit))
@@ -111,6 +114,7 @@ def run_track(
     summary = track_summary(capture, result, windows, labeling.formulation.name, time.perf_counter() - began, output)
     summary["second_pass"] = None if labeling.choice is None else labeling.choice.to_dict()
     summary["rival_reading"] = None if labeling.rival is None else labeling.rival.to_dict()
+    summary["mht_reading"] = None if labeling.hypotheses is None else labeling.hypotheses.to_dict()
     summary["exchanged_back"] = exchange_summary(labeling.exchanges, capture.names)
     summary["handed_back"] = handover_summary(labeling.handovers, capture.names)
     summary["shape_breaks"] = shape_break_summary(labeling.shape_breaks, result.names)
@@ -123,7 +127,7 @@ def run_track(
             f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
             f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
-            f"{second_pass_note(labeling.choice)}{rival_note(labeling.rival)}"
+            f"{second_pass_note(labeling.choice)}{rival_note(labeling.rival)}{rival_note(labeling.hypotheses, 'an mht reading')}"
             f"{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,
@@ -158,7 +162,8 @@ def track_summary(
     rigid pairs' disagreement with the first frame, and the one kept), None when no second
     pass applied; ``rival_reading`` (``RivalChoice``: the window and frame-by-frame readings'
     disagreement with the first frame, and the markers taken from the latter), None when it did
-    not run; ``exchanged_back``, the pairs whose labels the first frame's shape gave
+    not run; ``mht_reading`` likewise for the ``mht`` reading after it (``hypothesis_reading``);
+    ``exchanged_back``, the pairs whose labels the first frame's shape gave
     back over the take (``service.labeling.exchanged``: markers, frames from 0 [start, stop));
     ``handed_back``, the tracks given back to the marker they continue (owner, taker, frames);
     and ``shape_breaks``, the labels that left their rigid neighbours (``service.labeling.shape_doubt``).

@@ -186,11 +186,15 @@ class Cell:
     correct_on_jumps: int = 0
 
 
-def run_cell(key: CellKey, frames_cap: int = 0, data: Path = DATA, block_frames: int = 1000) -> Cell:
-    """Simulate, label and score one cell; ``frames_cap`` > 0 caps the frames used."""
+def run_cell(
+    key: CellKey, frames_cap: int = 0, data: Path = DATA, block_frames: int = 1000, mht_reading: bool = False,
+) -> Cell:
+    """Simulate, label and score one cell; ``frames_cap`` > 0 caps the frames used; ``mht_reading``
+    as ``LabelingOptions.mht_reading``."""
     take = _take(key.recording, data)
     frames = min(frames_cap, take.frames) if frames_cap else take.frames
-    scenario = replace(CONDITIONS[key.condition], seed=key.seed, start_frame=take.start, frames=frames)
+    scenario = replace(CONDITIONS[key.condition], seed=key.seed, start_frame=take.start, frames=frames,
+                       mht_reading=mht_reading)
     run = evaluate(take.truth, scenario, key.formulation)
     s = run.scores
     jumps = counts_within(run.capture, run.result, label_jumps(take.truth)[take.start : take.start + frames])

@@ -16,7 +16,7 @@ ASSOCIATIONS = ("joint-3d", "per-camera")
 # Keys one mode reads and the other ignores.
 _MODE_KEYS = {
     "cloud": ("noise_mm", "ghosts_per_frame", "ghost_spread_mm", "drop_rate", "drop_burst_frames", "unnamed_markers",
-              "second_pass"),
+              "second_pass", "mht_reading"),
     "cameras": ("calibration", "pixel_noise", "merge_radius_px", "clutter_per_camera", "occlusion_rate",
                 "occlusion_burst_frames", "up_axis", "association"),
 }
@@ -75,6 +75,8 @@ class Scenario:
         second_pass: Cloud mode without a model: label again from the take's distance
             spreads and keep the labeling closer to the first frame's rigid pairs
             (``LabelingOptions.second_pass``).
+        mht_reading: Cloud mode, where the frame-by-frame reading runs: read by ``mht`` too
+            (``LabelingOptions.mht_reading``).
         unnamed_markers: Cloud mode: this many markers, drawn with the seed, keep their points
             but get no name, as `track --start` leaves the markers absent in its start frame;
             a named marker on one of their points took a ghost.
@@ -102,6 +104,7 @@ class Scenario:
     up_axis: int = 2
     first_frame: str = "labeled"
     second_pass: bool = True
+    mht_reading: bool = False
     unnamed_markers: int = 0
 
     def __post_init__(self) -> None:
@@ -154,7 +157,7 @@ class Scenario:
         """How to label this scenario's capture; ``formulation`` replaces the scenario's own."""
         return LabelingOptions(
             formulation=self.formulation_table if formulation is None else formulation, window=self.window,
-            association=self.association, second_pass=self.second_pass,
+            association=self.association, second_pass=self.second_pass, mht_reading=self.mht_reading,
         )
 
     def frame_span(self, n_frames: int) -> tuple[int, int]:

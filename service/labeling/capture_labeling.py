@@ -44,9 +44,10 @@ from service.labeling.associations import Association, association_chain
 from service.labeling.camera_usage import detections_taken, unused_camera_warning
 from service.labeling.exchanged import GivenBack, exchanged_back, handed_back
 from service.labeling.extension import extended
+from service.labeling.hypothesis_reading import hypothesis_reading, merged_with_hypotheses
 from service.labeling.joint_3d import Joint3dChain
 from service.labeling.leftover_points import with_leftover_points
-from service.labeling.loop import Observer, Progress, first_marker_state, label_windows
+from service.labeling.loop import Observer, Progress, first_marker_state, label_windows, progress_after
 from service.labeling.model_start import model_chains, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
@@ -84,6 +85,7 @@ class CaptureLabeling:
         labeled = bool(np.isfinite(capture.first_frame).any())  # kept labels: the model only names (``ModelChain.steer``)
         self._second_pass = options.second_pass and capture.points is not None
         self.rival: RivalChoice | None = None  # what the frame-by-frame reading changed, when ``refine`` ran it
+        self.hypotheses: RivalChoice | None = None  # what the ``mht`` reading changed after it, likewise
         self._points = capture.points  # a cloud's points, for the tracks' extension over those left free
         self.choice: PassChoice | None = None  # which pass ``refine`` kept
         self.exchanges: list[GivenBack] = []  # given back in the last labels assembled (``exchanged``)
@@ -108,8 +110,10 @@ class CaptureLabeling:
             self._first = first_marker_state(capture.names, capture.first_frame)
             self._association = association_chain(capture, options, self.formulation.look_ahead)
             rival = association_chain(capture, options, look_ahead=False)
-        self._rival = RivalReading(rival, resolve_formulation("nn-hungarian"), partial(self._labeled, repaired=False),
+        unrepaired = partial(self._labeled, repaired=False)
+        self._rival = RivalReading(rival, resolve_formulation("nn-hungarian"), unrepaired,
                                    ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+        self._hypotheses = None if self._rival is None else hypothesis_reading(capture, options, self.formulation, unrepaired)
         self._early = None if self._rival is None else EarlyStart(capture, options)  # the reading beside, started early
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
@@ -138,7 +142,8 @@ class CaptureLabeling:
         second pass (``second_pass``) when it is on and agrees better with the first frame, with
         the marker groups a frame-by-frame reading labels better taken from it when the second
         pass ran (``rival_reading``; read in a child process meanwhile on a large take,
-        ``rival_process``); None when ``stop`` abandoned either. Sets ``choice`` and ``rival``."""
+        ``rival_process``), then likewise from an ``mht`` reading (``hypothesis_reading``); None
+        when ``stop`` abandoned any. Sets ``choice``, ``rival`` and ``hypotheses``."""
         if not self._second_pass:
             return outcomes
         rival = self._rival is not None and second_pass_runs(outcomes)  # a doubtful take: read frame by frame too
@@ -155,12 +160,19 @@ class CaptureLabeling:
                 return None
             kept_outcomes, self.choice = kept
             if rival:
-                after, labels = _after(progress, self.n_windows), judged_part(unrepaired(kept_outcomes))
+                after, labels = progress_after(progress, self.n_windows), judged_part(unrepaired(kept_outcomes))
                 read = child.read(after, stop) if child is not None else self.read_frame_by_frame(after, stop)
                 if read is None:
                     return None
                 assert self._rival is not None
                 kept_outcomes, self.rival = merged_with_rival(self._rival, self._first, kept_outcomes, labels, read)
+                if self._hypotheses is not None:
+                    merged = merged_with_hypotheses(self._hypotheses, self._first, kept_outcomes, unrepaired,
+                                                    (self._capture.n_frames, self._window),
+                                                    progress_after(progress, 3 * self.n_windows), stop)
+                    if merged is None:
+                        return None
+                    kept_outcomes, self.hypotheses = merged
         return outcomes if kept_outcomes is outcomes else list(stamped(kept_outcomes, self.fingerprint))  # ``is``: kept as stored
 
     def read_frame_by_frame(self, progress: Progress | None = None, stop: Stop | None = None) -> list[WindowOutcome] | None:
@@ -267,24 +279,16 @@ class CaptureLabeling:
     ) -> tuple[LabeledTrajectories, list[WindowStats]]:
         """Label every window in one go, and again if ``refine`` says so; ``progress``
         counts the first pass's windows, then both passes' once a second pass runs (43/43,
-        then 44/86 ...), then on through the frame-by-frame reading's two (87/129, 130/172);
+        then 44/86 ...), then on through the frame-by-frame and mht readings' two each (87/129 ... 215/258);
         ``observer`` sees the first pass; ``stage`` is told when the windows
         are done and the labels are assembled (35 s after the last window at 50,000 frames)."""
-        outcomes = self.refine(list(self.windows(progress=progress, observer=observer)), _after(progress, self.n_windows))
+        outcomes = self.refine(list(self.windows(progress=progress, observer=observer)), progress_after(progress, self.n_windows))
         assert outcomes is not None  # only a stop abandons the second pass
         if stage is not None:
             stage("windows done; assembling the labels (take-wide repairs, fill, confidence)")
         windows = [o.stats for o in outcomes]
         labels = self._labeled(outcomes, keep=self._view_choice is not None)  # camera mode reads them again
         return self._finished(labels, outcomes, True), windows
-
-
-def _after(progress: Progress | None, done: int) -> Progress | None:
-    """``progress`` of a pass that follows ``done`` windows, counted with them."""
-    if progress is None:
-        return None
-    report = progress  # bound here: mypy keeps the narrowing inside the closure
-    return lambda k, n: report(done + k, done + n)
 
 
 def _reported(labels: LabeledTrajectories) -> LabeledTrajectories:

@@ -149,3 +149,11 @@ def _solve(formulation: Formulation, problem: WindowProblem, template: int) -> W
         return formulation.solve(problem)
     except FormulationError as error:
         raise InputError(f"window from frame {template}: {error}") from None
+
+
+def progress_after(progress: Progress | None, done: int) -> Progress | None:
+    """``progress`` of a pass that follows ``done`` windows, counted with them."""
+    if progress is None:
+        return None
+    report = progress  # bound here: mypy keeps the narrowing inside the closure
+    return lambda k, n: report(done + k, done + n)

@@ -29,7 +29,7 @@ from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 from formulations.methods.formulation import Formulation
 from service.io.recording import LabeledTrajectories
-from service.labeling.loop import Progress, WindowChain, label_windows
+from service.labeling.loop import Progress, WindowChain, label_windows, progress_after
 from service.labeling.outcome import WindowOutcome
 from service.labeling.second_pass import Labels, Stop, judged_part, merged_readings, second_pass
 
@@ -82,9 +82,8 @@ def read_frame_by_frame(
     # Its own second pass as well, as a frame-by-frame labeling runs: on the seed-0 matrix's 85
     # rows, one pass judged with the take-wide repairs gave 97.801 % against 97.930 %; on four
     # cells one pass alone lost too (03_rolling at 4 mm 84.5 against 88.5 %, BTS at 4 mm 96.4 against 99.0 %).
-    done, report = len(read), progress
     passes = second_pass(rival.chain, rival.formulation, first, frames, window, read, rival.labels,
-                         None if report is None else lambda k, n: report(done + k, done + n), stop)
+                         progress_after(progress, len(read)), stop)
     return None if passes is None else passes[0]
 
 

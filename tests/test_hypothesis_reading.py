@@ -1,0 +1,67 @@
+"""A doubtful take read by ``mht`` as well, after the frame-by-frame reading, the marker groups it
+labels better taken from it (``service.labeling.hypothesis_reading``)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+from service_fixtures import generated_capture
+
+from formulations.methods.mht import Mht
+from service.capture.capture import LabelingOptions
+from service.evaluation.matrix import prepare, recording_named
+from service.evaluation.scenario import Scenario
+from service.evaluation.scores import label_scores
+from service.evaluation.simulate_cloud import simulate_cloud
+from service.evaluation.simulated import SimulatedCapture
+from service.io.recording import LabeledTrajectories
+from service.labeling.capture_labeling import CaptureLabeling
+
+HARD = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "hard.toml"
+
+
+def _wrist_exchange() -> SimulatedCapture:
+    """CMU 135_02 under the hard preset, seed 1, 400 frames: LWRA, unseen for over 100 frames,
+    takes LFIN's returning point at frame 161 in both window passes and in the frame-by-frame
+    reading, and holds it to the end (the module docstring's case)."""
+    take = prepare(recording_named("cmu-135_02"))
+    scenario = Scenario.from_toml(HARD)
+    return simulate_cloud(take.truth, dataclasses.replace(scenario, seed=1, start_frame=take.start, frames=400))
+
+
+def _held(simulated: SimulatedCapture, result: LabeledTrajectories, marker: str, frames: range) -> np.ndarray:
+    """The true marker of the point ``marker`` holds in each of ``frames`` (-2 for none, -1 a ghost)."""
+    n = result.names.index(marker)
+    return np.array([simulated.point_marker[f][result.point_index[f, n]] if result.point_index[f, n] >= 0 else -2
+                     for f in frames])
+
+
+def test_the_mht_reading_gives_a_returning_wrist_marker_its_own_point() -> None:
+    simulated = _wrist_exchange()
+    names = list(simulated.first_frame.names)
+    wrist, finger, after = names.index("male:LWRA"), names.index("male:LFIN"), range(170, 400)
+    without = CaptureLabeling(simulated.capture())  # off by default
+    result, _ = without.label()
+    assert np.mean(_held(simulated, result, "male:LWRA", after) == finger) > 0.9  # the setup: exchanged to the end
+    assert without.rival is not None and without.hypotheses is None
+    labeling = CaptureLabeling(simulated.capture(), LabelingOptions(mht_reading=True))
+    result, _ = labeling.label()
+    held = _held(simulated, result, "male:LWRA", after)
+    assert not np.any(held == finger) and np.mean(held == wrist) > 0.8
+    assert labeling.hypotheses is not None and labeling.hypotheses.markers >= 2  # the pair taken from it
+    assert label_scores(simulated, result).label_accuracy > 0.99
+
+
+def test_the_mht_reading_runs_only_where_the_frame_by_frame_one_does() -> None:
+    """Asked for: not on a clean take (no second pass), not with the rival readings off, not
+    when the windows are ``mht``'s own."""
+    capture, asked = generated_capture(60), LabelingOptions(mht_reading=True)
+    clean = CaptureLabeling(capture, asked)
+    clean.label()
+    assert clean.hypotheses is None and clean.rival is None
+    assert CaptureLabeling(capture, dataclasses.replace(asked, rival_reading=False))._hypotheses is None
+    assert CaptureLabeling(capture, dataclasses.replace(asked, formulation=Mht()))._hypotheses is None
+    assert CaptureLabeling(capture, asked)._hypotheses is not None
+    assert CaptureLabeling(capture)._hypotheses is None  # off by default
