@@ -34,10 +34,11 @@ Pose2Sim TRCs are left out there: triangulated video keypoints, not markers); th
 Wall time is the whole command (start-up, reading, writing); frames/s is the labeling time
 ``seconds`` of `--json`.
 
-`--formulation NAME` labels with another formulation (`track --formulation`; lp-l1 by default).
+`--formulation NAME` labels with another formulation (`track --formulation`; lp-l1 by default),
+`--mht-reading` with `track --mht-reading`.
 
     .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--half | --starts K] [--model [--keep-labels]]
-        [--formulation NAME]
+        [--formulation NAME] [--mht-reading]
 """
 
 from __future__ import annotations
@@ -181,8 +182,11 @@ class Route:
         return f"model of 0-{start - 1}{' + labels' if self.keep_labels else ''}"
 
 
-def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, route: Route, formulation: str) -> Row:
-    """Relabel the take at ``path`` (read as ``truth``) by ``route`` with ``formulation`` and score it."""
+def relabel(
+    name: str, path: Path, truth: Recording, cap: int, folder: Path, route: Route, formulation: str, mht: bool = False,
+) -> Row:
+    """Relabel the take at ``path`` (read as ``truth``) by ``route`` with ``formulation`` (and
+    ``track --mht-reading`` when ``mht``) and score it."""
     missing = truth.missing()
     out = folder / f"{name}.c3d"
     partial = bool(missing[0].any())
@@ -191,7 +195,7 @@ def relabel(name: str, path: Path, truth: Recording, cap: int, folder: Path, rou
         start = int(truth.n_frames * route.at)
     end = min(truth.n_frames, start + cap) if cap else truth.n_frames
     command = [*MARKERFLOW, "track", str(path), "--out", str(out), "--json", "--start", str(start), "--end", str(end),
-               "--formulation", formulation]
+               "--formulation", formulation, *(["--mht-reading"] if mht else [])]
     if not (partial and route.model and start > 0):  # no frame before the start: nothing to fit a model on
         row = Row(name, Route().label(start), end - start, truth.n_markers)
         if (summary := run(command, row)) is not None:
@@ -229,6 +233,7 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=0, help="start a take lacking a marker in frame 0 at this many "
                         "frames spread over it (--cap frames from each, 600 unless given)")
     parser.add_argument("--formulation", default="lp-l1", help="track --formulation (default lp-l1)")
+    parser.add_argument("--mht-reading", action="store_true", help="track --mht-reading")
     args = parser.parse_args()
     fractions = [(k + 1) / (args.starts + 1) for k in range(args.starts)] if args.starts else [0.5 if args.half else None]
     cap = args.cap or (600 if args.starts else 0)
@@ -245,7 +250,7 @@ def main() -> None:
             # frame 0 starts there on every route
             truth = read_labeled(path).without_unlabeled()
             rows = [relabel(recording.name, path, truth, cap, Path(folder), Route(at, args.model, args.keep_labels),
-                            args.formulation)
+                            args.formulation, args.mht_reading)
                     for at in (fractions if bool(truth.missing()[0].any()) else [None])]
             print("\n".join(row.cells() for row in rows), flush=True)
             scored = [row.correct / (row.correct + row.wrong + row.missing) for row in rows if not row.failure]
