@@ -167,7 +167,7 @@ class CaptureLabeling:
                 assert self._rival is not None
                 kept_outcomes, self.rival = merged_with_rival(self._rival, self._first, kept_outcomes, labels, read)
                 if self._hypotheses is not None:
-                    merged = merged_with_hypotheses(self._hypotheses, self._first, kept_outcomes, unrepaired,
+                    merged = merged_with_hypotheses(self._hypotheses, self._first, kept_outcomes,
                                                     (self._capture.n_frames, self._window),
                                                     progress_after(progress, 3 * self.n_windows), stop)
                     if merged is None:

@@ -12,7 +12,7 @@ point at frame 161 in both window passes and in the frame-by-frame reading, and 
 end of the take (95.58 % right); ``mht`` keeps them apart (100 %).
 
 Neither it nor the others are right everywhere, so it is one reading more, not a replacement
-(in place of the frame-by-frame reading it took the real basket sprint from 92.30 to 83.57 %):
+(in place of the frame-by-frame reading it took the real basket sprint from 92.17 to 83.57 %):
 read with its own second pass as the frame-by-frame reading is
 (``rival_reading.read_frame_by_frame``) and merged after it, event by event, by the same judge
 (``rival_reading.merged_with_rival``: the labeled first frame's rigid pairs). Asked for
@@ -37,16 +37,17 @@ from service.labeling.second_pass import Labels, Stop, judged_part
 def hypothesis_reading(
     capture: Capture, options: LabelingOptions, formulation: Formulation, labels: Labels,
 ) -> RivalReading | None:
-    """The ``mht`` reading of a capture of 3D points with no subject model, when
-    ``options.mht_reading`` asks for it and the windows are not ``mht``'s already; else None.
-    ``labels`` gives a reading's labels as the merge takes them (no take-wide repair)."""
-    if not options.mht_reading or capture.points is None or capture.model is not None or isinstance(formulation, Mht):
+    """The ``mht`` reading of a capture whose frame-by-frame reading runs (so 3D points), when
+    ``options.mht_reading`` asks for it, the capture has no subject model and the windows are not
+    ``mht``'s already; else None. ``labels`` gives a reading's labels as the merge takes them (no
+    take-wide repair): the kept windows' as well as its own."""
+    if not options.mht_reading or capture.model is not None or isinstance(formulation, Mht):
         return None
     return RivalReading(association_chain(capture, options, look_ahead=True), Mht(), labels)
 
 
 def merged_with_hypotheses(
-    reading: RivalReading, first: MarkerState, kept: list[WindowOutcome], labels: Labels, take: tuple[int, int],
+    reading: RivalReading, first: MarkerState, kept: list[WindowOutcome], take: tuple[int, int],
     progress: Progress | None = None, stop: Stop | None = None,
 ) -> tuple[list[WindowOutcome], RivalChoice] | None:
     """``kept`` with the marker groups the ``mht`` reading labels better taken from it, and what
@@ -55,11 +56,11 @@ def merged_with_hypotheses(
     Args:
         reading: From ``hypothesis_reading``.
         first: The labeled first frame's state.
-        kept: The windows kept so far (after the second pass and the frame-by-frame reading).
-        labels: Gives ``kept``'s labels, tracks extended but not repaired.
+        kept: The windows kept so far (after the second pass and the frame-by-frame reading),
+            assembled as ``reading.labels`` assembles a reading's.
         take: Its frames and the window length, as it was labeled.
     """
     read = read_frame_by_frame(reading, first, *take, progress, stop)
     if read is None:
         return None
-    return merged_with_rival(reading, first, kept, judged_part(labels(kept)), read)
+    return merged_with_rival(reading, first, kept, judged_part(reading.labels(kept)), read)
