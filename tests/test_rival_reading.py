@@ -116,9 +116,9 @@ def test_the_merges_judge_the_labels_they_merge_and_the_second_pass_learns_from_
     judged: list[tuple[np.ndarray, np.ndarray]] = []
     real = second_pass_module.labels_taken
 
-    def spy(points, capped, judged_triples):
+    def spy(points, capped, judged_triples, **kwargs):
         judged.append(points)
-        return real(points, capped, judged_triples)
+        return real(points, capped, judged_triples, **kwargs)
 
     learned: list[np.ndarray] = []
     real_spread = second_pass_module.with_take_spread

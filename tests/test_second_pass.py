@@ -117,7 +117,7 @@ def test_the_pass_kept_is_the_one_closer_to_the_first_frame(monkeypatch, first, 
 
     monkeypatch.setattr(second_pass_module, "label_windows", counted)
     monkeypatch.setattr(second_pass_module, "disagreement", disagreement)
-    monkeypatch.setattr(second_pass_module, "labels_taken", lambda points, *_: np.zeros(points[0].shape, bool))
+    monkeypatch.setattr(second_pass_module, "labels_taken", lambda points, *_, **__: np.zeros(points[0].shape, bool))
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001  (the pass as refine runs it)
     kept_outcomes, choice = second_pass(chain, formulation, labeling._first, 40, 10, outcomes, labeling.result)  # noqa: SLF001
     assert choice.kept == kept
@@ -154,7 +154,7 @@ def test_markers_the_other_pass_labels_better_come_from_it(monkeypatch, kept: in
     monkeypatch.setattr(second_pass_module, "label_windows", shifted)
     off = [5.0, 3.0] if kept == 2 else [3.0, 5.0]
     monkeypatch.setattr(second_pass_module, "disagreement", lambda *_: np.array(off))
-    first_two = lambda points, *_: np.broadcast_to(np.arange(points[0].shape[1]) < 2, points[0].shape)  # noqa: E731
+    first_two = lambda points, *_, **__: np.broadcast_to(np.arange(points[0].shape[1]) < 2, points[0].shape)  # noqa: E731
     monkeypatch.setattr(second_pass_module, "labels_taken", first_two)
     first_labels = labeling.result(outcomes)  # what the judges read is stubbed above
     chain, formulation = labeling._association, labeling.formulation  # noqa: SLF001

@@ -78,7 +78,7 @@ def pair_offsets(
     frame, ``| ||L_p[t, m] - L_p[t, j]|| - d0_mj |``, the cap where it does not label both or
     the offset passes the tolerance (module doc); and ``(F, N, R)`` the triples some labeling
     labels together (U)."""
-    mates, spread = _rigid_mates(labelings, neighbours, partners)
+    mates, spread = rigid_mates(labelings, neighbours, partners)
     rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
     off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
                     for positions in labelings])  # NaN where a pair is not labeled together
@@ -89,7 +89,7 @@ def pair_offsets(
     return capped, np.isfinite(off).any(axis=0)
 
 
-def _rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners: int) -> tuple[NDArray[np.int64], Array]:
+def rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners: int) -> tuple[NDArray[np.int64], Array]:
     """``(N, partners)`` each marker's neighbours of least spread r_mj in any labeling (module
     doc), and those spreads (variances, mm^2; NaN where no labeling shows one)."""
     rigidity = np.fmin.reduce([take_spread(positions, neighbours) for positions in labelings])

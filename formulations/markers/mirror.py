@@ -61,7 +61,7 @@ def repair_mirrors(state: MarkerState, reference: np.ndarray) -> tuple[MarkerSta
     noise_var = _noise_var(state)
     quads, has = rigid_groups(state.visible, learned, rigid_bound(state), 4)
     has &= np.isfinite(reference[quads]).all(axis=(1, 2))
-    s_now, s_then = _sines(state.position[quads]), _sines(reference[quads])
+    s_now, s_then = sines(state.position[quads]), sines(reference[quads])
     # Most quadruples keep their sign: only the others are judged, one at a time.
     for a in np.flatnonzero(has & (s_now * s_then < 0)).tolist():
         quad = quads[a]
@@ -125,17 +125,17 @@ def rigid_groups(allowed: np.ndarray, learned: LearnedPairs, bound: float, size:
     return np.column_stack([np.arange(n), nearest]), found & (inner.max(axis=(1, 2)) <= bound)
 
 
-def _sines(points: np.ndarray) -> np.ndarray:
+def sines(points: np.ndarray) -> np.ndarray:
     """``(Q,)`` V(a, b, c, d) over the product of the edges from a, for ``(Q, 4, 3)`` quadruples."""
     edges = points[:, 1:] - points[:, :1]
     volume = np.einsum("qi,qi->q", np.cross(edges[:, 0], edges[:, 1]), edges[:, 2])
-    sines: np.ndarray = volume / np.maximum(np.prod(lengths(edges), axis=1), 1e-12)
-    return sines
+    ratio: np.ndarray = volume / np.maximum(np.prod(lengths(edges), axis=1), 1e-12)
+    return ratio
 
 
 def _sine(points: np.ndarray) -> float:
     """The sine of one ``(4, 3)`` quadruple."""
-    return float(_sines(points[None])[0])
+    return float(sines(points[None])[0])
 
 
 def _flipped(now: np.ndarray, then: np.ndarray, sigma: float) -> bool:
@@ -149,7 +149,7 @@ def _flipped(now: np.ndarray, then: np.ndarray, sigma: float) -> bool:
 def _sine_sd(points: np.ndarray, sigma: float, step: float = 1e-3) -> float:
     """sigma |grad s|: the sine's sd under per-axis noise sigma (central differences)."""
     nudge = step * np.eye(12).reshape(12, 4, 3)
-    grad = (_sines(points[None] + nudge) - _sines(points[None] - nudge)) / (2 * step)
+    grad = (sines(points[None] + nudge) - sines(points[None] - nudge)) / (2 * step)
     return max(sigma * float(np.linalg.norm(grad)), 1e-12)
 
 

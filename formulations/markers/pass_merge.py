@@ -25,6 +25,10 @@ Events, not groups: a group joined across the body by one shared point (an acrom
 thigh and shank markers on 03_rolling) was judged as a whole over every frame where any
 member differed, so two exchanges at once, one in each pass, tied and one stayed.
 
+Handedness before bends: where one pass's labels of an event mirror their markers' rigid
+quadruples off the first frame and the other's do not (``first_frame_handedness``), the event
+takes the other's, whatever the bends say; distances cannot see such an exchange.
+
 No frame then gives one point to two markers: a point taken by a in one pass and by b in
 the other joins the two cells into one event, which takes both labels from one pass.
 """
@@ -36,6 +40,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from formulations.markers.first_frame_handedness import mirrored_side
 from formulations.markers.first_frame_shape import CAP_MM
 
 Array = NDArray[np.float64]
@@ -46,7 +51,7 @@ NEAR_TIE = 0.1  # of the larger bend: an event's two readings closer than this a
 
 def labels_taken(
     points: tuple[NDArray[np.int64], NDArray[np.int64]], capped: Array, judged: NDArray[np.bool_],
-    cap_mm: float = CAP_MM,
+    cap_mm: float = CAP_MM, flips: Array | None = None,
 ) -> NDArray[np.bool_]:
     """``(F, N)`` True where a marker's label is taken from the second pass (module doc).
 
@@ -56,6 +61,8 @@ def labels_taken(
         capped, judged: The passes' offsets off the labeled first frame, in the order of
             ``points`` (``first_frame_shape.pair_offsets``).
         cap_mm: The cap those offsets were computed with: a leave-out costs it per partner.
+        flips: ``(2, F, N)`` the passes' handedness flips, in the same order
+            (``first_frame_handedness.handedness_flips``); None judges by bends alone.
     """
     taken = np.zeros(points[0].shape, dtype=bool)
     (frame, marker), event = _events(*points)
@@ -73,7 +80,8 @@ def labels_taken(
         mine, theirs = bend[0][box].sum(), bend[1][box].sum()
         clear = abs(mine - theirs) >= NEAR_TIE * max(mine, theirs)
         g = group[markers[0]]
-        if (theirs < mine) if clear else whole[1][g] < whole[0][g]:
+        mirrored = None if flips is None else mirrored_side(flips[:, frames, markers])
+        if mirrored == 0 or (mirrored is None and ((theirs < mine) if clear else whole[1][g] < whole[0][g])):
             taken[frames, markers] = True
     return taken
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from formulations.markers.first_frame_handedness import handedness_flips
 from formulations.markers.first_frame_shape import disagreement, pair_offsets
 from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
@@ -104,9 +105,11 @@ def merged_with_rival(
             (``rival_process``).
     """
     mine, theirs = judged_part(labels), judged_part(rival.labels(read))
-    capped, judged = pair_offsets([mine.positions, theirs.positions], first.position, first.neighbours)
+    positions = [mine.positions, theirs.positions]
+    capped, judged = pair_offsets(positions, first.position, first.neighbours)
+    flips = handedness_flips(positions, first.position, first.neighbours)
     # Ties stay with the window reading: its windows, certificates and look-ahead.
-    taken = labels_taken((mine.point_index, theirs.point_index), capped, judged)
+    taken = labels_taken((mine.point_index, theirs.point_index), capped, judged, flips=flips)
     window_off, rival_off = (None if np.isnan(v) else float(v) for v in disagreement(capped, judged))
     choice = RivalChoice(window_off, rival_off, int(taken.any(axis=0).sum()))
     return merged_readings(kept, read, taken), choice
