@@ -7,8 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from formulations.markers.first_frame_handedness import KEPT_SHARE, MIRRORED_SHARE, handedness_flips, mirrored_side
-from formulations.markers.first_frame_shape import pair_offsets
+from formulations.markers.first_frame_handedness import KEPT_SHARE, MIRRORED_SHARE, first_frame_judges, mirrored_side
 from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 
@@ -43,7 +42,7 @@ def _neighbours(truth: np.ndarray) -> np.ndarray:
 def test_an_exchange_of_mirror_images_flips_the_handedness_of_both() -> None:
     truth = _foot()
     wrong = _exchanged(truth, 30)[1]
-    flips = handedness_flips([truth, wrong], truth[0], _neighbours(truth))
+    flips = first_frame_judges([truth, wrong], truth[0], _neighbours(truth)).flips
     assert np.nansum(flips[0]) == 0 and np.isfinite(flips[0]).mean() > 0.9  # a rigid motion keeps it, judged nearly everywhere
     assert np.all(flips[1][30:, [TOE, FIFTH]] == 1) and np.all(flips[1][:30] == 0)
 
@@ -51,7 +50,7 @@ def test_an_exchange_of_mirror_images_flips_the_handedness_of_both() -> None:
 def test_a_flat_quadruple_is_not_judged() -> None:
     truth = _foot(noise_mm=0.0)
     truth[:, 1] = 0.5 * (truth[:, 0] + truth[:, 2])  # the ankle between heel and toe: no handedness
-    assert np.isnan(handedness_flips([truth], truth[0], _neighbours(truth))).all()
+    assert np.isnan(first_frame_judges([truth], truth[0], _neighbours(truth)).flips).all()
 
 
 @pytest.mark.parametrize("shares, side", [
@@ -73,8 +72,7 @@ def test_the_merge_takes_the_unmirrored_labels_where_the_bends_cannot_tell() -> 
     truth = _foot(noise_mm=0.0)
     right, wrong = (np.tile(np.arange(4), (FRAMES, 1)), truth), _exchanged(truth, 30)
     positions = [wrong[1], right[1]]  # the exchanged pass first: the one kept unless the merge takes the other
-    offsets = pair_offsets(positions, truth[0], _neighbours(truth))
-    assert not labels_taken((wrong[0], right[0]), *offsets).any()  # bends alone: the exchange stays
-    flips = handedness_flips(positions, truth[0], _neighbours(truth))
-    take = labels_taken((wrong[0], right[0]), *offsets, flips=flips)
+    judges = first_frame_judges(positions, truth[0], _neighbours(truth))
+    assert not labels_taken((wrong[0], right[0]), judges.capped, judges.judged).any()  # bends alone: the exchange stays
+    take = labels_taken((wrong[0], right[0]), judges.capped, judges.judged, flips=judges.flips)
     assert np.array_equal(np.where(take, right[0], wrong[0]), right[0])

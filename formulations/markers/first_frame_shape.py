@@ -78,7 +78,13 @@ def pair_offsets(
     frame, ``| ||L_p[t, m] - L_p[t, j]|| - d0_mj |``, the cap where it does not label both or
     the offset passes the tolerance (module doc); and ``(F, N, R)`` the triples some labeling
     labels together (U)."""
-    mates, spread = rigid_mates(labelings, neighbours, partners)
+    return mate_offsets(labelings, first, *rigid_mates(labelings, neighbours, partners), cap_mm)
+
+
+def mate_offsets(
+    labelings: list[Array], first: Array, mates: NDArray[np.int64], spread: Array, cap_mm: float = CAP_MM,
+) -> tuple[Array, NDArray[np.bool_]]:
+    """``pair_offsets`` for the ``mates`` and their ``spread`` (``rigid_mates``) found already."""
     rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
     off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
                     for positions in labelings])  # NaN where a pair is not labeled together

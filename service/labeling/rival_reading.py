@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from formulations.markers.first_frame_handedness import handedness_flips
-from formulations.markers.first_frame_shape import disagreement, pair_offsets
+from formulations.markers.first_frame_handedness import first_frame_judges
+from formulations.markers.first_frame_shape import disagreement
 from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 from formulations.methods.formulation import Formulation
@@ -105,9 +105,7 @@ def merged_with_rival(
             (``rival_process``).
     """
     mine, theirs = judged_part(labels), judged_part(rival.labels(read))
-    positions = [mine.positions, theirs.positions]
-    capped, judged = pair_offsets(positions, first.position, first.neighbours)
-    flips = handedness_flips(positions, first.position, first.neighbours)
+    capped, judged, flips = first_frame_judges([mine.positions, theirs.positions], first.position, first.neighbours)
     # Ties stay with the window reading: its windows, certificates and look-ahead.
     taken = labels_taken((mine.point_index, theirs.point_index), capped, judged, flips=flips)
     window_off, rival_off = (None if np.isnan(v) else float(v) for v in disagreement(capped, judged))

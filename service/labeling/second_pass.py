@@ -44,8 +44,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from formulations.confidence.two_readings import agreed_confidence
-from formulations.markers.first_frame_handedness import handedness_flips
-from formulations.markers.first_frame_shape import disagreement, pair_offsets
+from formulations.markers.first_frame_handedness import first_frame_judges
+from formulations.markers.first_frame_shape import disagreement
 from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import with_take_spread
@@ -164,15 +164,14 @@ def judged_passes(
     first frame, ``first_frame_shape``), the ``(N,)`` markers to take from the other
     (``pass_merge``), and each pass's disagreement (mm). Both judges read one computation
     of the passes' offsets off the first frame."""
-    positions = [first_labels.positions, second_labels.positions]
-    capped, judged = pair_offsets(positions, first.position, first.neighbours)
+    capped, judged, flips = first_frame_judges([first_labels.positions, second_labels.positions], first.position,
+                                               first.neighbours)
     off = disagreement(capped, judged)
     # NaN (no rigid pair labeled together) compares False: the first pass stays.
     kept = 2 if off[1] < off[0] else 1
     order = [1, 0] if kept == 2 else [0, 1]
     points = (first_labels.point_index, second_labels.point_index)
-    flips = handedness_flips(positions, first.position, first.neighbours)[order]
-    taken = labels_taken((points[order[0]], points[order[1]]), capped[order], judged, flips=flips)
+    taken = labels_taken((points[order[0]], points[order[1]]), capped[order], judged, flips=flips[order])
     return kept, taken, off
 
 
