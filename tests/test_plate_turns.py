@@ -21,6 +21,7 @@ from service.labeling.exchanged import EXCHANGED_CONFIDENCE, exchange_summary, e
 
 EQUILATERAL = 43.0 * np.array([[0.0, 0, 0], [1, 0, 0], [0.5, np.sqrt(3) / 2, 0]])
 SCALENE = np.array([[0.0, 0, 0], [30, 0, 0], [0, 40, 0]])  # sides 30, 40, 50 mm
+ALONE = np.array([[1, 2], [0, 2], [0, 1]])  # a plate and nothing else: each corner's neighbours are the other two
 
 
 def _turning_plate(frames: int, degrees_per_frame: float, seed: int = 0) -> np.ndarray:
@@ -67,7 +68,7 @@ def test_a_slow_plate_lost_whole_and_read_exchanged_is_given_back_exactly(readin
     and ends where the labels turn right again; the frames around it untouched."""
     plate = _turning_plate(200, 1.5)
     labels = _exchanged(plate, reading, 80, 150, 12)
-    turns = plate_turns(labels, labels[0])
+    turns = plate_turns(labels, labels[0], ALONE)
     assert [(t.start, t.stop) for t in turns] == [(80, 150)]
     given = labels.copy()
     markers = list(turns[0].markers)
@@ -84,7 +85,7 @@ def test_the_change_goes_where_a_labels_track_jumps_not_where_the_plate_was_lost
     labels = _exchanged(plate, (1, 0, 2), 80, 150, 12)
     labels[80:82] = np.nan
     labels[80:82, 0] = plate[80:82, 0]
-    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0])] == [(82, 150)]
+    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0], ALONE)] == [(82, 150)]
 
 
 def test_the_labeled_first_frame_is_never_read_otherwise() -> None:
@@ -98,7 +99,7 @@ def test_the_labeled_first_frame_is_never_read_otherwise() -> None:
     labels[1:4] = np.nan
     labels[1:100, 2] = np.nan
     labels[0, 2] += [15.0, 0.0, 0.0]
-    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0])] == [(10, 140)]
+    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0], ALONE)] == [(10, 140)]
 
 
 def test_a_right_labeling_is_left_alone_however_fast_the_plate_turns() -> None:
@@ -106,7 +107,7 @@ def test_a_right_labeling_is_left_alone_however_fast_the_plate_turns() -> None:
         plate = _turning_plate(300, degrees, seed=3)
         plate[100:110] = np.nan
         plate[200:215, 1] = np.nan
-        assert plate_turns(plate, plate[0]) == [], degrees
+        assert plate_turns(plate, plate[0], ALONE) == [], degrees
 
 
 def test_a_plate_turning_faster_than_its_gap_can_tell_is_read_as_most_of_it_is_labeled() -> None:
@@ -116,7 +117,7 @@ def test_a_plate_turning_faster_than_its_gap_can_tell_is_read_as_most_of_it_is_l
     plate = _turning_plate(200, 40.0)
     assert np.all(plate_readings(_exchanged(plate, (1, 0, 2), 80, 200, 12)) == 0)
     labels = _exchanged(plate, (1, 0, 2), 80, 120, 12)
-    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0])] == [(80, 120)]
+    assert [(t.start, t.stop) for t in plate_turns(labels, labels[0], ALONE)] == [(80, 120)]
 
 
 def test_a_ghost_in_place_of_one_marker_does_not_count_as_a_turn() -> None:
@@ -124,7 +125,7 @@ def test_a_ghost_in_place_of_one_marker_does_not_count_as_a_turn() -> None:
     plate = _turning_plate(200, 1.5)
     labels = plate.copy()
     labels[100, 2] += [60.0, -40.0, 30.0]
-    assert plate_turns(labels, labels[0]) == []
+    assert plate_turns(labels, labels[0], ALONE) == []
 
 
 def test_the_labeling_gives_an_exchanged_plate_back_and_says_so() -> None:

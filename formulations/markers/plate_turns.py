@@ -46,6 +46,7 @@ from scipy.spatial import cKDTree
 from formulations.markers.noise import MAD_TO_SIGMA
 from formulations.markers.pair_spread import PairSpreads
 from formulations.markers.rigid import rigid_transform
+from formulations.markers.witness_costs import witnesses_deny
 
 Array = NDArray[np.float64]
 
@@ -202,17 +203,23 @@ def mutual_triples(frame: Array) -> list[tuple[int, int, int]]:
     return sorted(triples)  # type: ignore[arg-type]
 
 
-def plate_turns(positions: Array, first: Array) -> list[PlateTurn]:
+def plate_turns(positions: Array, first: Array, neighbours: NDArray[np.int64]) -> list[PlateTurn]:
     """The runs over which each plate's labels are read otherwise (module doc), from labeled
-    ``positions`` ``(T, N, 3)`` (NaN unlabeled) and the labeled ``first`` frame, as exchanges
-    or rotations to give back."""
-    turns = []
+    ``positions`` ``(T, N, 3)`` (NaN unlabeled), the labeled ``first`` frame and each marker's
+    ``neighbours`` there, as exchanges or rotations to give back; a run the plate's rigid
+    witnesses deny (``witness_costs.witnesses_deny``) is not."""
+    turns, spreads = [], PairSpreads(positions)
     for plate in equal_plates(positions, first):
         reading = plate_readings(positions[:, list(plate)])
         edges = np.flatnonzero(np.diff(np.r_[0, reading, 0]))
         for start, stop in zip(edges[:-1], edges[1:], strict=True):
-            if reading[start]:
-                turns.append(PlateTurn(_cycle(plate, READINGS[reading[start]]), int(start), int(stop)))
+            if not reading[start]:
+                continue
+            turn = PlateTurn(_cycle(plate, READINGS[reading[start]]), int(start), int(stop))
+            markers = list(turn.markers)
+            if not witnesses_deny(positions, first, neighbours, spreads, markers, markers[1:] + markers[:1],
+                                  list(plate), slice(start, stop)):
+                turns.append(turn)
     return turns
 
 

@@ -47,10 +47,10 @@ from formulations.markers.take_exchange import (
     MIN_RATE,
     NEAREST,
     best_run,
-    capped_cost,
     label_distance,
     near_pairs,
 )
+from formulations.markers.witness_costs import permutation_costs, rigid_witnesses
 
 Array = NDArray[np.float64]
 
@@ -129,19 +129,8 @@ def judged_permutation(tracks: Array, markers: list[int], taken: list[int], neig
     ``tracks``: the labeled positions and the same continued over gaps by the prediction;
     ``spreads``: of the labeled positions."""
     positions = tracks[0]
-    near = [int(j) for j in np.unique(neighbours[markers]) if j not in markers]
-    witness = [j for j, ok in zip(near, np.asarray(spreads.rigid(markers, near).all(axis=0))) if ok]
-    judges = witness + markers  # the set's own distances judge too
-    var = spreads.var(markers, judges)
-    right, rotated = np.zeros(len(positions)), np.zeros(len(positions))
-    for k, (m, t) in enumerate(zip(markers, taken)):
-        others = [i for i, j in enumerate(judges) if j != m]
-        sd = np.sqrt(var[k, others] + var[markers.index(t), others])
-        jud = [judges[i] for i in others]
-        # the set's other markers, in the permuted labeling, sit on the points they take
-        where = np.stack([positions[:, taken[markers.index(j)]] if j in markers else positions[:, j] for j in jud], axis=1)
-        right = right + capped_cost((np.linalg.norm(positions[:, m][:, None] - positions[:, jud], axis=2) - d0[m, jud]) / sd)
-        rotated = rotated + capped_cost((np.linalg.norm(positions[:, t][:, None] - where, axis=2) - d0[m, jud]) / sd)
+    judges = rigid_witnesses(markers, neighbours, spreads, markers) + markers  # the set's own distances judge too
+    right, rotated = permutation_costs(positions, markers, taken, judges, d0, spreads)
     every = np.isfinite(right) & np.isfinite(rotated) & np.isfinite(positions[:, markers]).all(axis=(1, 2))
     gain = np.where(every, right - rotated, 0.0)
     if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:

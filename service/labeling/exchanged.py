@@ -45,7 +45,7 @@ def exchanged_back(
     flips = take_flips(arrays["positions"], first.position, first.neighbours, arrays.get("filled"))
     for f in flips:
         _given_back(arrays, f)
-    turns = plate_turns(arrays["positions"], first.position)
+    turns = plate_turns(arrays["positions"], first.position, first.neighbours)
     for t in turns:
         _given_back(arrays, t)
     given: list[GivenBack] = [*exchanges, *rotations, *flips, *turns]
