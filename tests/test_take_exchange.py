@@ -126,6 +126,7 @@ def test_track_says_which_pairs_the_first_frame_gave_back(tmp_path: Path, monkey
     source.write_text(document_json(capture))
     forced = [TakeExchange(0, 1, 10, 30, 99.0)]
     monkeypatch.setattr(exchanged_module, "take_exchanges", lambda *args: forced)
+    monkeypatch.setattr(exchanged_module, "take_mirrors", lambda *args: [])  # it would give the forced exchange back
     done = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "a.csv"), "--json", "--one-pass"])
     assert done.exit_code == 0, done.output
     summary = json.loads(done.stdout.splitlines()[-1])

@@ -60,21 +60,26 @@ def first_frame_judges(labelings: list[Array], first: Array, neighbours: NDArray
     return FirstFrameJudges(*mate_offsets(labelings, first, mates, spread), handedness_flips(labelings, first, mates))
 
 
-def handedness_flips(labelings: list[Array], first: Array, mates: NDArray[np.int64]) -> Array:
-    """``(P, F, N)`` 1 where a labeling's label flips its quadruple's handedness off the first
+def handedness_flips(labelings: list[Array], first: Array, mates: NDArray[np.int64],
+                     markers: NDArray[np.int64] | None = None) -> Array:
+    """``(P, F, M)`` 1 where a labeling's label flips its quadruple's handedness off the first
     frame, 0 where it keeps it, NaN where it is not judged (module doc).
 
     Args:
         labelings: ``(F, N, 3)`` labeled positions of each labeling, NaN where unlabeled.
         first: ``(N, 3)`` the labeled first frame (NaN for a marker it lacks).
         mates: ``(N, 3)`` each marker's rigid mates (``first_frame_shape.rigid_mates``).
+        markers: the M markers judged; every one when None.
     """
-    quads = np.column_stack([np.arange(len(first)), mates])
+    judged_markers = np.arange(len(first)) if markers is None else np.asarray(markers)
+    if mates.shape[1] < 3:  # a take of three markers or fewer has no quadruple: nothing judged
+        return np.full((len(labelings), len(labelings[0]), len(judged_markers)), np.nan)
+    quads = np.column_stack([judged_markers, mates[judged_markers]])
     then = sines(first[quads])
     then = np.where(np.abs(then) >= MIN_SINE, then, np.nan)  # NaN: a flat or unlabeled first quadruple
     flips = []
     for positions in labelings:
-        now = sines(positions[:, quads].reshape(-1, 4, 3)).reshape(positions.shape[:2])
+        now = sines(positions[:, quads].reshape(-1, 4, 3)).reshape(len(positions), len(quads))
         judged = np.isfinite(then)[None] & (np.abs(now) >= MIN_SINE)  # NaN compares False: not judged
         flips.append(np.where(judged, (now * then[None] < 0).astype(float), np.nan))
     return np.stack(flips)

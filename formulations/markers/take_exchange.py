@@ -165,7 +165,7 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     gain = np.where(both, right - swapped, 0.0)
     if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:  # no run can reach it: spare the turns
         return None
-    start, stop, nats = best_run(gain, _may_turn(own, other, tracks[1][:, a], tracks[1][:, b]))
+    start, stop, nats = best_run(gain, may_exchange(own, other, tracks[1][:, a], tracks[1][:, b]))
     inside = np.zeros(len(both), bool)
     inside[start:stop] = True
     outside = both & ~inside
@@ -195,7 +195,7 @@ def best_run(gain: Array, may_turn: NDArray[np.bool_]) -> tuple[int, int, float]
     return start, stop, float(total[stop] - total[start])
 
 
-def _may_turn(own: Array, other: Array, own_continued: Array, other_continued: Array) -> NDArray[np.bool_]:
+def may_exchange(own: Array, other: Array, own_continued: Array, other_continued: Array) -> NDArray[np.bool_]:
     """``(F + 1,)`` frames where an exchange of the pair may start or stop: where the labels
     step farther from where each marker was heading (``heading.track_heading`` of its track continued over
     gaps) than the exchanged labels would, or after a frame that labels neither (both were

@@ -1,7 +1,8 @@
 """A labeling with the exchanges (rotations of three markers, plates of four turned half round)
 the labeled first frame finds over the whole take given back (``formulations.markers.take_exchange``,
 ``take_rotation``, ``take_flip``), the exchanges inside plates with equal sides that how far
-each plate turned finds (``formulations.markers.plate_turns``), and
+each plate turned finds (``formulations.markers.plate_turns``), the exchanges of mirror-image
+markers their handedness finds (``take_mirror``), and
 the tracks other markers took over handed back to the markers they continue
 (``formulations.markers.take_handover``).
 
@@ -21,10 +22,11 @@ from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, take_exchanges
 from formulations.markers.take_flip import take_flips
 from formulations.markers.take_handover import Handover, held_fill, take_handovers
+from formulations.markers.take_mirror import TakeMirror, take_mirrors
 from formulations.markers.take_rotation import TakeRotation, take_rotations
 from service.io.recording import LabeledTrajectories
 
-GivenBack = TakeExchange | TakeRotation | PlateTurn
+GivenBack = TakeExchange | TakeRotation | PlateTurn | TakeMirror
 EXCHANGED_CONFIDENCE = 0.5  # the windows and the first frame's shape read these labels otherwise
 
 
@@ -33,8 +35,8 @@ def exchanged_back(
 ) -> tuple[LabeledTrajectories, list[GivenBack]]:
     """``labels`` with each exchange of ``take_exchanges``, then each rotation of three markers
     of ``take_rotations``, each half-turned plate of four of ``take_flips`` (two exchanges)
-    and each plate with equal sides read exchanged (``plate_turns``) in what they leave,
-    applied to every per-label array; and all of them."""
+    each plate with equal sides read exchanged (``plate_turns``) and each pair of mirror images
+    exchanged (``take_mirrors``) in what they leave, applied to every per-label array; and all of them."""
     arrays = _per_label(labels)
     exchanges = take_exchanges(labels.positions, first.position, first.neighbours, _predicted(labels))
     for e in exchanges:
@@ -48,7 +50,10 @@ def exchanged_back(
     turns = plate_turns(arrays["positions"], first.position, first.neighbours)
     for t in turns:
         _given_back(arrays, t)
-    given: list[GivenBack] = [*exchanges, *rotations, *flips, *turns]
+    mirrors = take_mirrors(arrays["positions"], first.position, first.neighbours, arrays.get("filled"))
+    for m in mirrors:
+        _given_back(arrays, m)
+    given: list[GivenBack] = [*exchanges, *rotations, *flips, *turns, *mirrors]
     return (replace(labels, **arrays) if given else labels), given
 
 

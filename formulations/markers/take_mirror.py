@@ -1,0 +1,103 @@
+"""Recovery over a whole labeled take: two markers exchanged with each other's mirror image,
+given back by handedness.
+
+The take-wide exchange (``take_exchange``) judges a pair by its distances to witnesses rigid
+with both. A toe and a fifth-metatarsal marker have one such witness at most (the heel: the
+ankle crosses a joint), nearly as far from either, so their exchange keeps every distance
+(HDM05 whole take, seed 0: RTOE and RMT5 exchanged over frames 1383-1965, in every reading of
+the windows; the heel's costs 62.7 for the labels against 61.0 exchanged). Handedness is not
+blind (``first_frame_handedness``): each of the 490 judged wrong labels of either flips its
+quadruple with its three rigid mates (the other of the pair, heel, ankle) off the labeled
+first frame, and none of their 1,547 judged right ones.
+
+For two markers a, b each among the other's rigid mates (``first_frame_shape.rigid_mates``),
+exchanging their labels in frame t gains
+
+    g_t = sum over m in {a, b} of  flip_m,t(labels) - flip_m,t(exchanged),
+
+flip 1 where m's quadruple is flipped off the first frame, 0 where kept, and 0 where either
+labeling leaves it unjudged. Only a quadruple that keeps clear of flat (``mirror.MIN_SINE``) in
+all but ``FLAT_SHARE`` of the frames labeling it judges: one that is often flat turns through
+flat with the pose (HDM05's wrist, LWRA with LWRB, LFRM and LFIN: flat in 54 % of its labeled
+frames, its sign turned over 16 % of its right labels; the foot's never flat). The exchange is
+made over the run of largest gain
+(``take_exchange.best_run``, starting and stopping where an exchange may:
+``take_exchange.may_exchange``) where the labels are the mirrored side against the exchanged
+ones (``first_frame_handedness.mirrored_side``: most of their judged labels there flipped,
+almost none of the exchanged) and the exchange unflips at least ``MIN_UNFLIPPED`` labels. The
+pair of largest gain goes first; the rest are judged again on the labels it leaves, as the
+take-wide exchanges are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from formulations.markers.first_frame_handedness import handedness_flips, mirrored_side
+from formulations.markers.first_frame_shape import PARTNERS, rigid_mates
+from formulations.markers.take_exchange import best_run, may_exchange
+
+Array = NDArray[np.float64]
+
+MIN_UNFLIPPED = 10  # labels a take-wide exchange must unflip: a few may be a flat moment's noise
+FLAT_SHARE = 0.1  # of the frames labeling a quadruple: one flat more often turns through flat with the pose
+
+
+@dataclass(frozen=True)
+class TakeMirror:
+    """Markers ``a`` and ``b`` exchange their labels over frames [start, stop), which unflips
+    ``unflipped`` labels' handedness."""
+
+    a: int
+    b: int
+    start: int
+    stop: int
+    unflipped: float
+
+    @property
+    def markers(self) -> tuple[int, int]:
+        """The two markers, each taking the other's labels (as ``TakeExchange.markers``)."""
+        return self.a, self.b
+
+
+def take_mirrors(positions: Array, first: Array, neighbours: NDArray[np.int64],
+                 predicted: Array | None = None) -> list[TakeMirror]:
+    """The exchanges that give a labeling back its first frame's handedness (module doc), in
+    the order they apply; arguments as ``take_exchange.take_exchanges``."""
+    mates, _ = rigid_mates([positions], neighbours, PARTNERS)
+    pairs = sorted({(min(a, int(b)), max(a, int(b))) for a in range(len(first)) for b in mates[a] if a in mates[b]})
+    continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
+    working, done = np.stack([positions, continued]), []
+    for _ in range(len(pairs)):
+        found = [m for pair in pairs if (m := _judged(working, first, mates, *pair)) is not None]
+        if not found:
+            break
+        best = max(found, key=lambda m: m.unflipped)
+        moved = list(best.markers)
+        working[:, best.start:best.stop, moved] = working[:, best.start:best.stop, moved[::-1]]
+        done.append(best)
+    return done
+
+
+def _judged(tracks: Array, first: Array, mates: NDArray[np.int64], a: int, b: int) -> TakeMirror | None:
+    """The pair's exchange over its best frames, None when it does not clear (module doc).
+    ``tracks``: the labeled positions and the same continued over gaps by the prediction."""
+    labels = tracks[0]
+    exchanged = labels.copy()
+    exchanged[:, [a, b]] = labels[:, [b, a]]
+    flips = handedness_flips([labels, exchanged], first, mates, np.array([a, b]))  # (2, F, 2)
+    labeled = np.isfinite(labels[:, np.column_stack([[a, b], mates[[a, b]]])]).all(axis=(2, 3))  # (F, 2)
+    if ((labeled & np.isnan(flips[0])).sum(axis=0) > FLAT_SHARE * labeled.sum(axis=0)).any():
+        return None  # a quadruple whose sign the pose turns says nothing of the labels
+    both = np.isfinite(flips).all(axis=0)
+    gain = np.where(both, flips[0] - flips[1], 0.0).sum(axis=1)
+    if gain[1:][gain[1:] > 0].sum() < MIN_UNFLIPPED:  # no run can reach it: spare the search
+        return None
+    start, stop, unflipped = best_run(gain, may_exchange(labels[:, a], labels[:, b], tracks[1][:, a], tracks[1][:, b]))
+    run = flips[:, start:stop]
+    if unflipped < MIN_UNFLIPPED or mirrored_side(run.reshape(2, -1)) != 0:
+        return None
+    return TakeMirror(a, b, start, stop, unflipped)
