@@ -72,7 +72,10 @@ def take_mirrors(positions: Array, first: Array, neighbours: NDArray[np.int64],
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
     for _ in range(len(pairs)):
-        found = [m for pair in pairs if (m := _judged(working, first, mates, *pair)) is not None]
+        # a pair gains no more than its labels' flips: most pairs of a take have none to give back
+        flipped = np.nansum(handedness_flips([working[0]], first, mates)[0], axis=0)
+        found = [m for a, b in pairs if flipped[a] + flipped[b] >= MIN_UNFLIPPED
+                 and (m := _judged(working, first, mates, a, b)) is not None]
         if not found:
             break
         best = max(found, key=lambda m: m.unflipped)
