@@ -27,6 +27,12 @@ from the frame before are longest against the steps the change makes (a label's 
 where the changed reading continues it; never cutting a track the labels hold smoothly), the
 latest of equals.
 
+A run read so is given back unless the plate's witnesses deny it
+(``witness_costs.witnesses_deny``: the markers rigid with it favour the labels by the bar a
+take-wide permutation must clear). The plate alone cannot tell a turn of 113 degrees under a
+34-frame loss from the 49 another reading turns plus a change (HDM05's wrist, seed 0: read
+taken round over 360 frames, 1,142 labels lost); its elbow and forearm markers can.
+
 It runs after the take-wide exchanges, rotations and half turns (``service.labeling.exchanged``).
 Measured (lp-l1, 600 frames): the wheelchair racing take's 15 rows of seeds 0-2, 13 higher
 and 2 lower (seed 0 at 2 mm 86.76 -> 85.65 %, at 4 mm 61.85 -> 61.75), default 90.73 -> 93.57 %
