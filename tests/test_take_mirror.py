@@ -52,3 +52,21 @@ def test_a_quadruple_the_pose_turns_through_flat_does_not_judge() -> None:
     for crossing in (30, 90, 150):
         labels[crossing - 2:crossing + 3, [TOE, FIFTH]] = np.nan
     assert take_mirrors(labels, truth[0], _neighbours(truth)) == []
+
+
+def test_one_markers_quadruple_turned_by_a_loose_mate_is_no_exchange() -> None:
+    """a's quadruple has a loose mate d swinging through its plane (turned over frames 30-90);
+    b's quadruple is not labeled whole there (its mate f lost); both a and b lost where d
+    crosses, where an exchange may start. a's flips alone are no exchange of a and b."""
+    c, a, b, f, d = range(5)
+    t = np.arange(FRAMES)
+    swing = 30.0 * np.clip(3 * np.cos(2 * np.pi * t / 120), -1.0, 1.0)
+    body = np.array([[20.0, 0, 0], [60, 0, 0], [60, 40, 0], [20, 40, 20], [70, -20, 0]])
+    truth = np.repeat(body[None], FRAMES, axis=0) + np.random.default_rng(1).normal(0.0, 0.3, (FRAMES, 5, 3))
+    truth[:, d, 2] += swing
+    labels = truth.copy()
+    labels[31:90, f] = np.nan
+    for crossing in (30, 90, 150):
+        labels[crossing - 2:crossing + 3, [a, b]] = np.nan
+    neighbours = MarkerState.from_first_frame(truth[0], n_neighbours=3).neighbours
+    assert take_mirrors(labels, truth[0], neighbours) == []

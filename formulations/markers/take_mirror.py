@@ -15,9 +15,13 @@ exchanging their labels in frame t gains
 
     g_t = sum over m in {a, b} of  flip_m,t(labels) - flip_m,t(exchanged),
 
-flip 1 where m's quadruple is flipped off the first frame, 0 where kept, and 0 where either
-labeling leaves it unjudged. Only a quadruple that keeps clear of flat (``mirror.MIN_SINE``) in
-all but ``FLAT_SHARE`` of the frames labeling it judges: one that is often flat turns through
+flip 1 where m's quadruple is flipped off the first frame, 0 where kept, and g_t = 0 where
+either labeling leaves either quadruple unjudged: an exchange turns both over, and a pose that
+turns one marker's loose mate across the others' plane turns one (03_rolling, the hard preset,
+seed 1: LLFHD's quadruple with the right elbow's LR_HLE flipped over 197-224 while LLBHD's was
+judged once; the exchange made on it, and the next on what it left, cost 100 labels).
+Only a quadruple that keeps clear of flat (``mirror.MIN_SINE``) in all but ``FLAT_SHARE`` of
+the frames labeling it judges: one that is often flat turns through
 flat with the pose (HDM05's wrist, LWRA with LWRB, LFRM and LFIN: flat in 54 % of its labeled
 frames, its sign turned over 16 % of its right labels; the foot's never flat). The exchange is
 made over the run of largest gain
@@ -99,12 +103,12 @@ def _judged(tracks: Array, first: Array, mates: NDArray[np.int64], a: int, b: in
     labeled = np.isfinite(labels[:, np.column_stack([[a, b], mates[[a, b]]])]).all(axis=(2, 3))  # (F, 2)
     if ((labeled & np.isnan(flips[0])).sum(axis=0) > FLAT_SHARE * labeled.sum(axis=0)).any():
         return None  # a quadruple whose sign the pose turns says nothing of the labels
-    both = np.isfinite(flips).all(axis=0)
-    gain = np.where(both, flips[0] - flips[1], 0.0).sum(axis=1)
+    both = np.asarray(np.isfinite(flips).all(axis=(0, 2)))  # each marker's quadruple judged in both labelings
+    gain = np.where(both[:, None], flips[0] - flips[1], 0.0).sum(axis=1)
     if gain[1:][gain[1:] > 0].sum() < MIN_UNFLIPPED:  # no run can reach it: spare the search
         return None
     start, stop, unflipped = best_run(gain, may_exchange(labels[:, a], labels[:, b], tracks[1][:, a], tracks[1][:, b]))
-    run = flips[:, start:stop]
+    run = flips[:, start:stop][:, both[start:stop]]
     if unflipped < MIN_UNFLIPPED or mirrored_side(run.reshape(2, -1)) != 0:
         return None
     return TakeMirror(a, b, start, stop, unflipped)
