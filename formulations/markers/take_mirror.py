@@ -34,7 +34,8 @@ take-wide exchanges are.
 
 Measured (2026-12-06, after the plate turns' witnesses; ``docs/measured.md``): HDM05 whole,
 default and 2 mm, seeds 0-1, 99.28 / 99.27 -> 99.99 / 99.99 % (``nn-hungarian`` 99.27 / 99.25);
-seed-0 accuracy matrix 2 rows up, none down; seeds 1-2 9 up and 2 down of 170.
+seed-0 accuracy matrix 2 rows up, none down; seeds 1-2 (with the witnesses) 8 up and 2 down of
+170 against neither.
 """
 
 from __future__ import annotations
