@@ -16,6 +16,7 @@ def test_the_repaired_labels_differ_from_the_windows_by_the_repair_alone(monkeyp
     the windows' labels keep their reading, the repaired ones swap exactly those frames, and
     the result's labels are the repaired ones."""
     monkeypatch.setattr(exchanged_module, "take_exchanges", lambda *args: [TakeExchange(0, 1, 10, 30, 99.0)])
+    monkeypatch.setattr(exchanged_module, "take_mirrors", lambda *args: [])  # it would give the forced exchange back
     labeling = CaptureLabeling(generated_capture(60), LabelingOptions(second_pass=False))
     outcomes = list(labeling.windows())
     windows, repaired = labeling.assembled(outcomes, repaired=False), labeling.assembled(outcomes)
