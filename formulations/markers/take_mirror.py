@@ -15,22 +15,22 @@ exchanging their labels in frame t gains
 
     g_t = sum over m in {a, b} of  flip_m,t(labels) - flip_m,t(exchanged),
 
-flip 1 where m's quadruple is flipped off the first frame, 0 where kept, and g_t = 0 where
-either labeling leaves either quadruple unjudged: an exchange turns both over, and a pose that
-turns one marker's loose mate across the others' plane turns one (03_rolling, the hard preset,
-seed 1: LLFHD's quadruple with the right elbow's LR_HLE flipped over 197-224 while LLBHD's was
-judged once; the exchange made on it, and the next on what it left, cost 100 labels).
-Only a quadruple that keeps clear of flat (``mirror.MIN_SINE``) in all but ``FLAT_SHARE`` of
-the frames labeling it judges: one that is often flat turns through
-flat with the pose (HDM05's wrist, LWRA with LWRB, LFRM and LFIN: flat in 54 % of its labeled
-frames, its sign turned over 16 % of its right labels; the foot's never flat). The exchange is
-made over the run of largest gain
-(``take_exchange.best_run``, starting and stopping where an exchange may:
-``take_exchange.may_exchange``) where the labels are the mirrored side against the exchanged
-ones (``first_frame_handedness.mirrored_side``: most of their judged labels there flipped,
-almost none of the exchanged) and the exchange unflips at least ``MIN_UNFLIPPED`` labels. The
-pair of largest gain goes first; the rest are judged again on the labels it leaves, as the
-take-wide exchanges are.
+flip 1 where m's quadruple is flipped off the first frame and 0 where kept; g_t = 0 where
+either labeling leaves either quadruple unjudged. An exchange turns both quadruples over; a
+pose that turns one marker's loose mate across the others' plane turns one (03_rolling, the
+hard preset, seed 1: LLFHD's quadruple with the right elbow's LR_HLE flipped over 197-224
+while LLBHD's was judged once; the exchange made on it, and the next on what it left, cost
+100 labels). Only a quadruple that keeps clear of flat (``mirror.MIN_SINE``) in all but
+``FLAT_SHARE`` of the frames labeling it judges: one that is often flat turns through flat
+with the pose (HDM05's wrist, LWRA with LWRB, LFRM and LFIN: flat in 54 % of its labeled
+frames, its sign turned over 16 % of its right labels; the foot's never flat).
+
+The exchange is made over the run of largest gain (``take_exchange.best_run``, starting and
+stopping where an exchange may: ``take_exchange.may_exchange``) where the labels are the
+mirrored side against the exchanged ones (``first_frame_handedness.mirrored_side``: most of
+their judged labels there flipped, almost none of the exchanged) and the exchange unflips at
+least ``MIN_UNFLIPPED`` labels. The pair of largest gain goes first; the rest are judged again
+on the labels it leaves, as the take-wide exchanges are.
 
 Measured (2026-12-06, after the plate turns' witnesses; ``docs/measured.md``): HDM05 whole,
 default and 2 mm, seeds 0-1, 99.28 / 99.27 -> 99.99 / 99.99 % (``nn-hungarian`` 99.27 / 99.25);

@@ -34,7 +34,7 @@ def exchanged_back(
     labels: LabeledTrajectories, first: MarkerState,
 ) -> tuple[LabeledTrajectories, list[GivenBack]]:
     """``labels`` with each exchange of ``take_exchanges``, then each rotation of three markers
-    of ``take_rotations``, each half-turned plate of four of ``take_flips`` (two exchanges)
+    of ``take_rotations``, each half-turned plate of four of ``take_flips`` (two exchanges),
     each plate with equal sides read exchanged (``plate_turns``) and each pair of mirror images
     exchanged (``take_mirrors``) in what they leave, applied to every per-label array; and all of them."""
     arrays = _per_label(labels)
