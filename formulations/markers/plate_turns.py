@@ -31,7 +31,11 @@ A run read so is given back unless the plate's witnesses deny it
 (``witness_costs.witnesses_deny``: the markers rigid with it favour the labels by the bar a
 take-wide permutation must clear). The plate alone cannot tell a turn of 113 degrees under a
 34-frame loss from the 49 another reading turns plus a change (HDM05's wrist, seed 0: read
-taken round over 360 frames, 1,142 labels lost); its elbow and forearm markers can.
+taken round over 360 frames, 1,142 labels lost); its elbow and forearm markers can. Measured
+(lp-l1, 2026-12-06, against no witnesses): on racing's labels before the take-wide repairs
+(seeds 0-2, five conditions, 235 turns) the bar denies 10 turns, all wrong, and no right one;
+seed-0 accuracy matrix 2 rows up and 1 down of 85 (racing default 95.25 -> 93.29 %: the second
+pass learns from the repaired labels), racing and HDM05 at seeds 1-2 2 up and 1 down of 20.
 
 It runs after the take-wide exchanges, rotations and half turns (``service.labeling.exchanged``).
 Measured (lp-l1, 600 frames): the wheelchair racing take's 15 rows of seeds 0-2, 13 higher

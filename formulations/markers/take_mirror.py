@@ -81,10 +81,11 @@ def take_mirrors(positions: Array, first: Array, neighbours: NDArray[np.int64],
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
     for _ in range(len(pairs)):
-        # a pair gains no more than its labels' flips: most pairs of a take have none to give back
-        flipped = np.nansum(handedness_flips([working[0]], first, mates)[0], axis=0)
-        found = [m for a, b in pairs if flipped[a] + flipped[b] >= MIN_UNFLIPPED
-                 and (m := _judged(working, first, mates, a, b)) is not None]
+        flips = handedness_flips([working[0]], first, mates)[0]  # (F, N), the labels'
+        firm = _clear_of_flat(working[0], flips, mates)
+        flipped = np.nansum(flips, axis=0)  # a pair gains no more: most pairs have nothing to give back
+        found = [m for a, b in pairs if firm[a] and firm[b] and flipped[a] + flipped[b] >= MIN_UNFLIPPED
+                 and (m := _judged(working, first, mates, flips[:, [a, b]], a, b)) is not None]
         if not found:
             break
         best = max(found, key=lambda m: m.unflipped)
@@ -94,22 +95,31 @@ def take_mirrors(positions: Array, first: Array, neighbours: NDArray[np.int64],
     return done
 
 
-def _judged(tracks: Array, first: Array, mates: NDArray[np.int64], a: int, b: int) -> TakeMirror | None:
+def _clear_of_flat(positions: Array, flips: Array, mates: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """``(N,)`` each marker's quadruple judged (clear of flat) in all but ``FLAT_SHARE`` of the
+    frames labeling it: one flat more often is turned by the pose and says nothing of labels."""
+    quads = np.column_stack([np.arange(len(mates)), mates])
+    labeled = np.isfinite(positions[:, quads]).all(axis=(2, 3))  # (F, N)
+    firm: NDArray[np.bool_] = (labeled & np.isnan(flips)).sum(axis=0) <= FLAT_SHARE * labeled.sum(axis=0)
+    return firm
+
+
+def _judged(tracks: Array, first: Array, mates: NDArray[np.int64], flips: Array, a: int, b: int) -> TakeMirror | None:
     """The pair's exchange over its best frames, None when it does not clear (module doc).
-    ``tracks``: the labeled positions and the same continued over gaps by the prediction."""
+    ``tracks``: the labeled positions and the same continued over gaps by the prediction;
+    ``flips``: ``(F, 2)`` the labels' flips of a's and b's quadruples. The exchange negates both
+    sines, but the sine's scale (edges from the quadruple's first point) changes with it, and
+    with it which frames are judged: the exchanged flips are computed, not derived."""
     labels = tracks[0]
     exchanged = labels.copy()
     exchanged[:, [a, b]] = labels[:, [b, a]]
-    flips = handedness_flips([labels, exchanged], first, mates, np.array([a, b]))  # (2, F, 2)
-    labeled = np.isfinite(labels[:, np.column_stack([[a, b], mates[[a, b]]])]).all(axis=(2, 3))  # (F, 2)
-    if ((labeled & np.isnan(flips[0])).sum(axis=0) > FLAT_SHARE * labeled.sum(axis=0)).any():
-        return None  # a quadruple whose sign the pose turns says nothing of the labels
-    both = np.asarray(np.isfinite(flips).all(axis=(0, 2)))  # each marker's quadruple judged in both labelings
-    gain = np.where(both[:, None], flips[0] - flips[1], 0.0).sum(axis=1)
+    pair = np.stack([flips, handedness_flips([exchanged], first, mates, np.array([a, b]))[0]])  # (2, F, 2)
+    both = np.asarray(np.isfinite(pair).all(axis=(0, 2)))  # each marker's quadruple judged in both labelings
+    gain = np.where(both[:, None], pair[0] - pair[1], 0.0).sum(axis=1)
     if gain[1:][gain[1:] > 0].sum() < MIN_UNFLIPPED:  # no run can reach it: spare the search
         return None
     start, stop, unflipped = best_run(gain, may_exchange(labels[:, a], labels[:, b], tracks[1][:, a], tracks[1][:, b]))
-    run = flips[:, start:stop][:, both[start:stop]]
+    run = pair[:, start:stop][:, both[start:stop]]
     if unflipped < MIN_UNFLIPPED or mirrored_side(run.reshape(2, -1)) != 0:
         return None
     return TakeMirror(a, b, start, stop, unflipped)
