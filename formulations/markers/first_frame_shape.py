@@ -12,10 +12,12 @@ For labelings L_1 .. L_P (``(F, N, 3)``, NaN where a marker has no label), the p
 v^p_mj of each (``take_spread``: robust to a tenth of wrong labels) give each pair's rigidity
 r_mj = min_p v^p_mj, the pair as rigid as any labeling shows it: a labeling that is wrong over
 most of the take cannot make a rigid pair look loose to the others. Marker m's partners J_m
-are its ``partners`` neighbours of least r_mj. With d0_mj their distance in the first frame,
+are its ``partners`` neighbours of least r_mj. With d_mj their rest length (``rest_lengths``: the
+first frame's distance, or the median of the distances the labelings agree on where the first
+frame is an outlier of those),
 and U the (frame t, marker m, partner j in J_m) triples labeled together in any labeling,
 
-    o_p(t, m, j) = | ||L_p[t, m] - L_p[t, j]|| - d0_mj |
+    o_p(t, m, j) = | ||L_p[t, m] - L_p[t, j]|| - d_mj |
     disagreement(L_p) = mean over U of  o_p(t, m, j)   where L_p labels both m and j at t
                                                        and o_p <= tol_mj,
                                         cap             else,
@@ -40,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.rest_lengths import rest_lengths
 from formulations.markers.shape_breaks import NEAREST_SHARE, SPREADS
 from formulations.markers.take_spread import take_spread
 
@@ -75,7 +78,7 @@ def pair_offsets(
     labelings: list[Array], first: Array, neighbours: NDArray[np.int64], partners: int = PARTNERS, cap_mm: float = CAP_MM,
 ) -> tuple[Array, NDArray[np.bool_]]:
     """``(P, F, N, R)`` each labeling's offset of each marker's R rigid partners off the first
-    frame, ``| ||L_p[t, m] - L_p[t, j]|| - d0_mj |``, the cap where it does not label both or
+    frame, ``| ||L_p[t, m] - L_p[t, j]|| - d_mj |``, the cap where it does not label both or
     the offset passes the tolerance (module doc); and ``(F, N, R)`` the triples some labeling
     labels together (U)."""
     return mate_offsets(labelings, first, *rigid_mates(labelings, neighbours, partners), cap_mm)
@@ -85,12 +88,12 @@ def mate_offsets(
     labelings: list[Array], first: Array, mates: NDArray[np.int64], spread: Array, cap_mm: float = CAP_MM,
 ) -> tuple[Array, NDArray[np.bool_]]:
     """``pair_offsets`` for the ``mates`` and their ``spread`` (``rigid_mates``) found already."""
-    rest = np.linalg.norm(first[:, None] - first[mates], axis=2)
-    off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
-                    for positions in labelings])  # NaN where a pair is not labeled together
     gaps = np.linalg.norm(first[:, None] - first[None], axis=2)
     np.fill_diagonal(gaps, np.inf)
     tolerance = np.fmax(SPREADS * np.sqrt(spread), NEAREST_SHARE * np.nanmin(gaps, axis=1)[:, None])
+    rest = rest_lengths(labelings, first, mates, spread, tolerance)
+    off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
+                    for positions in labelings])  # NaN where a pair is not labeled together
     capped: Array = np.minimum(np.where(off <= tolerance, off, cap_mm), cap_mm)  # NaN compares False: the cap
     return capped, np.isfinite(off).any(axis=0)
 
