@@ -58,7 +58,7 @@ def test_the_first_frame_alone_keeps_the_toe_given_away(monkeypatch: pytest.Monk
     later = np.linalg.norm(truth[EVENT.start, TOE] - truth[EVENT.start, ANKLE])
     assert abs(later - first[MT5]) < abs(later - first[TOE])  # the pitched first frame misleads
     monkeypatch.setattr(first_frame_shape, "rest_lengths",
-                        lambda labelings, first, mates, spread, tolerance: np.linalg.norm(first[:, None] - first[mates], axis=2))
+                        lambda labelings, mates, distance, d0, spread, tolerance: d0)
     assert _merged(truth)[EVENT, [TOE, MT5]].all()
 
 
@@ -71,13 +71,20 @@ MATES = np.array([[TOE, MT5, HEEL], [ANKLE, MT5, HEEL], [ANKLE, TOE, HEEL], [ANK
 SPREAD = np.ones((4, 3))  # mm^2: the foot's distances vary by about 1 mm over the take
 
 
+def _rest(labelings: list[np.ndarray], first: np.ndarray, tolerance: float) -> np.ndarray:
+    """``rest_lengths`` of ``MATES`` with the first labeling's distances and ``first``'s."""
+    distance = np.linalg.norm(labelings[0][:, :, None] - labelings[0][:, MATES], axis=3)
+    d0 = np.linalg.norm(first[:, None] - first[MATES], axis=2)
+    return rest_lengths(labelings, MATES, distance, d0, SPREAD, np.full((4, 3), tolerance))
+
+
 def test_an_outlying_first_frame_distance_gives_way_to_the_agreed_median() -> None:
     """The ankle's distances to the foot, pitched in the first frame, are the median over the
     frames both passes label alike; the foot's own distances, the same in every pose, keep the
     first frame's."""
     truth = _foot()
     (_, _), positions = _passes(truth)
-    rest = rest_lengths(positions, truth[0], MATES, SPREAD, np.full((4, 3), 30.0))
+    rest = _rest(positions, truth[0], 30.0)
     agreed = np.r_[0:EVENT.start, EVENT.stop:FRAMES]
     expected = np.median(np.linalg.norm(truth[agreed, ANKLE] - truth[agreed, TOE], axis=1))
     assert rest[ANKLE, 0] == pytest.approx(expected)
@@ -95,7 +102,7 @@ def test_labels_both_labelings_get_wrong_do_not_move_the_rest_length() -> None:
     wrong[10:, [TOE, MT5]] = truth[10:, [MT5, TOE]]
     flat = truth[1]  # a first frame in the take's usual pose
     first = np.linalg.norm(flat[:, None] - flat[MATES], axis=2)
-    rest = rest_lengths([wrong, wrong.copy()], flat, MATES, SPREAD, np.full((4, 3), 10.0))
+    rest = _rest([wrong, wrong.copy()], flat, 10.0)
     assert rest[ANKLE, :2] == pytest.approx(first[ANKLE, :2])
-    few = rest_lengths([truth[:15], truth[:15].copy()], truth[0], MATES, SPREAD, np.full((4, 3), 30.0))
+    few = _rest([truth[:15], truth[:15].copy()], truth[0], 30.0)
     assert few == pytest.approx(np.linalg.norm(truth[0, :, None] - truth[0, MATES], axis=2))

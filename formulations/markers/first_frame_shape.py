@@ -91,11 +91,13 @@ def mate_offsets(
     gaps = np.linalg.norm(first[:, None] - first[None], axis=2)
     np.fill_diagonal(gaps, np.inf)
     tolerance = np.fmax(SPREADS * np.sqrt(spread), NEAREST_SHARE * np.nanmin(gaps, axis=1)[:, None])
-    rest = rest_lengths(labelings, first, mates, spread, tolerance)
-    off = np.stack([np.abs(np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) - rest)
-                    for positions in labelings])  # NaN where a pair is not labeled together
+    distance = np.stack([np.linalg.norm(positions[:, :, None] - positions[:, mates], axis=3) for positions in labelings])
+    d0 = np.linalg.norm(first[:, None] - first[mates], axis=2)
+    rest = rest_lengths(labelings, mates, distance[0], d0, spread, tolerance)
+    off: Array = np.abs(distance - rest)  # NaN where a pair is not labeled together
     capped: Array = np.minimum(np.where(off <= tolerance, off, cap_mm), cap_mm)  # NaN compares False: the cap
-    return capped, np.isfinite(off).any(axis=0)
+    judged: NDArray[np.bool_] = np.asarray(np.isfinite(off).any(axis=0))
+    return capped, judged
 
 
 def rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners: int) -> tuple[NDArray[np.int64], Array]:
