@@ -30,6 +30,7 @@ import itertools
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.assignment.dominated import without_dominated
 from formulations.assignment.murty import Costs, Indices, RankedAssignment
 from formulations.assignment.rankings import BlockRanking, RankingCache
 
@@ -77,7 +78,7 @@ def k_best_assignments(
     unassigned (column -1), None when every row must be assigned. Ties come in any order.
     ``cache`` shares block rankings with other calls (None: this call's own).
     """
-    cost = np.asarray(cost, dtype=float)
+    cost = without_dominated(np.asarray(cost, dtype=float), miss, k)  # smaller blocks, the same k best
     rows, width = cost.shape
     cache = RankingCache() if cache is None else cache
     extended = np.column_stack([cost, np.full(rows, np.inf) if miss is None else miss])
