@@ -135,7 +135,7 @@ def test_the_frame_by_frame_reading_of_an_identified_take_acquires_from_the_mode
     frames, owner = _cloud(held, absent)
     capture = Capture(model_names(model), np.full((len(order), 3), np.nan), 100.0, points=frames, model=model)
     labeling = CaptureLabeling(capture, LabelingOptions(window=10))
-    outcomes = labeling.read_frame_by_frame()
+    outcomes = labeling.read_beside("frame-by-frame")
     assert outcomes is not None
     took = labeling.assembled(outcomes, repaired=False).point_index
     right = [owner[f][took[f, late]] == late for f in range(40, len(frames)) if took[f, late] >= 0]

@@ -1,4 +1,4 @@
-"""The frame-by-frame reading run in a child process beside the second pass
+"""The frame-by-frame and ``mht`` readings run in child processes beside the second pass
 (``service.labeling.rival_process``): the same labels as read here, its failures said, a stop ends it."""
 
 from __future__ import annotations
@@ -27,44 +27,52 @@ def _spied(monkeypatch: pytest.MonkeyPatch) -> list[RivalBeside]:
     started: list[RivalBeside] = []
 
     class Spied(RivalBeside):
-        def __init__(self, capture: Capture, options: LabelingOptions) -> None:
-            super().__init__(capture, options)
+        def __init__(self, capture: Capture, options: LabelingOptions, reading: str = "frame-by-frame") -> None:
+            super().__init__(capture, options, reading)
             started.append(self)
 
-    monkeypatch.setattr(capture_labeling, "RivalBeside", Spied)
     monkeypatch.setattr(rival_process, "RivalBeside", Spied)
     return started
 
 
-def _labeled(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool) -> tuple[CaptureLabeling, object, list[RivalBeside]]:
-    """``late``: ``refine`` starts the child; ``early``: the first pass does (``EarlyStart``)."""
+def _labeled(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool, mht: bool = False,
+             ) -> tuple[CaptureLabeling, object, list[RivalBeside]]:
+    """``late``: ``refine`` starts the children; ``early``: the first pass does (``EarlyStart``);
+    ``mht``: the ``mht`` reading runs too."""
     started = _spied(monkeypatch)
     monkeypatch.setattr(capture_labeling, "runs_beside", lambda seconds: late)
     monkeypatch.setattr(rival_process, "runs_beside", lambda seconds: early)
-    labeling = CaptureLabeling(_doubtful(), LabelingOptions(window=10))
+    labeling = CaptureLabeling(_doubtful(), LabelingOptions(window=10, mht_reading=mht))
     progress: list[tuple[int, int]] = []
     result, _ = labeling.label(progress=lambda k, n: progress.append((k, n)))
-    assert progress[-1] == (4 * labeling.n_windows, 4 * labeling.n_windows)  # both readings' two passes counted
+    passes = 6 if mht else 4  # the windows' two passes, and each reading's two
+    assert progress[-1] == (passes * labeling.n_windows, passes * labeling.n_windows)
     return labeling, result, started
 
 
 @pytest.fixture(scope="module")
-def read_here() -> tuple[CaptureLabeling, object]:
-    """The doubtful take labeled with the reading in this process (once for both tests)."""
+def read_here() -> dict[bool, tuple[CaptureLabeling, object]]:
+    """The doubtful take labeled with the readings in this process, without and with ``mht``'s."""
+    labeled = {}
     with pytest.MonkeyPatch.context() as monkeypatch:
-        here, here_result, none = _labeled(monkeypatch, late=False, early=False)
-    assert here.rival is not None and not none  # the take is doubtful: the reading ran, here
-    return here, here_result
+        for mht in (False, True):
+            here, here_result, none = _labeled(monkeypatch, late=False, early=False, mht=mht)
+            assert here.rival is not None and not none  # the take is doubtful: the readings ran, here
+            assert (here.hypotheses is not None) == mht
+            labeled[mht] = here, here_result
+    return labeled
 
 
-@pytest.mark.parametrize("late, early", [(True, False), (False, True)])
+@pytest.mark.parametrize("late, early, mht", [(True, False, False), (False, True, False), (False, True, True)])
 def test_the_reading_beside_gives_the_labels_read_here(
-    monkeypatch: pytest.MonkeyPatch, read_here: tuple[CaptureLabeling, object], late: bool, early: bool,
+    monkeypatch: pytest.MonkeyPatch, read_here: dict[bool, tuple[CaptureLabeling, object]], late: bool, early: bool,
+    mht: bool,
 ) -> None:
-    here, here_result = read_here
-    beside, beside_result, started = _labeled(monkeypatch, late, early)
-    assert len(started) == 1 and started[0].ended  # ... and the second time in one child, done
-    assert beside.rival == here.rival and beside.choice == here.choice
+    here, here_result = read_here[mht]
+    beside, beside_result, started = _labeled(monkeypatch, late, early, mht)
+    assert [child.reading for child in started] == ["frame-by-frame", "mht"][: 1 + mht]  # ... the second time in children
+    assert all(child.ended for child in started)
+    assert beside.rival == here.rival and beside.choice == here.choice and beside.hypotheses == here.hypotheses
     for field in ("positions", "point_index", "confidence", "filled"):
         assert np.array_equal(getattr(beside_result, field), getattr(here_result, field), equal_nan=True), field
 
@@ -76,7 +84,7 @@ def test_a_reading_started_early_is_ended_when_the_take_is_not_doubtful(monkeypa
     first_pass = CaptureLabeling(_doubtful(), LabelingOptions(window=10, rival_reading=False)).windows()  # no child of its own
     list(early.watched(first_pass))
     assert len(started) == 1 and not started[0].ended  # doubtful: started while the first pass ran
-    assert early.taken(False) is None
+    assert early.taken(False).children == {}
     assert started[0].ended
 
 

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from formulations.assignment.dominated import without_dominated
 from formulations.assignment.murty import Costs, Indices, RankedAssignment
-from formulations.assignment.rankings import BlockRanking, RankingCache
+from formulations.assignment.rankings import BlockRanking, RankingCache, is_enumerated
 
 
 class _Placed:
@@ -78,12 +78,19 @@ def k_best_assignments(
     unassigned (column -1), None when every row must be assigned. Ties come in any order.
     ``cache`` shares block rankings with other calls (None: this call's own).
     """
-    cost = without_dominated(np.asarray(cost, dtype=float), miss, k)  # smaller blocks, the same k best
+    cost = np.asarray(cost, dtype=float)
     rows, width = cost.shape
     cache = RankingCache() if cache is None else cache
     extended = np.column_stack([cost, np.full(rows, np.inf) if miss is None else miss])
     finite = np.isfinite(extended)
     lone, shared = _blocks(finite[:, :width])
+    if k > 1 and not all(is_enumerated(finite[r][:, np.append(c, width)]) for r, c in shared):
+        # a block for Murty's ranking: drop the entries none of the k best takes, which
+        # splits it (one LAP more, worth it only then), and find the blocks again
+        cost = without_dominated(cost, miss, k)
+        extended[:, :width] = cost
+        finite = np.isfinite(extended)
+        lone, shared = _blocks(finite[:, :width])
     # One-row blocks, all at once: each row's options sorted (the last column is the miss).
     order = np.argsort(extended[lone], axis=1, kind="stable")
     ranked_cost = np.take_along_axis(extended[lone], order, axis=1)

@@ -13,7 +13,10 @@ of these steps the k-th best of P costs at most best + D, so P's k best are the 
 matrix's, exactly. In a window of markers a lost marker's wide gate reaches many points and
 joins most rows into one block (median 4 rows, 90th percentile 64, on 03_rolling's ``mht``
 reading); with the entries dearer than missing by more than D dropped, 2 and 4 rows, which
-``rankings`` enumerates instead of running Murty's ranking over the whole block: real
+``rankings`` enumerates instead of running Murty's ranking over the whole block. It costs a
+LAP on the whole matrix, so ``blocks`` drops entries only where a block is too large to
+enumerate (on the milder scenario of ``bench/mht_speed.py``, where blocks are small, dropping
+them always made ``mht`` slower: 2.17 -> 2.71 ms/frame on CMU 85_02). Real
 03_rolling from frame 562 with ``--mht-reading`` took 62.2 s against 78.4 s (means of two
 runs alternated, 2026-12-06), with the same labels.
 """

@@ -20,6 +20,7 @@ import math
 import operator
 
 import numpy as np
+from numpy.typing import NDArray
 
 from formulations.assignment.murty import Costs, Indices, MurtyRanking, RankedAssignment
 
@@ -35,7 +36,7 @@ class BlockRanking:
         options: list[int] = np.isfinite(extended).sum(axis=1).tolist()
         self.more: MurtyRanking | None = None
         self.found: list[RankedAssignment] = []
-        if math.prod(options) <= ENUMERATION_LIMIT:
+        if is_enumerated(np.isfinite(extended)):
             self.costs, self.columns = _enumerated(extended, options)
         else:
             self.costs, self.columns = np.empty(0), np.empty((0, len(cost)), dtype=np.intp)
@@ -72,6 +73,11 @@ class BlockRanking:
                 self.more = None
             else:
                 self.found.append(found)
+
+
+def is_enumerated(finite: NDArray[np.bool_]) -> bool:
+    """Whether a block whose finite entries (miss column last) are ``finite`` is enumerated whole."""
+    return math.prod(finite.sum(axis=1).tolist()) <= ENUMERATION_LIMIT
 
 
 class RankingCache:

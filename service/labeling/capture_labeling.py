@@ -19,7 +19,6 @@ loop, the formulation and the first marker state are the same for all.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from contextlib import nullcontext
 from functools import partial
 
 import numpy as np
@@ -52,7 +51,7 @@ from service.labeling.model_start import model_chains, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
-from service.labeling.rival_process import EarlyStart, RivalBeside, runs_beside
+from service.labeling.rival_process import READINGS, Beside, EarlyStart, runs_beside, started
 from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame
 from service.labeling.second_pass import PassChoice, Stop, judged_part, second_pass, second_pass_runs
 from service.labeling.shape_doubt import shape_doubted
@@ -111,10 +110,11 @@ class CaptureLabeling:
             self._association = association_chain(capture, options, self.formulation.look_ahead)
             rival = association_chain(capture, options, look_ahead=False)
         unrepaired = partial(self._labeled, repaired=False)
-        self._rival = RivalReading(rival, resolve_formulation("nn-hungarian"), unrepaired,
-                                   ) if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+        self._rival = RivalReading(rival, resolve_formulation("nn-hungarian"), unrepaired) \
+            if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
         self._hypotheses = None if self._rival is None else hypothesis_reading(capture, options, self.formulation, unrepaired)
-        self._early = None if self._rival is None else EarlyStart(capture, options)  # the reading beside, started early
+        self._readings = READINGS[: 1 + (self._hypotheses is not None)]  # what runs beside, in child processes
+        self._early = None if self._rival is None else EarlyStart(capture, options, self._readings)  # started early
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(
@@ -138,48 +138,49 @@ class CaptureLabeling:
     def refine(
         self, outcomes: list[WindowOutcome], progress: Progress | None = None, stop: Stop | None = None,
     ) -> list[WindowOutcome] | None:
-        """The windows to keep once every window is labeled: ``outcomes``, or those of a
-        second pass (``second_pass``) when it is on and agrees better with the first frame, with
-        the marker groups a frame-by-frame reading labels better taken from it when the second
-        pass ran (``rival_reading``; read in a child process meanwhile on a large take,
-        ``rival_process``), then likewise from an ``mht`` reading (``hypothesis_reading``); None
-        when ``stop`` abandoned any. Sets ``choice``, ``rival`` and ``hypotheses``."""
+        """The windows to keep once every window is labeled: ``outcomes``, or a second pass's
+        (``second_pass``) when on and closer to the first frame, with the marker groups a
+        frame-by-frame reading (``rival_reading``), then an ``mht`` one (``hypothesis_reading``),
+        label better taken from them when the second pass ran (read in child processes meanwhile
+        on a large take, ``rival_process``); None when ``stop`` abandoned any. Sets ``choice``,
+        ``rival`` and ``hypotheses``."""
         if not self._second_pass:
             return outcomes
         rival = self._rival is not None and second_pass_runs(outcomes)  # a doubtful take: read frame by frame too
-        child = self._early.taken(rival) if self._early is not None else None  # started during the first pass
-        if child is None and rival and runs_beside(sum(o.stats.total_seconds for o in outcomes)):
-            child = RivalBeside(self._capture, self._options)
-        # Both merges take window columns, so they judge the windows' own labels (repaired ones
-        # grouped other markers: the real racing take's GloveR2 and GloveR3 got one point, 568 frames).
+        beside = self._early.taken(rival) if self._early is not None else Beside({})  # started during the first pass
+        if not beside.children and rival and runs_beside(sum(o.stats.total_seconds for o in outcomes)):
+            beside = started(self._capture, self._options, self._readings)
+        # The merges take window columns: judged unrepaired (repairs put racing's GloveR2, R3 on one point)
         unrepaired = partial(self._labeled, repaired=False)
-        with child if child is not None else nullcontext():
+        with beside:
             kept = second_pass(self._association, self.formulation, self._first, self._capture.n_frames, self._window,
                                outcomes, unrepaired, progress, stop, learned=self._labeled)
             if kept is None:
                 return None
             kept_outcomes, self.choice = kept
             if rival:
-                after, labels = progress_after(progress, self.n_windows), judged_part(unrepaired(kept_outcomes))
-                read = child.read(after, stop) if child is not None else self.read_frame_by_frame(after, stop)
+                labels = judged_part(unrepaired(kept_outcomes))
+                read = beside.read(READINGS[0], self.read_beside, progress_after(progress, self.n_windows), stop)
                 if read is None:
                     return None
                 assert self._rival is not None
                 kept_outcomes, self.rival = merged_with_rival(self._rival, self._first, kept_outcomes, labels, read)
                 if self._hypotheses is not None:
-                    merged = merged_with_hypotheses(self._hypotheses, self._first, kept_outcomes,
-                                                    (self._capture.n_frames, self._window),
-                                                    progress_after(progress, 3 * self.n_windows), stop)
-                    if merged is None:
+                    read = beside.read(READINGS[1], self.read_beside, progress_after(progress, 3 * self.n_windows), stop)
+                    if read is None:
                         return None
-                    kept_outcomes, self.hypotheses = merged
+                    kept_outcomes, self.hypotheses = merged_with_hypotheses(self._hypotheses, self._first,
+                                                                            kept_outcomes, read)
         return outcomes if kept_outcomes is outcomes else list(stamped(kept_outcomes, self.fingerprint))  # ``is``: kept as stored
 
-    def read_frame_by_frame(self, progress: Progress | None = None, stop: Stop | None = None) -> list[WindowOutcome] | None:
-        """The take's windows read frame by frame (``rival_reading``), with its own second pass;
-        None when ``stop`` abandoned them. Only when ``rival_reading`` is on for this take."""
-        assert self._rival is not None
-        return read_frame_by_frame(self._rival, self._first, self._capture.n_frames, self._window, progress, stop)
+    def read_beside(self, reading: str, progress: Progress | None = None, stop: Stop | None = None,
+                    ) -> list[WindowOutcome] | None:
+        """The take's windows as ``reading`` (``rival_process.READINGS``) reads them: frame by frame
+        (``rival_reading``) or by ``mht`` (``hypothesis_reading``), with its own second pass; None
+        when ``stop`` abandoned them. Only when that reading is on for this take."""
+        chosen = self._rival if reading == READINGS[0] else self._hypotheses
+        assert chosen is not None
+        return read_frame_by_frame(chosen, self._first, self._capture.n_frames, self._window, progress, stop)
 
     def result(self, outcomes: list[WindowOutcome], calibrated: bool = True) -> LabeledTrajectories:
         """The labeled trajectories from all windows' outcomes, their tracks extended over the
@@ -198,9 +199,8 @@ class CaptureLabeling:
         return self._finished(self._labeled(outcomes), outcomes, calibrated)
 
     def assembled(self, outcomes: list[WindowOutcome], repaired: bool = True) -> LabeledTrajectories:
-        """The windows' labels as ``result`` starts from: confidences, tracks extended and, when
-        ``repaired``, the take-wide exchanges and hand-overs given back; no fill, calibration or
-        shape doubt yet. What each stage of ``label`` hands on (``bench/real_stages.py``)."""
+        """The windows' labels as ``result`` starts from (confidences, tracks extended, when ``repaired``
+        the take-wide repairs; no fill, calibration or shape doubt): ``bench/real_stages.py``."""
         return self._labeled(outcomes, repaired=repaired)
 
     def _finished(self, labels: LabeledTrajectories, outcomes: list[WindowOutcome], calibrated: bool) -> LabeledTrajectories:

@@ -28,10 +28,9 @@ from formulations.methods.formulation import Formulation
 from formulations.methods.mht import Mht
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.associations import association_chain
-from service.labeling.loop import Progress
 from service.labeling.outcome import WindowOutcome
-from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame
-from service.labeling.second_pass import Labels, Stop, judged_part
+from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival
+from service.labeling.second_pass import Labels, judged_part
 
 
 def hypothesis_reading(
@@ -47,20 +46,17 @@ def hypothesis_reading(
 
 
 def merged_with_hypotheses(
-    reading: RivalReading, first: MarkerState, kept: list[WindowOutcome], take: tuple[int, int],
-    progress: Progress | None = None, stop: Stop | None = None,
-) -> tuple[list[WindowOutcome], RivalChoice] | None:
+    reading: RivalReading, first: MarkerState, kept: list[WindowOutcome], read: list[WindowOutcome],
+) -> tuple[list[WindowOutcome], RivalChoice]:
     """``kept`` with the marker groups the ``mht`` reading labels better taken from it, and what
-    was taken; None when ``stop`` abandoned the reading.
+    was taken.
 
     Args:
         reading: From ``hypothesis_reading``.
         first: The labeled first frame's state.
         kept: The windows kept so far (after the second pass and the frame-by-frame reading),
             assembled as ``reading.labels`` assembles a reading's.
-        take: Its frames and the window length, as it was labeled.
+        read: The ``mht`` reading's windows (``rival_reading.read_frame_by_frame`` of ``reading``;
+            in a child process beside the others on a large take, ``rival_process``).
     """
-    read = read_frame_by_frame(reading, first, *take, progress, stop)
-    if read is None:
-        return None
     return merged_with_rival(reading, first, kept, judged_part(reading.labels(kept)), read)

@@ -1,6 +1,6 @@
-"""The child process of ``rival_process``: the frame-by-frame reading of a pickled capture.
+"""The child process of ``rival_process``: a reading of a pickled capture (frame-by-frame or ``mht``).
 
-    python -m service.labeling.rival_child CAPTURE.pickle WINDOWS.pickle PARENT_PID
+    python -m service.labeling.rival_child CAPTURE.pickle WINDOWS.pickle PARENT_PID READING
 
 It prints ``k n`` after each window, pickles its windows to the second file, and exits when
 its parent is gone (a killed job, Ctrl-C): nobody would read its windows. A module of its own,
@@ -29,13 +29,13 @@ def _exit_with_parent(parent: int) -> None:
             os._exit(1)
 
 
-def _main(capture_file: str, answer_file: str, parent: str) -> None:
+def _main(capture_file: str, answer_file: str, parent: str, reading: str) -> None:
     threading.Thread(target=_exit_with_parent, args=(int(parent),), daemon=True).start()
     capture, options = pickle.loads(Path(capture_file).read_bytes())
     labeling = CaptureLabeling(capture, options)
-    windows = labeling.read_frame_by_frame(lambda k, n: print(k, n, flush=True))
+    windows = labeling.read_beside(reading, lambda k, n: print(k, n, flush=True))
     Path(answer_file).write_bytes(pickle.dumps(windows, protocol=pickle.HIGHEST_PROTOCOL))
 
 
 if __name__ == "__main__":
-    _main(*sys.argv[1:4])
+    _main(*sys.argv[1:5])

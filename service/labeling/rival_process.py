@@ -1,4 +1,5 @@
-"""The frame-by-frame reading in a process of its own, beside the window reading's second pass.
+"""The frame-by-frame reading (and the ``mht`` reading when asked) in a process of its own,
+beside the window reading's second pass.
 
 A doubtful take is read four times: two window passes, then the frame-by-frame reading and its
 own second pass (``rival_reading``; on the real 03_rolling 18 + 21 s of windows, then 12 + 10 s).
@@ -10,6 +11,11 @@ server is unsafe; a plain subprocess works the same under the CLI, a job's worke
 worker. Its start-up (about 1.5 s of imports here) is paid back only on a take whose first pass
 took ``BESIDE_MIN_SECONDS`` or more; a smaller take is read here after the second pass, as it
 always was. Either way the labels are the same (``tests/test_rival_process.py``).
+
+The ``mht`` reading (``hypothesis_reading``, asked for by ``LabelingOptions.mht_reading``) needs
+nothing of the others either, and runs in a second child started with the first: three
+processes on two cores, so the readings share them instead of the ``mht`` reading waiting
+for the merge of the frame-by-frame one.
 
 The capture and options go to the child in a pickle file; it prints ``k n`` after each window
 (its progress) and pickles its windows to a second file. Pickle is safe here: both files are
@@ -25,7 +31,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
 
@@ -34,6 +40,7 @@ from service.labeling.loop import Progress
 from service.labeling.outcome import WindowOutcome
 from service.labeling.second_pass import Stop, second_pass_runs
 
+READINGS = ("frame-by-frame", "mht")  # what a child reads: ``CaptureLabeling.read_beside``
 BESIDE_MIN_SECONDS = 5.0  # first-pass seconds from which a child's ~1.5 s start-up is worth paying
 POLL_SECONDS = 0.05  # how often the parent looks at its child (stop latency)
 
@@ -46,10 +53,11 @@ def runs_beside(first_pass_seconds: float) -> bool:
 
 
 class RivalBeside:
-    """The frame-by-frame reading of ``capture`` running in a child process; ``read`` waits for
-    it. A context manager: leaving it ends the child and removes its files."""
+    """A reading of ``capture`` (one of ``READINGS``) running in a child process; ``read`` waits
+    for it. A context manager: leaving it ends the child and removes its files."""
 
-    def __init__(self, capture: Capture, options: LabelingOptions) -> None:
+    def __init__(self, capture: Capture, options: LabelingOptions, reading: str = READINGS[0]) -> None:
+        self.reading = reading
         self._folder = tempfile.TemporaryDirectory(prefix="markerflow-rival-")
         folder = Path(self._folder.name)
         self._answer = folder / "windows.pickle"
@@ -57,7 +65,7 @@ class RivalBeside:
         self._errors = (folder / "stderr.txt").open("w+")
         self._process = subprocess.Popen(
             [sys.executable, "-m", "service.labeling.rival_child", str(folder / "capture.pickle"), str(self._answer),
-             str(os.getpid())],
+             str(os.getpid()), reading],
             stdout=subprocess.PIPE, stderr=self._errors, text=True, cwd=Path(__file__).resolve().parents[2])
         self._done = (0, 0)  # the child's last progress (windows done, windows)
         self._follower = threading.Thread(target=self._follow, daemon=True)
@@ -86,7 +94,7 @@ class RivalBeside:
         if self._process.returncode != 0:
             self._errors.seek(0)
             last = (self._errors.read().strip().splitlines() or ["no message"])[-1]
-            raise RuntimeError(f"the frame-by-frame reading's process failed (exit {self._process.returncode}): {last}")
+            raise RuntimeError(f"the {self.reading} reading's process failed (exit {self._process.returncode}): {last}")
         windows: list[WindowOutcome] = pickle.loads(self._answer.read_bytes())
         return windows
 
@@ -114,30 +122,56 @@ class RivalBeside:
 
 
 class EarlyStart:
-    """Starts the reading beside during the first pass, once that pass has taken
+    """Starts the readings beside during the first pass, once that pass has taken
     ``BESIDE_MIN_SECONDS`` and its windows so far are doubtful enough for a second pass
-    (``second_pass_runs``): it then runs beside the rest of the first pass too (03_rolling:
-    otherwise the window reading's second pass waits 4-5 s for it at the end). ``taken``
-    hands it over when the whole first pass is doubtful, and ends it otherwise."""
+    (``second_pass_runs``): they then run beside the rest of the first pass too (03_rolling:
+    otherwise the window reading's second pass waits 4-5 s for them at the end). ``taken``
+    hands them over when the whole first pass is doubtful, and ends them otherwise."""
 
-    def __init__(self, capture: Capture, options: LabelingOptions) -> None:
-        self._capture, self._options = capture, options
+    def __init__(self, capture: Capture, options: LabelingOptions, readings: tuple[str, ...] = READINGS[:1]) -> None:
+        self._capture, self._options, self._readings = capture, options, readings
         self._seen: list[WindowOutcome] = []
-        self._child: RivalBeside | None = None
+        self._children = Beside({})
 
     def watched(self, windows: Iterator[WindowOutcome]) -> Iterator[WindowOutcome]:
         """``windows``, each looked at (``EarlyStart``) as it finishes."""
         for outcome in windows:
             self._seen.append(outcome)
-            if self._child is None and runs_beside(sum(o.stats.total_seconds for o in self._seen)) \
+            if not self._children.children and runs_beside(sum(o.stats.total_seconds for o in self._seen)) \
                     and second_pass_runs(self._seen):
-                self._child = RivalBeside(self._capture, self._options)
+                self._children = started(self._capture, self._options, self._readings)
             yield outcome
 
-    def taken(self, wanted: bool) -> RivalBeside | None:
-        """The reading started early, if ``wanted`` (else it is ended); None if none started."""
-        child, self._child, self._seen = self._child, None, []
-        if child is not None and not wanted:
-            child.__exit__(None, None, None)
-            return None
-        return child
+    def taken(self, wanted: bool) -> Beside:
+        """The readings started early, if ``wanted`` (else they are ended); none if none started."""
+        children, self._children, self._seen = self._children, Beside({}), []
+        if not wanted:
+            children.__exit__(None, None, None)
+            return Beside({})
+        return children
+
+
+class Beside:
+    """The readings running in child processes, by name (``READINGS``); a context manager that
+    ends them all on leaving."""
+
+    def __init__(self, children: dict[str, RivalBeside]) -> None:
+        self.children = children
+
+    def read(self, reading: str, here: Callable[[str, Progress | None, Stop | None], list[WindowOutcome] | None],
+             progress: Progress | None = None, stop: Stop | None = None) -> list[WindowOutcome] | None:
+        """``reading``'s windows from its child (``RivalBeside.read``), or read ``here`` when it has none."""
+        child = self.children.get(reading)
+        return here(reading, progress, stop) if child is None else child.read(progress, stop)
+
+    def __enter__(self) -> Beside:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None) -> None:
+        for child in self.children.values():
+            child.__exit__(kind, error, trace)
+
+
+def started(capture: Capture, options: LabelingOptions, readings: tuple[str, ...]) -> Beside:
+    """A child process for each of ``readings``."""
+    return Beside({reading: RivalBeside(capture, options, reading) for reading in readings})
