@@ -16,8 +16,8 @@ Neither it nor the others are right everywhere, so it is one reading more, not a
 read with its own second pass as the frame-by-frame reading is
 (``rival_reading.read_frame_by_frame``) and merged after it, event by event, by the same judge
 (``rival_reading.merged_with_rival``: the labeled first frame's rigid pairs). Asked for
-(``LabelingOptions.mht_reading``, ``track --mht-reading``; off by default, as it about doubles
-the time of a doubtful take), it runs where the frame-by-frame reading runs, on 3D points
+(``LabelingOptions.mht_reading``, ``track --mht-reading``; off by default, as it makes a
+doubtful take about 1.7 times slower even in a process of its own, ``rival_process``), it runs where the frame-by-frame reading runs, on 3D points
 without a subject model (where it was measured), and not when the windows are ``mht``'s own.
 """
 
