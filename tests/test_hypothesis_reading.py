@@ -7,7 +7,9 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
+import pytest
 from service_fixtures import generated_capture
+from test_cli import CMU, assert_input_error, run_cli
 
 from formulations.methods.mht import Mht
 from service.capture.capture import LabelingOptions
@@ -65,3 +67,21 @@ def test_the_mht_reading_runs_only_where_the_frame_by_frame_one_does() -> None:
     assert CaptureLabeling(capture, dataclasses.replace(asked, formulation=Mht()))._hypotheses is None
     assert CaptureLabeling(capture, asked)._hypotheses is not None
     assert CaptureLabeling(capture)._hypotheses is None  # off by default
+
+
+@pytest.mark.parametrize(("options", "said"), [
+    (["--one-pass"], "the second pass, which is off"),
+    (["--formulation", "mht"], "the windows are mht's own"),
+    (["--formulation", "nn-hungarian"], "(nn-hungarian) are read frame by frame already"),
+])
+def test_track_refuses_an_mht_reading_that_could_never_run(tmp_path: Path, options: list[str], said: str) -> None:
+    """Asked for where it cannot run, it is refused before labeling (it was skipped unsaid)."""
+    result = run_cli("track", CMU, "--out", tmp_path / "x.c3d", "--mht-reading", *options)
+    assert_input_error(result, "--mht-reading does not apply here", said)
+    assert not (tmp_path / "x.c3d").exists()
+
+
+def test_track_says_when_a_clean_take_needed_no_mht_reading(tmp_path: Path) -> None:
+    result = run_cli("track", CMU, "--out", tmp_path / "x.c3d", "--mht-reading")
+    assert result.returncode == 0, result.stderr
+    assert "no mht reading: the take was not doubtful enough for a second pass" in " ".join(result.stdout.split())

@@ -20,9 +20,11 @@ def second_pass_note(choice: PassChoice | None) -> str:
     return f"; {kept} ({off}{choice.first_doubtful:.1%} -> {choice.second_doubtful:.1%} doubtful{other})"
 
 
-def rival_note(rival: RivalChoice | None, reading: str = "a frame-by-frame reading") -> str:
-    """What the summary line says of a reading that ran (``rival_reading``; ``reading`` names it)."""
+def rival_note(rival: RivalChoice | None, reading: str = "a frame-by-frame reading", asked: bool = False) -> str:
+    """What the summary line says of a reading that ran (``rival_reading``; ``reading`` names it),
+    or, ``asked`` for, did not: the take was not doubtful enough for a second pass."""
     if rival is None:
-        return ""
+        unread = reading.removeprefix("an ").removeprefix("a ")
+        return f"; no {unread}: the take was not doubtful enough for a second pass" if asked else ""
     return f"; {counted(rival.markers, 'marker')}' labels from {reading}" if rival.markers else (
         f"; {reading} changed no label")

@@ -28,6 +28,7 @@ from service.labeling.capture_labeling import CaptureLabeling
 from service.labeling.carried_markers import CarriedMarkers
 from service.labeling.coincident import coincident_pairs
 from service.labeling.exchanged import exchange_summary, handover_summary
+from service.labeling.hypothesis_reading import unread_reason
 from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
 from service.labeling.result_warnings import early_scale_warning
@@ -99,6 +100,8 @@ def run_track(
     if mht_reading:
         options = replace(options, mht_reading=True)
     labeling = CaptureLabeling(capture, options)
+    if mht_reading and (reason := unread_reason(capture, options, labeling.formulation)) is not None:
+        raise InputError(f"--mht-reading does not apply here: {reason}")
     unit = source.unit if source else ("the document's units" if input.suffix.lower() == ".json" else "mm")
     warn(early_scale_warning(capture, unit))
     began = time.perf_counter()
@@ -127,7 +130,8 @@ def run_track(
             f"({summary['occluded_fraction']:.1%} occluded, {summary['integral_window_fraction']:.0%} windows "
             f"{CERTIFICATE}, max gap {max((w.gap for w in windows), default=0.0):.1e}, "
             f"{summary['doubtful_fraction']:.1%} labels doubtful, noise {_mm(summary['noise_mm'])})"
-            f"{second_pass_note(labeling.choice)}{rival_note(labeling.rival)}{rival_note(labeling.hypotheses, 'an mht reading')}"
+            f"{second_pass_note(labeling.choice)}{rival_note(labeling.rival)}"
+            f"{rival_note(labeling.hypotheses, 'an mht reading', options.mht_reading)}"
             f"{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
             f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
             highlight=False,

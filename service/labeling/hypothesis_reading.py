@@ -17,8 +17,9 @@ read with its own second pass as the frame-by-frame reading is
 (``rival_reading.read_frame_by_frame``) and merged after it, event by event, by the same judge
 (``rival_reading.merged_with_rival``: the labeled first frame's rigid pairs). Asked for
 (``LabelingOptions.mht_reading``, ``track --mht-reading``; off by default, as it makes a
-doubtful take about 1.7 times slower even in a process of its own, ``rival_process``), it runs where the frame-by-frame reading runs, on 3D points
-without a subject model (where it was measured), and not when the windows are ``mht``'s own.
+doubtful take about 1.7 times slower even in a process of its own, ``rival_process``), it
+runs where the frame-by-frame reading runs, on 3D points without a subject model (where it
+was measured), and not when the windows are ``mht``'s own (``unread_reason``).
 """
 
 from __future__ import annotations
@@ -40,9 +41,28 @@ def hypothesis_reading(
     ``options.mht_reading`` asks for it, the capture has no subject model and the windows are not
     ``mht``'s already; else None. ``labels`` gives a reading's labels as the merge takes them (no
     take-wide repair): the kept windows' as well as its own."""
-    if not options.mht_reading or capture.model is not None or isinstance(formulation, Mht):
+    if not options.mht_reading or unread_reason(capture, options, formulation) is not None:
         return None
     return RivalReading(association_chain(capture, options, look_ahead=True), Mht(), labels)
+
+
+def unread_reason(capture: Capture, options: LabelingOptions, formulation: Formulation) -> str | None:
+    """Why the ``mht`` reading never runs on ``capture`` with ``options`` and ``formulation`` (a
+    clause for an error line), or None: then it runs wherever the take is doubtful enough for a
+    second pass."""
+    if capture.points is None:
+        return "it reads 3D points, and this take is camera detections"
+    if capture.model is not None:
+        return "it reads takes without a subject model"
+    if not options.second_pass:
+        return "it runs after the second pass, which is off"
+    if not options.rival_reading:
+        return "it runs after the frame-by-frame reading, which is off"
+    if isinstance(formulation, Mht):
+        return "the windows are mht's own"
+    if not formulation.look_ahead:
+        return f"the windows ({formulation.name}) are read frame by frame already"
+    return None
 
 
 def merged_with_hypotheses(
