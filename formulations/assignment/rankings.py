@@ -77,7 +77,8 @@ class BlockRanking:
 
 def is_enumerated(finite: NDArray[np.bool_]) -> bool:
     """Whether a block whose finite entries (miss column last) are ``finite`` is enumerated whole."""
-    return math.prod(finite.sum(axis=1).tolist()) <= ENUMERATION_LIMIT
+    options: list[int] = finite.sum(axis=1).tolist()
+    return math.prod(options) <= ENUMERATION_LIMIT
 
 
 class RankingCache:
