@@ -40,8 +40,8 @@ def _labeled(monkeypatch: pytest.MonkeyPatch, late: bool, early: bool, mht: bool
     """``late``: ``refine`` starts the children; ``early``: the first pass does (``EarlyStart``);
     ``mht``: the ``mht`` reading runs too."""
     started = _spied(monkeypatch)
-    monkeypatch.setattr(capture_labeling, "runs_beside", lambda seconds: late)
-    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds: early)
+    monkeypatch.setattr(capture_labeling, "runs_beside", lambda seconds, readings: late)
+    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds, readings: early)
     labeling = CaptureLabeling(_doubtful(), LabelingOptions(window=10, mht_reading=mht))
     progress: list[tuple[int, int]] = []
     result, _ = labeling.label(progress=lambda k, n: progress.append((k, n)))
@@ -79,7 +79,7 @@ def test_the_reading_beside_gives_the_labels_read_here(
 
 def test_a_reading_started_early_is_ended_when_the_take_is_not_doubtful(monkeypatch: pytest.MonkeyPatch) -> None:
     started = _spied(monkeypatch)
-    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds: True)
+    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds, readings: True)
     early = EarlyStart(_doubtful(), LabelingOptions(window=10))
     first_pass = CaptureLabeling(_doubtful(), LabelingOptions(window=10, rival_reading=False)).windows()  # no child of its own
     list(early.watched(first_pass))
@@ -110,3 +110,12 @@ def test_a_stop_ends_the_child() -> None:
     with RivalBeside(_doubtful(), LabelingOptions(window=10)) as child:
         assert child.read(stop=lambda: True) is None
     assert child.ended
+
+
+def test_with_the_mht_reading_the_readings_go_beside_from_a_smaller_take(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(rival_process.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    bar = rival_process.BESIDE_MIN_SECONDS
+    assert not rival_process.runs_beside(0.6 * bar) and rival_process.runs_beside(bar)
+    assert rival_process.runs_beside(0.6 * bar, readings=2)  # two readings' passes to take off this process
+    monkeypatch.setattr(rival_process.os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    assert not rival_process.runs_beside(10 * bar, readings=2)  # one core: nothing to run beside on

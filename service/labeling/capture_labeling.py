@@ -148,7 +148,7 @@ class CaptureLabeling:
             return outcomes
         rival = self._rival is not None and second_pass_runs(outcomes)  # a doubtful take: read frame by frame too
         beside = self._early.taken(rival) if self._early is not None else Beside({})  # started during the first pass
-        if not beside.children and rival and runs_beside(sum(o.stats.total_seconds for o in outcomes)):
+        if not beside.children and rival and runs_beside(sum(o.stats.total_seconds for o in outcomes), len(self._readings)):
             beside = started(self._capture, self._options, self._readings)
         # The merges take window columns: judged unrepaired (repairs put racing's GloveR2, R3 on one point)
         unrepaired = partial(self._labeled, repaired=False)

@@ -45,11 +45,16 @@ BESIDE_MIN_SECONDS = 5.0  # first-pass seconds from which a child's ~1.5 s start
 POLL_SECONDS = 0.05  # how often the parent looks at its child (stop latency)
 
 
-def runs_beside(first_pass_seconds: float) -> bool:
-    """Whether the frame-by-frame reading of a take whose first pass took ``first_pass_seconds``
-    runs in a child process: a second core to run on, and a take large enough."""
+def runs_beside(first_pass_seconds: float, readings: int = 1) -> bool:
+    """Whether ``readings`` readings of a take whose first pass took ``first_pass_seconds`` run
+    in child processes: a second core to run on, and a take large enough. Each reading is two
+    passes of its own, so the work they take off this process grows with their number (the
+    ``mht`` reading's passes cost more than a window pass): with the ``mht`` reading too the
+    bar halves: the real racing take (first pass under 5 s), read here after the windows, took
+    31.9 / 33.4 s with ``--mht-reading``, beside 24.2 / 22.2 s (17.5 / 17.6 s without the
+    reading; alternated, 2026-12-06), the same labels."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)  # not on macOS
-    return cores >= 2 and first_pass_seconds >= BESIDE_MIN_SECONDS
+    return cores >= 2 and first_pass_seconds * readings >= BESIDE_MIN_SECONDS
 
 
 class RivalBeside:
@@ -137,7 +142,7 @@ class EarlyStart:
         """``windows``, each looked at (``EarlyStart``) as it finishes."""
         for outcome in windows:
             self._seen.append(outcome)
-            if not self._children.children and runs_beside(sum(o.stats.total_seconds for o in self._seen)) \
+            if not self._children.children and runs_beside(sum(o.stats.total_seconds for o in self._seen), len(self._readings)) \
                     and second_pass_runs(self._seen):
                 self._children = started(self._capture, self._options, self._readings)
             yield outcome
