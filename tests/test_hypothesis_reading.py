@@ -70,7 +70,7 @@ def test_the_mht_reading_runs_only_where_the_frame_by_frame_one_does() -> None:
 
 
 @pytest.mark.parametrize(("options", "said"), [
-    (["--one-pass"], "the second pass, which is off"),
+    (["--one-pass"], "run after the second pass, which is off"),
     (["--formulation", "mht"], "the windows are mht's own"),
     (["--formulation", "nn-hungarian"], "(nn-hungarian) are read frame by frame already"),
 ])

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from formulations.assignment.murty import Costs
+from formulations.assignment.murty import Costs, with_miss_columns
 
 
 def without_dominated(cost: Costs, miss: Costs | None, k: int) -> Costs:
@@ -34,10 +34,8 @@ def without_dominated(cost: Costs, miss: Costs | None, k: int) -> Costs:
     when any is dropped; ``cost`` itself when none can be: no misses, or k = 1)."""
     if miss is None or k < 2 or not np.isfinite(miss).all():
         return cost
-    rows, width = cost.shape
-    extended = np.full((rows, width + rows), np.inf)
-    extended[:, :width] = cost
-    extended[np.arange(rows), width + np.arange(rows)] = miss
+    width = cost.shape[1]
+    extended = with_miss_columns(cost, miss)
     row, column = linear_sum_assignment(extended)  # feasible: every row may miss
     own = extended[row, column]  # each row's cost in the best assignment (rows come in order)
     assigned = column < width

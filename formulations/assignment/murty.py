@@ -117,7 +117,7 @@ class MurtyRanking(Iterator[RankedAssignment]):
 
     def __init__(self, cost: Costs, miss: Costs | None = None) -> None:
         cost = np.asarray(cost, dtype=float)
-        self.width, self.extended = cost.shape[1], _extended(cost, miss)
+        self.width, self.extended = cost.shape[1], with_miss_columns(cost, miss)
         none = np.empty(0, dtype=np.intp)
         self.counter = itertools.count()
         root = _Subproblem(none, none, (), key=-np.inf)
@@ -149,7 +149,7 @@ def ranked_assignments(cost: Costs, miss: Costs | None = None) -> MurtyRanking:
     return MurtyRanking(cost, miss)
 
 
-def _extended(cost: Costs, miss: Costs | None) -> Costs:
+def with_miss_columns(cost: Costs, miss: Costs | None) -> Costs:
     """``[cost | diag(miss)]`` with inf off the diagonal (``cost`` itself without misses)."""
     if miss is None:
         return cost

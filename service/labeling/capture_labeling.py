@@ -52,7 +52,7 @@ from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.rival_process import READINGS, Beside, EarlyStart, runs_beside, started
-from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame
+from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame, rival_unread_reason
 from service.labeling.second_pass import PassChoice, Stop, judged_part, second_pass, second_pass_runs
 from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
@@ -111,7 +111,7 @@ class CaptureLabeling:
             rival = association_chain(capture, options, look_ahead=False)
         unrepaired = partial(self._labeled, repaired=False)
         self._rival = RivalReading(rival, resolve_formulation("nn-hungarian"), unrepaired) \
-            if self._second_pass and options.rival_reading and self.formulation.look_ahead else None
+            if rival_unread_reason(capture, options, self.formulation) is None else None
         self._hypotheses = None if self._rival is None else hypothesis_reading(capture, options, self.formulation, unrepaired)
         self._readings = READINGS[: 1 + (self._hypotheses is not None)]  # what runs beside, in child processes
         self._early = None if self._rival is None else EarlyStart(capture, options, self._readings)  # started early

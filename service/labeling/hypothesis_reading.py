@@ -30,7 +30,7 @@ from formulations.methods.mht import Mht
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.associations import association_chain
 from service.labeling.outcome import WindowOutcome
-from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival
+from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, rival_unread_reason
 from service.labeling.second_pass import Labels, judged_part
 
 
@@ -49,20 +49,12 @@ def hypothesis_reading(
 def unread_reason(capture: Capture, options: LabelingOptions, formulation: Formulation) -> str | None:
     """Why the ``mht`` reading never runs on ``capture`` with ``options`` and ``formulation`` (a
     clause for an error line), or None: then it runs wherever the take is doubtful enough for a
-    second pass."""
-    if capture.points is None:
-        return "it reads 3D points, and this take is camera detections"
+    second pass (where the frame-by-frame reading runs, ``rival_unread_reason``)."""
     if capture.model is not None:
         return "it reads takes without a subject model"
-    if not options.second_pass:
-        return "it runs after the second pass, which is off"
-    if not options.rival_reading:
-        return "it runs after the frame-by-frame reading, which is off"
     if isinstance(formulation, Mht):
         return "the windows are mht's own"
-    if not formulation.look_ahead:
-        return f"the windows ({formulation.name}) are read frame by frame already"
-    return None
+    return rival_unread_reason(capture, options, formulation)
 
 
 def merged_with_hypotheses(

@@ -9,8 +9,9 @@ meet at the merge. The child is a fresh interpreter (``python -m service.labelin
 not a fork: multiprocessing forbids a job's daemonic worker children, and a fork of a threaded
 server is unsafe; a plain subprocess works the same under the CLI, a job's worker and a Dask
 worker. Its start-up (about 1.5 s of imports here) is paid back only on a take whose first pass
-took ``BESIDE_MIN_SECONDS`` or more; a smaller take is read here after the second pass, as it
-always was. Either way the labels are the same (``tests/test_rival_process.py``).
+took ``BESIDE_MIN_SECONDS`` or more (half that with the ``mht`` reading too, ``runs_beside``);
+a smaller take is read here after the second pass, as it always was. Either way the labels
+are the same (``tests/test_rival_process.py``).
 
 The ``mht`` reading (``hypothesis_reading``, asked for by ``LabelingOptions.mht_reading``) needs
 nothing of the others either, and runs in a second child started with the first: three
@@ -127,8 +128,8 @@ class RivalBeside:
 
 
 class EarlyStart:
-    """Starts the readings beside during the first pass, once that pass has taken
-    ``BESIDE_MIN_SECONDS`` and its windows so far are doubtful enough for a second pass
+    """Starts the readings beside during the first pass, once that pass has taken long enough
+    (``runs_beside``) and its windows so far are doubtful enough for a second pass
     (``second_pass_runs``): they then run beside the rest of the first pass too (03_rolling:
     otherwise the window reading's second pass waits 4-5 s for them at the end). ``taken``
     hands them over when the whole first pass is doubtful, and ends them otherwise."""

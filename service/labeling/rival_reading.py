@@ -29,6 +29,7 @@ from formulations.markers.first_frame_shape import disagreement
 from formulations.markers.pass_merge import labels_taken
 from formulations.markers.state import MarkerState
 from formulations.methods.formulation import Formulation
+from service.capture.capture import Capture, LabelingOptions
 from service.io.recording import LabeledTrajectories
 from service.labeling.loop import Progress, WindowChain, label_windows, progress_after
 from service.labeling.outcome import WindowOutcome
@@ -61,6 +62,21 @@ class RivalChoice:
 
     def to_dict(self) -> dict:
         return {"window_off_mm": self.window_off_mm, "rival_off_mm": self.rival_off_mm, "markers": self.markers}
+
+
+def rival_unread_reason(capture: Capture, options: LabelingOptions, formulation: Formulation) -> str | None:
+    """Why the frame-by-frame reading (and so the ``mht`` reading after it) never runs on
+    ``capture`` with ``options`` and ``formulation`` (a clause for an error line), or None: then
+    it runs wherever the take is doubtful enough for a second pass."""
+    if capture.points is None:
+        return "the readings are of 3D points, and this take is camera detections"
+    if not options.second_pass:
+        return "the readings run after the second pass, which is off"
+    if not options.rival_reading:
+        return "the frame-by-frame reading is off"
+    if not formulation.look_ahead:
+        return f"the windows ({formulation.name}) are read frame by frame already"
+    return None
 
 
 def read_frame_by_frame(
