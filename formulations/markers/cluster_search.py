@@ -8,8 +8,8 @@ turned by about 140 degrees and the wheel turned on it: no one rigid fit of the 
 is within 26 mm of them. Its markers sit in plates of four (chair, wheel, upper arm,
 forearm), and a plate's distances do not depend on pose.
 
-So each cluster of ``min_members`` or more lost markers rigid with each other (learned sd of
-every pair at most ``max_sd_mm``, a clique of the neighbour tables) is looked for by its
+So each cluster of three or more lost markers rigid with each other (learned sd of every
+pair at most ``max_sd_mm``, a clique of the neighbour tables) is looked for by its
 three markers spread widest, a, b, c, and again by the widest three without each of them (a
 member may be absent when its plate comes back: the sprint's upper arm came back into view
 for 700 frames without the elbow marker of its cluster): every triple (i, j, l) of free
@@ -27,12 +27,20 @@ mirror image, so both images are fitted; the wrong one leaves the fourth marker 
 The fit that brings the most members within ``tol`` of a free point is taken when it
 explains ``min_members`` of them or more and no other fit explains as many with another
 point for any member: a symmetric plate (a square) fits several ways and is left where it
-was, and so are two lost clusters of one shape that both fit the same points. Three members
-are not enough: some triangle of free points nearly always matches three distances (the
-sprint's forearm, three markers within 3 mm of each other, fitted the wheel's points, and
-the head's three the wheel's and the sync marker's). A member no point explains (a marker
-absent when its plate comes back) keeps its prediction. The members explained have their
-predictions moved onto their points; the window then decides what they take.
+was, and so are two lost clusters of one shape that both fit the same points.
+
+Three members are a weaker sighting: in a crowded cloud some triangle of free points nearly
+always matches three distances (the sprint's forearm, three markers rigid with each other,
+fitted the wheel's points, and the head's three the wheel's and the sync marker's, when
+clusters of three were placed by their last-seen positions). Yet the sprint's plates come
+back into a sparse volume three at a time, six points in view and nothing labeled: 825 of
+the take's 1,865 unlabeled plate samples. So a cluster (of three, or of four with one
+absent) is placed by three members only when that reading is the only one of its fits
+(as for four) and no other lost cluster fits any of its points by three or more members,
+nor a placement of four holds one: a lookalike, or a triangle two clusters share, leaves
+both where they were. A member no point explains (a marker absent when its plate comes
+back) keeps its prediction. The members explained have their predictions moved onto their
+points; the window then decides what they take.
 """
 
 from __future__ import annotations
@@ -57,8 +65,9 @@ class ClusterSearch:
     Attributes:
         max_sd_mm: A pair whose learned distance sd is above this is not one plate.
         noise_mm: Added to a cluster's tolerance: the noise of two points.
-        min_members: Fewer lost markers than this make no cluster, and a fit must explain this many
-            (three distances of three members nearly always match some triangle of points: module doc).
+        min_members: A fit explaining this many members places its cluster unless another cluster's
+            placement holds one of its points; one explaining three only where it is unambiguous
+            (three distances nearly always match some triangle of a crowded cloud: module doc).
     """
 
     max_sd_mm: float = 3.0
@@ -67,6 +76,7 @@ class ClusterSearch:
 
 
 CLUSTER_SEARCH = ClusterSearch()
+TRIANGLE = 3  # members that place a cluster at all: three points fix a rigid fit
 
 
 def search_lost_clusters(
@@ -76,43 +86,80 @@ def search_lost_clusters(
     """``(N, 3)`` predictions with each lost cluster found by its shape moved onto its points
     (those no seen marker's prediction claims, ``Reacquisition.claim_mm``)."""
     points = free_points(points, guess[state.visible], REACQUISITION.claim_mm)
-    if len(points) < settings.min_members:
+    if len(points) < TRIANGLE:
         return guess
-    found, claimed, learned = guess.copy(), [], LearnedPairs.of(state)
+    learned = LearnedPairs.of(state)
     d_points = cdist(points, points)  # once for every cluster's triples
-    for cluster in rigid_clusters(learned, lost, settings):
-        inside = np.ix_(cluster, cluster)
-        tol = 3 * np.sqrt(np.where(np.eye(len(cluster), dtype=bool), 0.0, learned.var[inside]).max()) + settings.noise_mm
-        placed = _placed(learned_shape(learned.mean[inside]), points, d_points, tol, settings.min_members)
-        if placed is not None:
-            kept = np.isfinite(placed).all(axis=1)
-            found[cluster[kept]] = placed[kept]
-            claimed.append((cluster[kept], placed[kept]))
-    # Two clusters on one point: one of them is a lookalike, and nothing says which.
-    for cluster, placed in claimed:
-        others = [p for c, p in claimed if c is not cluster]
-        if others and (cdist(placed, np.vstack(others)) < 1e-9).any():
-            found[cluster] = guess[cluster]
+    sightings = [_sighting(cluster, learned, points, d_points, settings) for cluster in rigid_clusters(learned, lost, settings)]
+    # Markers unseen but not yet lost are not searched, but their points are free as well:
+    # a triangle of theirs that matches decides nothing either.
+    rivals = [_sighting(cluster, learned, points, d_points, settings)
+              for cluster in rigid_clusters(learned, ~state.visible & ~lost, settings)]
+    found = guess.copy()
+    for sighting in _unambiguous(sightings, rivals, settings.min_members):
+        kept = sighting.reading >= 0
+        found[sighting.cluster[kept]] = points[sighting.reading[kept]]
     return found
+
+
+@dataclass(frozen=True)
+class _Sighting:
+    """A lost cluster's best fit: the point each member is on (-1: none), how many it
+    explains (0: no one reading), and every point a fit explaining three or more touches."""
+
+    cluster: NDArray[np.int64]
+    reading: NDArray[np.intp]
+    explained: int
+    touched: frozenset[int]
+
+
+def _sighting(
+    cluster: NDArray[np.int64], learned: LearnedPairs, points: np.ndarray, d_points: np.ndarray, settings: ClusterSearch,
+) -> _Sighting:
+    inside = np.ix_(cluster, cluster)
+    tol = 3 * np.sqrt(np.where(np.eye(len(cluster), dtype=bool), 0.0, learned.var[inside]).max()) + settings.noise_mm
+    reading, explained, touched = _placed(learned_shape(learned.mean[inside]), points, d_points, tol)
+    return _Sighting(cluster, reading, explained, touched)
+
+
+def _unambiguous(sightings: list[_Sighting], rivals: list[_Sighting], min_members: int) -> list[_Sighting]:
+    """The sightings taken (module doc): of ``min_members`` or more, those sharing no point
+    with another such; of three, those whose points no other cluster's fit touches, lost or
+    only unseen (``rivals``)."""
+    plates = [s for s in sightings if s.explained >= min_members]
+    taken = [s for s in plates if not any(_holds(o, s) for o in plates if o is not s)]
+    held = {int(p) for s in plates for p in s.reading if p >= 0}
+    for s in sightings:
+        on = {int(p) for p in s.reading if p >= 0}
+        if s.explained == TRIANGLE and not on & held and not any(on & o.touched for o in sightings + rivals if o is not s):
+            taken.append(s)
+    return taken
+
+
+def _holds(sighting: _Sighting, other: _Sighting) -> bool:
+    """Whether two sightings put members on one point: one of them is a lookalike, and nothing says which."""
+    return bool(set(sighting.reading[sighting.reading >= 0].tolist()) & set(other.reading[other.reading >= 0].tolist()))
 
 
 def rigid_clusters(learned: LearnedPairs, lost: np.ndarray, settings: ClusterSearch = CLUSTER_SEARCH) -> list[NDArray[np.int64]]:
     """Cliques of lost markers whose every pair is learned rigid (in either marker's table),
-    greedily from each lost marker in turn (a marker joins one cluster)."""
+    greedily from each lost marker in turn (a marker joins one cluster): cliques of
+    ``min_members`` or more first, then of three from the markers left."""
     rigid = learned.var <= settings.max_sd_mm**2
     rigid = (rigid | rigid.T) & lost[:, None] & lost[None]
     np.fill_diagonal(rigid, False)
     free, clusters = lost.copy(), []
-    for m in np.flatnonzero(lost):
-        if not free[m]:
-            continue
-        members = [m]
-        for j in np.flatnonzero(rigid[m] & free):
-            if rigid[j, members].all():
-                members.append(j)
-        if len(members) >= settings.min_members:
-            clusters.append(np.array(members))
-            free[members] = False
+    for least in (settings.min_members, TRIANGLE):
+        for m in np.flatnonzero(free):
+            if not free[m]:
+                continue
+            members = [m]
+            for j in np.flatnonzero(rigid[m] & free):
+                if rigid[j, members].all():
+                    members.append(j)
+            if len(members) >= least:
+                clusters.append(np.array(members))
+                free[members] = False
     return clusters
 
 
@@ -131,27 +178,27 @@ def learned_shape(mean: np.ndarray) -> np.ndarray:
 
 
 def _placed(
-    shape: np.ndarray, points: np.ndarray, d_points: np.ndarray, tol: float, min_explained: int,
-) -> np.ndarray | None:
-    """``(k, 3)`` the members on the points of the one fit of ``shape`` that explains the most
-    of them, NaN for a member it does not (module doc); None when it explains fewer than
-    ``min_explained``, or another fit explains as many with other points; ``d_points`` their distances."""
+    shape: np.ndarray, points: np.ndarray, d_points: np.ndarray, tol: float,
+) -> tuple[NDArray[np.intp], int, frozenset[int]]:
+    """The point each member of ``shape`` is on in the one fit that explains the most of
+    them (-1: a member it does not explain, module doc), how many that is (0 when another
+    fit explains as many with other points), and the points any fit explaining three or
+    more touches; ``d_points`` the points' distances."""
+    none = np.full(len(shape), -1, dtype=np.intp)
     d_shape = cdist(shape, shape)
     fits = [f for triple in _spanning_triples(shape) if (f := _fits(shape, d_shape, points, d_points, triple, tol)) is not None]
     if not fits:
-        return None
+        return none, 0, frozenset()
     moved = np.concatenate(fits)
     distance = cdist(moved.reshape(-1, 3), points).reshape(len(moved), len(shape), len(points))
     nearest, within = distance.argmin(axis=2), distance.min(axis=2) <= tol
     explained = within.sum(axis=1)
-    if explained.max() < min_explained:
-        return None
+    readings = np.where(within, nearest, -1)
+    touched = frozenset(readings[explained >= TRIANGLE][readings[explained >= TRIANGLE] >= 0].tolist())
     tops = np.flatnonzero(explained == explained.max())
-    readings = {tuple(np.where(within[t], nearest[t], -1)) for t in tops}
-    if len(readings) > 1:  # the plate fits another way as well: its symmetry, or a lookalike
-        return None
-    placed: np.ndarray = np.where(within[tops[0]][:, None], points[nearest[tops[0]]], np.nan)
-    return placed
+    if len({tuple(readings[t]) for t in tops}) > 1:  # the plate fits another way as well: its symmetry, or a lookalike
+        return none, 0, touched
+    return readings[tops[0]].astype(np.intp), int(explained.max()), touched
 
 
 def _fits(
