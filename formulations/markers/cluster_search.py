@@ -34,7 +34,8 @@ always matches three distances (the sprint's forearm, three markers rigid with e
 fitted the wheel's points, and the head's three the wheel's and the sync marker's, when
 clusters of three were placed by their last-seen positions). Yet the sprint's plates come
 back into a sparse volume three at a time, six points in view and nothing labeled: 825 of
-the take's 1,865 unlabeled plate samples. So a cluster (of three, or of four with one
+the 1,414 plate samples the take lost (wrong or unlabeled) had three of their plate's
+markers in view. So a cluster (of three, or of four with one
 absent) is placed by three members only when that reading is the only one of its fits
 (as for four) and no other lost cluster fits any of its points by three or more members,
 nor a placement of four holds one: a lookalike, or a triangle two clusters share, leaves

@@ -110,8 +110,8 @@ def guide_track(
     A marker counts as tracked once seen ``trust_after`` frames in a row: a marker just
     re-acquired may have been re-acquired wrongly, and others should not lean on it.
     Markers lost together are looked for where their group registers to the cloud
-    (``realign_lost``), and each rigid cluster of four or more of them by its own shape,
-    whatever pose it comes back in (``search_lost_clusters``).
+    (``realign_lost``), and each rigid cluster of them by its own shape, whatever pose it
+    comes back in (``search_lost_clusters``).
     """
     m, n = len(frames), len(state.position)
     predicted, velocity = np.empty((m, n, 3)), np.empty((m, n, 3))
