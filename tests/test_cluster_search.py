@@ -164,7 +164,7 @@ def test_a_plate_back_with_three_of_its_four_markers_is_placed_by_them():
     assert np.allclose(found[seen], back[seen])
     assert np.allclose(found[[CHAIR[3], WHEEL[1]]], guess[[CHAIR[3], WHEEL[1]]])
     four_only = cluster_search._unambiguous
-    strict = lambda sightings, rivals, least: [s for s in four_only(sightings, rivals, least) if s.explained >= least]  # noqa: E731
+    strict = lambda sightings, rivals, least, n: [s for s in four_only(sightings, rivals, least, n) if s.explained >= least]  # noqa: E731
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(cluster_search, "_unambiguous", strict)
         assert np.allclose(search_lost_clusters(guess, state, np.ones(len(BODY), bool), back[seen]), guess)
@@ -199,6 +199,20 @@ def test_a_triangle_of_a_plate_unseen_but_not_yet_lost_places_no_lookalike():
     seen = replace(state, unseen=np.where(np.isin(np.arange(len(BODY)), WHEEL), 0, state.unseen))
     placed = search_lost_clusters(guess, seen, lost, back[WHEEL[:3]] + [0.0, 0.0, 2000.0])
     assert np.allclose(placed[CHAIR[:3]], back[WHEEL[:3]] + [0.0, 0.0, 2000.0])  # a seen plate is no rival
+
+
+def test_three_members_among_a_crowd_of_points_no_plate_explains_are_left():
+    """The same three chair markers, placed alone, are left among twelve points no cluster's
+    fit accounts for: in such a crowd (a subject back in view but past its plates' fits) one
+    triangle with the plate's distances is as likely chance."""
+    state = _away(_learned_state())
+    back = _returned([CHAIR, WHEEL, HEAD])
+    guess = state.predict()
+    lost = np.ones(len(BODY), bool)
+    assert np.allclose(search_lost_clusters(guess, state, lost, back[CHAIR[:3]])[CHAIR[:3]], back[CHAIR[:3]])
+    crowd = back[0] + np.random.default_rng(3).uniform(-1500.0, 1500.0, (12, 3))
+    found = search_lost_clusters(guess, state, lost, np.vstack([back[CHAIR[:3]], crowd]))
+    assert np.allclose(found, guess)
 
 
 def test_three_members_in_a_crowd_of_matching_triangles_are_left():
