@@ -5,7 +5,6 @@ from dataclasses import replace
 from itertools import permutations
 
 import numpy as np
-import pytest
 from scipy.spatial.distance import pdist
 from scipy.spatial.transform import Rotation
 
@@ -152,7 +151,7 @@ def test_a_member_seen_again_leaves_its_three_lost_mates_to_their_triangle():
     assert np.allclose(found[WHEEL], back[WHEEL])
 
 
-def test_a_plate_back_with_three_of_its_four_markers_is_placed_by_them():
+def test_a_plate_back_with_three_of_its_four_markers_is_placed_by_them(monkeypatch):
     """The basket sprint's plates come back into a sparse volume three markers at a time: the
     one triangle of free points with three of the plate's distances places it, and the absent
     member keeps its prediction. Required to explain four, as before, it stays lost."""
@@ -165,9 +164,8 @@ def test_a_plate_back_with_three_of_its_four_markers_is_placed_by_them():
     assert np.allclose(found[[CHAIR[3], WHEEL[1]]], guess[[CHAIR[3], WHEEL[1]]])
     four_only = cluster_search._unambiguous
     strict = lambda sightings, rivals, least, n: [s for s in four_only(sightings, rivals, least, n) if s.explained >= least]  # noqa: E731
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(cluster_search, "_unambiguous", strict)
-        assert np.allclose(search_lost_clusters(guess, state, np.ones(len(BODY), bool), back[seen]), guess)
+    monkeypatch.setattr(cluster_search, "_unambiguous", strict)
+    assert np.allclose(search_lost_clusters(guess, state, np.ones(len(BODY), bool), back[seen]), guess)
 
 
 def test_a_triangle_two_lost_clusters_share_places_neither():

@@ -95,10 +95,11 @@ def search_lost_clusters(
     learned = LearnedPairs.of(state)
     d_points = cdist(points, points)  # once for every cluster's triples
     sightings = [_sighting(cluster, learned, points, d_points, settings) for cluster in rigid_clusters(learned, lost, settings)]
-    # Markers unseen but not yet lost are not searched, but their points are free as well:
-    # a triangle of theirs that matches decides nothing either.
+    # Markers unseen but not yet lost are not searched, but their points are free as well: a
+    # triangle of theirs that matches leaves a sighting by three undecided (plates need none).
     rivals = [_sighting(cluster, learned, points, d_points, settings)
-              for cluster in rigid_clusters(learned, ~state.visible & ~lost, settings)]
+              for cluster in rigid_clusters(learned, ~state.visible & ~lost, settings)
+              ] if any(s.explained == TRIANGLE for s in sightings) else []
     found = guess.copy()
     for sighting in _unambiguous(sightings, rivals, settings.min_members, len(points)):
         kept = sighting.reading >= 0
@@ -108,13 +109,18 @@ def search_lost_clusters(
 
 @dataclass(frozen=True)
 class _Sighting:
-    """A lost cluster's best fit: the point each member is on (-1: none), how many it
+    """A rigid cluster's best fit: the point each member is on (-1: none), how many it
     explains (0: no one reading), and every point a fit explaining three or more touches."""
 
     cluster: NDArray[np.int64]
     reading: NDArray[np.intp]
     explained: int
     touched: frozenset[int]
+
+    @property
+    def on(self) -> set[int]:
+        """The points the best fit puts members on."""
+        return set(self.reading[self.reading >= 0].tolist())
 
 
 def _sighting(
@@ -131,20 +137,15 @@ def _unambiguous(sightings: list[_Sighting], rivals: list[_Sighting], min_member
     with another such; of three, those whose points no other cluster's fit touches, lost or
     only unseen (``rivals``), where most of the ``n_points`` free points are some fit's."""
     plates = [s for s in sightings if s.explained >= min_members]
-    taken = [s for s in plates if not any(_holds(o, s) for o in plates if o is not s)]
+    # two plates on one point: one of them is a lookalike, and nothing says which
+    taken = [s for s in plates if not any(o.on & s.on for o in plates if o is not s)]
     if 2 * len(frozenset().union(*(s.touched for s in sightings + rivals))) <= n_points:
         return taken  # a crowd: one triangle of it that matches may be chance
-    held = {int(p) for s in plates for p in s.reading if p >= 0}
+    held = set().union(*(s.on for s in plates))
     for s in sightings:
-        on = {int(p) for p in s.reading if p >= 0}
-        if s.explained == TRIANGLE and not on & held and not any(on & o.touched for o in sightings + rivals if o is not s):
+        if s.explained == TRIANGLE and not s.on & held and not any(s.on & o.touched for o in sightings + rivals if o is not s):
             taken.append(s)
     return taken
-
-
-def _holds(sighting: _Sighting, other: _Sighting) -> bool:
-    """Whether two sightings put members on one point: one of them is a lookalike, and nothing says which."""
-    return bool(set(sighting.reading[sighting.reading >= 0].tolist()) & set(other.reading[other.reading >= 0].tolist()))
 
 
 def rigid_clusters(learned: LearnedPairs, lost: np.ndarray, settings: ClusterSearch = CLUSTER_SEARCH) -> list[NDArray[np.int64]]:
@@ -200,7 +201,8 @@ def _placed(
     nearest, within = distance.argmin(axis=2), distance.min(axis=2) <= tol
     explained = within.sum(axis=1)
     readings = np.where(within, nearest, -1)
-    touched = frozenset(readings[explained >= TRIANGLE][readings[explained >= TRIANGLE] >= 0].tolist())
+    touching = readings[explained >= TRIANGLE]
+    touched = frozenset(touching[touching >= 0].tolist())
     tops = np.flatnonzero(explained == explained.max())
     if len({tuple(readings[t]) for t in tops}) > 1:  # the plate fits another way as well: its symmetry, or a lookalike
         return none, 0, touched
