@@ -23,7 +23,6 @@ from functools import partial
 
 import numpy as np
 
-from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.markers.gap_ends import tie_gap_ends
 from formulations.markers.rigid_fill import rigid_fill, rigid_refill
 from formulations.markers.shape_breaks import ShapeBreak
@@ -50,6 +49,7 @@ from service.labeling.loop import Observer, Progress, first_marker_state, label_
 from service.labeling.model_start import model_chains, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
+from service.labeling.reported import reported
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.rival_process import READINGS, Beside, EarlyStart, runs_beside, started
 from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame, rival_unread_reason
@@ -217,7 +217,7 @@ class CaptureLabeling:
             labels = self._view_choice.attach(labels, views)
         if not calibrated:
             return labels
-        labels, self.shape_breaks = shape_doubted(_reported(labels))
+        labels, self.shape_breaks = shape_doubted(reported(labels))
         return labels
 
     def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True, repaired: bool = True) -> LabeledTrajectories:
@@ -289,12 +289,3 @@ class CaptureLabeling:
         windows = [o.stats for o in outcomes]
         labels = self._labeled(outcomes, keep=self._view_choice is not None)  # camera mode reads them again
         return self._finished(labels, outcomes, True), windows
-
-
-def _reported(labels: LabeledTrajectories) -> LabeledTrajectories:
-    """``labels`` with their confidences calibrated (``formulations.confidence.calibration``);
-    the given first frame stays 1: the user labeled it."""
-    if labels.confidence.size:
-        labels.confidence = LABEL_CALIBRATION(labels.confidence)
-        labels.confidence[0] = 1.0
-    return labels

@@ -55,7 +55,7 @@ def doubtful_warning(fraction: float | None, advice: str = "check them") -> str 
     if fraction is None or fraction <= DOUBTFUL_WARNING:
         return None
     return (f"warning: {fraction:.1%} of the labels are doubtful (confidence below {REPORTED_DOUBTFUL_BELOW:.1%}: "
-            f"another reading of their window is nearly as likely); {advice}")
+            f"another reading of their window is nearly as likely, or the marker was seen alone amid an occlusion); {advice}")
 
 
 OCCLUDED_WARNING = 0.5  # warn when more than this share of the marker-frames after the labeled one took nothing
