@@ -55,3 +55,10 @@ def test_a_labeled_take_with_such_a_plate_is_warned_of() -> None:
         labels, _ = CaptureLabeling(capture).label()
         lines = [line for line in result_warnings(capture, labels, []) if "equal sides" in line]
         assert lines == ([symmetric_plate_warning([("g1", "g2", "g3")])] if plated else [])
+
+
+def test_the_line_counts_its_plates_in_words_that_agree() -> None:
+    one, two = ("g1", "g2", "g3"), ("h1", "h2", "h3")
+    assert (symmetric_plate_warning([one]) or "").startswith("warning: 1 plate of three markers with equal sides (g1/g2/g3)")
+    two_plates = "warning: 2 plates of three markers with equal sides (g1/g2/g3, h1/h2/h3)"
+    assert (symmetric_plate_warning([one, two]) or "").startswith(two_plates)
