@@ -48,5 +48,6 @@ def coincident_warning(pairs: list[tuple[str, str]]) -> str | None:
         return None
     named = ", ".join(f"{a} and {b}" for a, b in pairs[:LISTED])
     more = f" and {len(pairs) - LISTED} more" if len(pairs) > LISTED else ""
-    return (f"warning: {len(pairs)} pairs of markers sit on one position ({named}{more}): copied columns? "
+    counted = "1 pair of markers sits" if len(pairs) == 1 else f"{len(pairs)} pairs of markers sit"
+    return (f"warning: {counted} on one position ({named}{more}): copied columns? "
             "each pair's labels cannot be told apart and count as doubtful")
