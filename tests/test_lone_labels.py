@@ -1,12 +1,17 @@
 """Lone labels (one frame seen amid an occlusion) are reported no surer than lone labels are
 right: the window prices them by a drifted prediction alone and calls them sure."""
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
+from test_cli import run_cli
 
 from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.confidence.lone import lone_labels
 from service.capture.capture import Capture, LabelingOptions
+from service.capture.document import CaptureDocument
 from service.evaluation.scene import generate_scene
 from service.io.recording import LabeledTrajectories
 from service.labeling.capture_labeling import CaptureLabeling
@@ -48,7 +53,8 @@ def test_a_lone_label_is_reported_doubtful_and_a_label_in_a_run_is_not() -> None
     assert reported_doubtful(confidence, labels.occluded).tolist() == expected
 
 
-def test_a_marker_seen_for_one_frame_amid_an_occlusion_is_labeled_and_reported_doubtful() -> None:
+def _flickering() -> tuple[Capture, np.ndarray]:
+    """A walking figure whose marker ``MARKER`` is unseen over ``HIDDEN`` but for frame ``FLICKER``; the truth."""
     truth = generate_scene(n_frames=80, seed=1)
     rng = np.random.default_rng(1)
     points = []
@@ -56,11 +62,24 @@ def test_a_marker_seen_for_one_frame_amid_an_occlusion_is_labeled_and_reported_d
         seen = np.ones(len(frame), bool)
         seen[MARKER] = not (HIDDEN.start <= f < HIDDEN.stop) or f == FLICKER
         points.append(rng.permutation(frame[seen] + rng.normal(0.0, 0.5, (int(seen.sum()), 3))))
-    capture = Capture(list(truth.names), truth.positions[0], truth.rate, points=points)
+    return Capture(list(truth.names), truth.positions[0], truth.rate, points=points), truth.positions
+
+
+def test_a_marker_seen_for_one_frame_amid_an_occlusion_is_labeled_and_reported_doubtful() -> None:
+    capture, truth = _flickering()
     result, _ = CaptureLabeling(capture, LabelingOptions(window=10)).label()
     taken = result.positions[FLICKER, MARKER]
-    assert np.linalg.norm(taken - truth.positions[FLICKER, MARKER]) < 5.0  # its own point, taken
+    assert np.linalg.norm(taken - truth[FLICKER, MARKER]) < 5.0  # its own point, taken
     assert result.confidence[FLICKER, MARKER] <= LONE_CONFIDENCE
     assert reported_doubtful(result.confidence, result.occluded)[FLICKER, MARKER]
-    neighbours = [n for n in range(len(truth.names)) if n != MARKER]
+    neighbours = [n for n in range(len(capture.names)) if n != MARKER]
     assert not reported_doubtful(result.confidence, result.occluded)[FLICKER, neighbours].any()
+
+
+def test_track_json_lists_the_lone_labels(tmp_path: Path) -> None:
+    capture, _ = _flickering()
+    source = tmp_path / "capture.json"
+    source.write_text(CaptureDocument.of(capture, LabelingOptions(window=10)).model_dump_json())
+    done = run_cli("track", source, "--out", tmp_path / "labeled.csv", "--json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["lone_labels"] == {capture.names[MARKER]: [FLICKER]}

@@ -31,12 +31,11 @@ from service.labeling.exchanged import exchange_summary, handover_summary
 from service.labeling.hypothesis_reading import unread_reason
 from service.labeling.leftover_points import leftover_note, leftover_summary
 from service.labeling.lost_subject import unnamed_span
+from service.labeling.reported import lone_sightings
 from service.labeling.result_warnings import early_scale_warning
 from service.labeling.shape_doubt import shape_break_summary
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
-from service.labeling.take_warnings import (
-    fast_markers,
-)
+from service.labeling.take_warnings import fast_markers
 
 
 def run_track(
@@ -152,7 +151,8 @@ def track_summary(
     ``certificate`` says what an integral window proves: optimal under the model, not
     right; or, when no window has a bound (a frame-by-frame or greedy formulation), that
     none does. ``doubtful_fraction`` and ``reacquired`` (marker -> frames) are those of
-    ``service.labeling.stats``. ``noise_mm`` is the take's measurement noise read back
+    ``service.labeling.stats``, ``lone_labels`` (marker -> frames seen alone amid an occlusion,
+    doubtful) of ``service.labeling.reported``. ``noise_mm`` is the take's measurement noise read back
     from the labeled positions (``TakeNoise``: the robust scale of the constant-acceleration
     residual, mean over the axes); None when too little was seen to say. ``fast_markers``
     lists the markers that move more per frame than half their neighbour distance
@@ -183,6 +183,7 @@ def track_summary(
         "certificate": CERTIFICATE if any(w.integral or np.isfinite(w.gap) for w in windows) else NO_CERTIFICATE,
         "doubtful_fraction": doubtful_fraction(result.confidence, result.occluded),
         "reacquired": reacquisitions(result.names, result.occluded),
+        "lone_labels": lone_sightings(result.names, result.occluded),
         "fast_markers": [vars(fast) for fast in fast_markers(result.names, result.positions)],
         "coincident_markers": [list(pair) for pair in coincident_pairs(result.names, result.positions)],
         "unnamed_span": _unnamed(capture, result),

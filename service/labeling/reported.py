@@ -10,6 +10,7 @@ import numpy as np
 from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.confidence.lone import lone_labels
 from service.io.recording import LabeledTrajectories
+from service.labeling.stats import REACQUIRED_LISTED
 
 # The reported confidence of a lone label: of those on the real takes relabeled by ``track``
 # (``bench/real_takes.py``'s starts) where the file labels the marker, 171 of 193 were right,
@@ -26,3 +27,10 @@ def reported(labels: LabeledTrajectories) -> LabeledTrajectories:
         lone = lone_labels(np.isfinite(labels.positions).all(axis=2))
         labels.confidence[lone] = np.fmin(labels.confidence[lone], LONE_CONFIDENCE)
     return labels
+
+
+def lone_sightings(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:
+    """Per marker that has any, the first ``REACQUIRED_LISTED`` frames (from 0) where it was
+    seen alone amid an occlusion: its lone labels, reported doubtful."""
+    lone = lone_labels(~np.asarray(occluded, dtype=bool))
+    return {name: np.flatnonzero(lone[:, m])[:REACQUIRED_LISTED].tolist() for m, name in enumerate(names) if lone[:, m].any()}
