@@ -64,6 +64,7 @@ def test_a_copied_column_is_reported_and_not_read_as_fast_motion():
     assert fast_markers(names, copied) == []  # 5 mm a frame against the 30 mm to B and C, not 0 mm to the copy
     assert coincident_pairs(NAMES, cluster(28.0, 30.0)) == []
     line = coincident_warning([("A", "A copy")])
-    assert line is not None and line.startswith("warning: 1 pair of markers sits on one position (A and A copy)")
+    assert line is not None and line.startswith("warning: 1 pair of markers on one position (A and A copy)")
     assert coincident_warning([]) is None
-    assert (coincident_warning([("A", "A copy"), ("B", "B copy")]) or "").startswith("warning: 2 pairs of markers sit on")
+    two = coincident_warning([("A", "A copy"), ("B", "B copy")])
+    assert two is not None and two.startswith("warning: 2 pairs of markers on one position")

@@ -14,8 +14,9 @@ from formulations.best_view import select_views
 from formulations.errors import FormulationError
 from service.best_view.tables import read_view_costs, write_choices
 from service.cli.output import check_writable_output
-from service.cli.report import counted, out
+from service.cli.report import out
 from service.errors import InputError
+from service.words import counted
 
 
 def run_best_view(costs_path: Path, output: Path, switch_cost: float, window: int) -> None:

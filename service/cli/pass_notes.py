@@ -4,9 +4,9 @@ frame-by-frame reading and the ``mht`` reading (``service.labeling.second_pass``
 
 from __future__ import annotations
 
-from service.cli.report import counted
 from service.labeling.rival_reading import RivalChoice
 from service.labeling.second_pass import PassChoice
+from service.words import counted
 
 
 def second_pass_note(choice: PassChoice | None) -> str:

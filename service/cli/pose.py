@@ -33,6 +33,7 @@ from service.pose.openpose import camera_folders, match_cameras, missing_frames_
 from service.pose.overlay import write_overlay
 from service.pose.participant import choose_participant
 from service.pose.run import PoseFit, fit_keypoints
+from service.words import counted
 
 EMPTY_ROWS = 10  # frame_rows: empty TRC rows allowed per fitted frame before the numbering is refused
 
@@ -170,7 +171,7 @@ def empty_rows_warning(numbers: list[int], rows: np.ndarray) -> str | None:
     if not len(empty):
         return None
     listed = ", ".join(map(str, empty[:8].tolist())) + (" ..." if len(empty) > 8 else "")
-    return (f"warning: no camera has a file for {report.counted(len(empty), 'frame')} between {numbers[0]} and "
+    return (f"warning: no camera has a file for {counted(len(empty), 'frame')} between {numbers[0]} and "
             f"{numbers[-1]} ({listed}): written as rows of empty cells")
 
 

@@ -69,11 +69,6 @@ def warn_doubtful(fraction: float | None) -> None:
     warn(doubtful_warning(fraction, "markerflow track writes them with each label's confidence"))
 
 
-def counted(count: int, noun: str, plural: str | None = None) -> str:
-    """``1 marker``, ``2 markers`` (``plural`` for nouns that do not take an s)."""
-    return f"{count} {noun if count == 1 else plural or noun + 's'}"
-
-
 def stage(line: str) -> None:
     """What long work comes next, a line on stderr unless quiet: after its last window a long
     take assembles and writes for tens of seconds (50,000 frames: 35 s), silent before."""

@@ -19,7 +19,7 @@ from service.capture.model_input import check_shared_names, read_model, with_mod
 from service.capture.span import frame_span
 from service.cli.output import check_writable_output
 from service.cli.pass_notes import rival_note, second_pass_note
-from service.cli.report import CERTIFICATE, NO_CERTIFICATE, counted, out, stage, warn, window_progress
+from service.cli.report import CERTIFICATE, NO_CERTIFICATE, out, stage, warn, window_progress
 from service.errors import InputError
 from service.io.formats import check_labels_fit, is_copy, kept_source, read_labeled, write_labeled
 from service.io.recording import LabeledTrajectories, Recording, SourceFile
@@ -36,6 +36,7 @@ from service.labeling.result_warnings import early_scale_warning
 from service.labeling.shape_doubt import shape_break_summary
 from service.labeling.stats import WindowStats, certificate_figures, doubtful_fraction, finite_or_none, reacquisitions
 from service.labeling.take_warnings import fast_markers
+from service.words import counted
 
 
 def run_track(

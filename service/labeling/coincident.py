@@ -15,6 +15,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from formulations.markers.lengths import lengths
+from service.words import counted
 
 COINCIDENT_MM = 0.5  # under any marker's radius; two real markers are never this close
 SAMPLED_FRAMES = 400  # distances read on this many evenly spaced frames (O(F N^2) otherwise)
@@ -48,6 +49,5 @@ def coincident_warning(pairs: list[tuple[str, str]]) -> str | None:
         return None
     named = ", ".join(f"{a} and {b}" for a, b in pairs[:LISTED])
     more = f" and {len(pairs) - LISTED} more" if len(pairs) > LISTED else ""
-    counted = "1 pair of markers sits" if len(pairs) == 1 else f"{len(pairs)} pairs of markers sit"
-    return (f"warning: {counted} on one position ({named}{more}): copied columns? "
+    return (f"warning: {counted(len(pairs), 'pair')} of markers on one position ({named}{more}): copied columns? "
             "each pair's labels cannot be told apart and count as doubtful")

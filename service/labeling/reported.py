@@ -10,7 +10,7 @@ import numpy as np
 from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.confidence.lone import lone_labels
 from service.io.recording import LabeledTrajectories
-from service.labeling.stats import REACQUIRED_LISTED
+from service.labeling.stats import frames_listed
 
 # The reported confidence of a lone label: of those on the real takes relabeled by ``track``
 # (``bench/real_takes.py``'s starts) where the file labels the marker, 171 of 193 were right,
@@ -24,13 +24,12 @@ def reported(labels: LabeledTrajectories) -> LabeledTrajectories:
     if labels.confidence.size:
         labels.confidence = LABEL_CALIBRATION(labels.confidence)
         labels.confidence[0] = 1.0  # the user labeled it
-        lone = lone_labels(np.isfinite(labels.positions).all(axis=2))
+        lone = lone_labels(~labels.occluded)
         labels.confidence[lone] = np.fmin(labels.confidence[lone], LONE_CONFIDENCE)
     return labels
 
 
 def lone_sightings(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:
-    """Per marker that has any, the first ``REACQUIRED_LISTED`` frames (from 0) where it was
-    seen alone amid an occlusion: its lone labels, reported doubtful."""
-    lone = lone_labels(~np.asarray(occluded, dtype=bool))
-    return {name: np.flatnonzero(lone[:, m])[:REACQUIRED_LISTED].tolist() for m, name in enumerate(names) if lone[:, m].any()}
+    """Per marker that has any, the first frames (from 0) where it was seen alone amid an
+    occlusion (``stats.frames_listed``): its lone labels, reported doubtful."""
+    return frames_listed(names, lone_labels(~np.asarray(occluded, dtype=bool)))

@@ -129,11 +129,12 @@ def doubtful_fraction(confidence: np.ndarray, occluded: np.ndarray) -> float:
 def reacquisitions(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:
     """Per marker that has any, the first ``REACQUIRED_LISTED`` frames (from 0) where it
     reappeared after an occlusion: where its identity went from predicted back to a point."""
-    onsets = reacquired(np.asarray(occluded, dtype=bool))
-    return {
-        name: np.flatnonzero(onsets[:, m])[:REACQUIRED_LISTED].tolist()
-        for m, name in enumerate(names) if onsets[:, m].any()
-    }
+    return frames_listed(names, reacquired(np.asarray(occluded, dtype=bool)))
+
+
+def frames_listed(names: list[str], marked: np.ndarray) -> dict[str, list[int]]:
+    """Per marker with any ``marked`` ``(F, N)`` frame, the first ``REACQUIRED_LISTED`` of them (from 0)."""
+    return {name: np.flatnonzero(marked[:, m])[:REACQUIRED_LISTED].tolist() for m, name in enumerate(names) if marked[:, m].any()}
 
 
 def certificate_figures(windows: list[WindowStats]) -> dict[str, float | None]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from formulations.markers.plate_turns import equal_plates
+from service.words import counted
 
 LISTED = 3  # plates named in the warning line
 
@@ -35,7 +36,6 @@ def symmetric_plate_warning(plates: list[tuple[str, str, str]]) -> str | None:
         return None
     named = ", ".join("/".join(plate) for plate in plates[:LISTED])
     more = f" and {len(plates) - LISTED} more" if len(plates) > LISTED else ""
-    counted = "1 plate" if len(plates) == 1 else f"{len(plates)} plates"
-    return (f"warning: {counted} of three markers with equal sides ({named}{more}): an exchange inside one "
+    return (f"warning: {counted(len(plates), 'plate')} of three markers with equal sides ({named}{more}): an exchange inside one "
             "keeps every distance; where the plate is seen whole in frames near enough, how far it turned tells its "
             "labels apart, but a plate lost whole for longer may come back exchanged")
