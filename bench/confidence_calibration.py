@@ -8,7 +8,8 @@ then scored raw and calibrated: doubtful share and recall (raw p below ``DOUBTFU
 the same labels as calibrated p below its image, and for comparison calibrated p below
 ``DOUBTFUL_BELOW``), Brier score, and the expected calibration error over ten bins of p; and
 so is the map in use, ``LABEL_CALIBRATION``, so that it can be checked on other seeds than it
-was fitted on (``--seeds 1 2``). The fitted knots are printed in the form of
+was fitted on (``--seeds 1 2``); and the confidence a result reports (the map in use, then lone
+labels and shape breaks capped: ``service.labeling.reported``, ``shape_doubt``). The fitted knots are printed in the form of
 ``LABEL_CALIBRATION`` (``formulations/confidence/calibration.py``).
 
     .venv/bin/python bench/confidence_calibration.py [--seeds 0] [--frames 600] [--jobs 2] [--conditions ...]
@@ -36,8 +37,8 @@ from service.labeling.stats import DOUBTFUL_BELOW, REPORTED_DOUBTFUL_BELOW  # no
 FIVE = ["default", "noise-2", "noise-4", "drop-30", "ghosts-10"]  # the conditions the matrices in docs/ run
 
 
-def cell_labels(recording: str, condition: str, seed: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(L,)`` raw confidence and right of every window label of one cell."""
+def cell_labels(recording: str, condition: str, seed: int, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(L,)`` raw and reported confidence and right of every window label of one cell."""
     take = prepare(recording_named(recording), DATA)
     scenario = replace(CONDITIONS[condition], seed=seed, start_frame=take.start, frames=min(frames, take.frames))
     simulated = simulate_cloud(take.truth, scenario)
@@ -45,13 +46,15 @@ def cell_labels(recording: str, condition: str, seed: int, frames: int) -> tuple
     outcomes = labeling.refine(list(labeling.windows()))
     assert outcomes is not None  # no stop was asked for
     result = labeling.result(outcomes, calibrated=False)
-    raw, right = [], []
+    reported = labeling.result(outcomes).confidence
+    raw, shown, right = [], [], []
     for f in range(1, result.n_frames):  # frame 0 is the user's
         taken = result.point_index[f]
         labeled = np.flatnonzero(taken >= 0)
         raw.append(result.confidence[f, labeled])
+        shown.append(reported[f, labeled])
         right.append(simulated.point_marker[f][taken[labeled]] == labeled)
-    return np.concatenate(raw), np.concatenate(right)
+    return np.concatenate(raw), np.concatenate(shown), np.concatenate(right)
 
 
 def scores(p: np.ndarray, right: np.ndarray, below: float) -> str:
@@ -64,7 +67,7 @@ def scores(p: np.ndarray, right: np.ndarray, below: float) -> str:
             f"Brier {np.mean((p - right) ** 2):.4f}, calibration error {ece:.4f}")
 
 
-def _cell(args: tuple[str, str, int, int]) -> tuple[np.ndarray, np.ndarray]:
+def _cell(args: tuple[str, str, int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return cell_labels(*args)
 
 
@@ -75,22 +78,23 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--conditions", nargs="+", default=FIVE, choices=list(CONDITIONS))
     args = parser.parse_args()
-    pooled: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    pooled: dict[str, tuple[np.ndarray, ...]] = {}
     with Pool(args.jobs) as pool:
         for half in ("tuning", "validation"):
             cells = [(r.name, c, s, args.frames) for r in RECORDINGS if r.half == half for c in args.conditions
                      for s in args.seeds]
             labeled = pool.map(_cell, cells)
-            pooled[half] = (np.concatenate([p for p, _ in labeled]), np.concatenate([r for _, r in labeled]))
-            print(f"{half}: {len(cells)} cells, {len(pooled[half][0]):,} labels, {1 - pooled[half][1].mean():.2%} wrong",
+            pooled[half] = tuple(np.concatenate(part) for part in zip(*labeled))
+            print(f"{half}: {len(cells)} cells, {len(pooled[half][0]):,} labels, {1 - pooled[half][2].mean():.2%} wrong",
                   flush=True)
-    calibration = fit_calibration(*pooled["tuning"])
+    calibration = fit_calibration(pooled["tuning"][0], pooled["tuning"][2])
     reported_below = float(calibration(DOUBTFUL_BELOW))  # the same labels flagged (the map is monotone)
-    for half, (raw, right) in pooled.items():
+    for half, (raw, reported, right) in pooled.items():
         print(f"{half:10s} raw        {scores(raw, right, DOUBTFUL_BELOW)}")
         print(f"{half:10s} calibrated {scores(calibration(raw), right, reported_below)}")
         print(f"{half:10s} calibrated {scores(calibration(raw), right, DOUBTFUL_BELOW)} (another threshold)")
         print(f"{half:10s} shipped    {scores(LABEL_CALIBRATION(raw), right, REPORTED_DOUBTFUL_BELOW)} (the map in use)")
+        print(f"{half:10s} reported   {scores(reported, right, REPORTED_DOUBTFUL_BELOW)} (as a result reports it)")
     print(knots(calibration))
 
 
