@@ -3,6 +3,7 @@ take's share of them, the warning, and how they are scored against the truth."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -97,6 +98,20 @@ def test_labels_on_jumped_marker_frames_are_left_out_of_the_doubt_counts() -> No
     unknown[1, 1] = True  # the file's b is not known to be b there
     counts = doubt_counts(capture, result, unknown)
     assert (counts.labels, counts.doubtful, counts.wrong, counts.flagged) == (3, 2, 1, 1)
+
+
+def test_a_label_on_a_point_the_file_names_wrongly_is_left_out_unless_its_own_point_is_seen() -> None:
+    # frame 1: the file sees only b, at point 0, and its b is not known to be b there (it
+    # jumped); a, which the file does not see, takes that point: neither right nor wrong.
+    # frame 2: the file sees a at point 1 too, and a takes point 0 again: wrong either way.
+    capture = _capture([np.array([0, 1]), np.array([1]), np.array([1, 0])])
+    taken = np.array([[0, 1], [0, -1], [0, -1]])
+    result = LabeledTrajectories(["a", "b"], np.zeros((3, 2, 3)), taken < 0, 100.0, point_index=taken,
+                                 confidence=np.array([[1.0, 1.0], [0.999, 1.0], [0.999, 1.0]]))
+    assert dataclasses.astuple(doubt_counts(capture, result)) == (2, 0, 2, 0)
+    unknown = np.zeros((3, 2), bool)
+    unknown[1:, 1] = True
+    assert dataclasses.astuple(doubt_counts(capture, result, unknown)) == (1, 0, 1, 0)
 
 
 def test_the_warning_is_one_stderr_line_above_the_share(capsys: pytest.CaptureFixture[str]) -> None:

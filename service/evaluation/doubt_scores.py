@@ -37,7 +37,13 @@ def doubt_counts(
     ``REPORTED_DOUBTFUL_BELOW`` (``service.labeling.stats.reported_doubtful``).
 
     ``unknown``: ``(frames, markers)`` marker-frames whose truth is not known (a recording's
-    own label jumps there, ``label_jumps``): their labels are left out of every count.
+    own label jumps there, ``label_jumps``): their labels are left out of every count, and so
+    is a label of a marker the file does not see in that frame on a point the file names
+    there as such a marker: what that point is, is not known. (A marker the file does see,
+    on another's point, is wrong whatever that point is.) On 03_rolling the file's LL_HME
+    comes back from a gap on another marker for 53 frames, 85 mm off its upper-arm partners;
+    the labeler calls that point LL_TH1, absent from the file there, and was counted wrong
+    on every frame.
 
     Raises:
         ValueError: ``result`` has no confidences, or names a point a frame does not have.
@@ -54,9 +60,23 @@ def doubt_counts(
         if taken.max() >= len(capture.point_marker[f]):
             raise ValueError(f"frame {f}: the labeling names point {taken.max()} of {len(capture.point_marker[f])}")
         owner[f, labeled[f]] = capture.point_marker[f][taken]
+    if unknown is not None:
+        labeled &= ~_on_unknown_points(capture, owner, unknown)
     wrong = labeled & (owner != np.arange(result.point_index.shape[1]))
     doubtful = reported_doubtful(result.confidence, ~labeled)
     return DoubtCounts(int(labeled.sum()), int(doubtful.sum()), int(wrong.sum()), int((doubtful & wrong).sum()))
+
+
+def _on_unknown_points(capture: SimulatedCapture, owner: np.ndarray, unknown: np.ndarray) -> np.ndarray:
+    """``(frames, markers)`` labels of markers the file does not see in their frame, on a point
+    whose file label is ``unknown`` there (``doubt_counts``)."""
+    frames, markers = owner.shape
+    seen = np.zeros((frames, markers), bool)
+    for f, marker in enumerate(capture.point_marker[:frames]):
+        seen[f, marker[(marker >= 0) & (marker < markers)]] = True
+    rows = np.arange(frames)[:, None]
+    owner_unknown = (owner >= 0) & unknown[rows, np.clip(owner, 0, markers - 1)]
+    return owner_unknown & ~seen
 
 
 def doubt_scores(capture: SimulatedCapture, result: LabeledTrajectories) -> dict[str, float | None]:
