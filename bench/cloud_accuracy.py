@@ -13,8 +13,9 @@ proven optimal, the largest gap, the median ms per frame, and over all seeds' la
 doubtful share (labels with confidence below ``DOUBTFUL_BELOW``) and the doubtful recall
 (wrong labels among them / wrong labels; "-" when no label was wrong); then the same two
 without the marker-frames where the file's own labels jump to another marker
-(``service/evaluation/label_jumps.py``: there neither right nor wrong is known), and the
-share of labels left out so.
+(``service/evaluation/label_jumps.py``: there neither right nor wrong is known), nor the
+labels of markers the file does not see on those marker-frames' points (``doubt_counts``),
+and the share of labels left out so.
 
     .venv/bin/python bench/cloud_accuracy.py [--seeds 6] [--mu 0 0.05 0.2] [--formulations lp-l1 nn-hungarian]
         [--scenario configs/scenarios/hard.toml] [--recordings cmu-85_02 cmu-135_02 numediart-rolling]
