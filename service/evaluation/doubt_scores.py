@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from service.evaluation.scores import flat_points
 from service.evaluation.simulated import SimulatedCapture
 from service.io.recording import LabeledTrajectories
 from service.labeling.stats import reported_doubtful
@@ -71,9 +72,10 @@ def _on_unknown_points(capture: SimulatedCapture, owner: np.ndarray, unknown: np
     """``(frames, markers)`` labels of markers the file does not see in their frame, on a point
     whose file label is ``unknown`` there (``doubt_counts``)."""
     frames, markers = owner.shape
+    marker, frame, _ = flat_points(capture.point_marker[:frames])
     seen = np.zeros((frames, markers), bool)
-    for f, marker in enumerate(capture.point_marker[:frames]):
-        seen[f, marker[(marker >= 0) & (marker < markers)]] = True
+    real = marker >= 0
+    seen[frame[real], marker[real]] = True
     rows = np.arange(frames)[:, None]
     owner_unknown = (owner >= 0) & unknown[rows, np.clip(owner, 0, markers - 1)]
     return owner_unknown & ~seen

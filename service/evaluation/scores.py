@@ -112,12 +112,12 @@ class _Marked(NamedTuple):
 
 
 def _marked(capture: SimulatedCapture, result: LabeledTrajectories, first_given: bool = True) -> _Marked:
-    """The flat points (``_flatten``), the labeling, and per marker-frame masks.
+    """The flat points (``flat_points``), the labeling, and per marker-frame masks.
 
     ``scored[f]``: frame ``f >= 1``; ``visible[f, n]``: scored and ``n`` has a point;
     ``correct[f, n]``: visible and ``n`` took its own point.
     """
-    marker, frame, offsets = _flatten(capture.point_marker)
+    marker, frame, offsets = flat_points(capture.point_marker)
     taken = _checked_point_index(capture, result, offsets)
     # Frame 0 is given by the user, so nothing in it is scored (unless a model named it).
     scored = np.arange(taken.shape[0]) >= (1 if first_given else 0)
@@ -127,7 +127,7 @@ def _marked(capture: SimulatedCapture, result: LabeledTrajectories, first_given:
     return _Marked(marker, frame, offsets, taken, scored, visible, correct)
 
 
-def _flatten(point_marker: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flat_points(point_marker: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """All frames' points in one array: their marker, their frame, and frame offsets.
 
     Frame ``f`` owns flat indices ``offsets[f] : offsets[f + 1]``.
