@@ -21,7 +21,9 @@ demo: $(BIN)/.installed
 test: $(BIN)/.installed
 	$(BIN)/ruff check .
 	$(BIN)/mypy
-	$(BIN)/python -m pytest -q
+	# two workers, one per core of the CI machine; a file's tests stay on one worker, so its
+	# module fixtures (labeled takes, servers) are built once
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 bench: $(BIN)/.installed
 	$(BIN)/python bench/jiang_table1.py
