@@ -32,6 +32,7 @@ from formulations.confidence.calibration import LABEL_CALIBRATION, ConfidenceCal
 from service.evaluation.matrix import CONDITIONS, DATA, RECORDINGS, prepare, recording_named  # noqa: E402
 from service.evaluation.simulate_cloud import simulate_cloud  # noqa: E402
 from service.labeling.capture_labeling import CaptureLabeling  # noqa: E402
+from service.labeling.reported import as_reported  # noqa: E402
 from service.labeling.stats import DOUBTFUL_BELOW, REPORTED_DOUBTFUL_BELOW  # noqa: E402
 
 FIVE = ["default", "noise-2", "noise-4", "drop-30", "ghosts-10"]  # the conditions the matrices in docs/ run
@@ -46,7 +47,8 @@ def cell_labels(recording: str, condition: str, seed: int, frames: int) -> tuple
     outcomes = labeling.refine(list(labeling.windows()))
     assert outcomes is not None  # no stop was asked for
     result = labeling.result(outcomes, calibrated=False)
-    reported = labeling.result(outcomes).confidence
+    # the raw result as reported, not a second ``result``: that would assemble the take again
+    reported = as_reported(replace(result, confidence=result.confidence.copy()))[0].confidence
     raw, shown, right = [], [], []
     for f in range(1, result.n_frames):  # frame 0 is the user's
         taken = result.point_index[f]

@@ -49,12 +49,11 @@ from service.labeling.loop import Observer, Progress, first_marker_state, label_
 from service.labeling.model_start import model_chains, model_first_frame
 from service.labeling.outcome import WindowOutcome, take_confidence
 from service.labeling.outcome_fit import check_outcomes, check_resumable, stamped
-from service.labeling.reported import reported
+from service.labeling.reported import as_reported
 from service.labeling.result_warnings import result_warnings, time_limit_warning
 from service.labeling.rival_process import READINGS, Beside, EarlyStart, runs_beside, started
 from service.labeling.rival_reading import RivalChoice, RivalReading, merged_with_rival, read_frame_by_frame, rival_unread_reason
 from service.labeling.second_pass import PassChoice, Stop, judged_part, second_pass, second_pass_runs
-from service.labeling.shape_doubt import shape_doubted
 from service.labeling.spans import window_spans
 from service.labeling.stats import WindowStats
 from service.labeling.take_warnings import model_misfit_warning, refuse_wrong_scale, spacing_frame
@@ -217,7 +216,7 @@ class CaptureLabeling:
             labels = self._view_choice.attach(labels, views)
         if not calibrated:
             return labels
-        labels, self.shape_breaks = shape_doubted(reported(labels))
+        labels, self.shape_breaks = as_reported(labels)
         return labels
 
     def _labeled(self, outcomes: list[WindowOutcome], keep: bool = True, repaired: bool = True) -> LabeledTrajectories:

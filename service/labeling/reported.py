@@ -9,7 +9,9 @@ import numpy as np
 
 from formulations.confidence.calibration import LABEL_CALIBRATION
 from formulations.confidence.lone import lone_labels
+from formulations.markers.shape_breaks import ShapeBreak
 from service.io.recording import LabeledTrajectories
+from service.labeling.shape_doubt import shape_doubted
 from service.labeling.stats import frames_listed
 
 # The reported confidence of a lone label: of those on the real takes relabeled by ``track``
@@ -27,6 +29,12 @@ def reported(labels: LabeledTrajectories) -> LabeledTrajectories:
         lone = lone_labels(~labels.occluded)
         labels.confidence[lone] = np.fmin(labels.confidence[lone], LONE_CONFIDENCE)
     return labels
+
+
+def as_reported(labels: LabeledTrajectories) -> tuple[LabeledTrajectories, list[ShapeBreak]]:
+    """``labels`` with the confidence a result reports (``reported``, then capped inside the
+    shape breaks, ``shape_doubt``), and the breaks; ``labels``' own confidences are replaced."""
+    return shape_doubted(reported(labels))
 
 
 def lone_sightings(names: list[str], occluded: np.ndarray) -> dict[str, list[int]]:
