@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from formulations.markers.first_frame_shape import CAP_MM, first_frame_disagreement, pair_offsets
+from formulations.markers.first_frame_shape import CAP_MM, first_frame_disagreement, pair_offsets, rigid_mates
 from formulations.markers.state import MarkerState
 from formulations.markers.take_spread import take_spread
 
@@ -123,3 +123,21 @@ def test_a_label_on_a_close_neighbours_point_costs_the_cap_though_it_bends_its_p
     assert wrong_row[-3:].tolist() == [CAP_MM] * 3  # the pairs to 2 and 4, and to 1, which it left out
     assert np.allclose(wrong_row[:2], np.sort(bent[[1, 3]]))
     assert capped[0, 30, 0].max() < 3.0
+
+
+def test_a_labeling_that_labels_a_marker_only_while_still_does_not_make_it_rigid_with_another_segment() -> None:
+    """The leg stands still for 25 frames, then the shank swings about foot marker 0. One
+    labeling labels shank marker 4 only in the still frames, where its pairs to foot markers
+    1-3 vary by noise alone; the other labels it everywhere. The least spread either shows
+    would make the foot its rigid mates; a spread over a tenth of the frames the other
+    labeling shows the pair in is not heard, so its mates are the shank's and the pivot."""
+    right = _two_segments(frames=250, seed=2)
+    right[:25] = right[0] + np.random.default_rng(3).normal(0, 1.0, (25, 8, 3))  # still: the first frame's pose
+    sparse = right.copy()
+    sparse[25:, 4] = np.nan
+    neighbours = _neighbours(right[0])
+    foot = np.isin(neighbours[4], [1, 2, 3])
+    still, moving = take_spread(sparse, neighbours)[4], take_spread(right, neighbours)[4]
+    assert np.sort(still[foot])[:2].max() < np.sort(moving[~foot])[2]  # the least spread alone picks foot mates
+    assert not np.isin(rigid_mates([sparse, right], neighbours, partners=3)[0][4], [1, 2, 3]).any()
+    assert np.isin(rigid_mates([sparse], neighbours, partners=3)[0][4], [1, 2, 3]).sum() >= 2  # alone, it is all there is
