@@ -122,6 +122,8 @@ def rigid_mates(labelings: list[Array], neighbours: NDArray[np.int64], partners:
 
 def _together(positions: Array, neighbours: NDArray[np.int64]) -> NDArray[np.int64]:
     """``(N, K)`` frames in which each marker and neighbour are both labeled."""
-    labeled = np.isfinite(positions[:, :, 0]).astype(np.int64)  # (F, N)
-    both: NDArray[np.int64] = np.take_along_axis(labeled.T @ labeled, neighbours, axis=1)
+    # counted in floats: BLAS multiplies them (integer matmul took 3.4 s at 100,000 frames of
+    # 68 markers, floats 0.016 s), exactly while a count is under 2^53
+    labeled = np.isfinite(positions[:, :, 0]).astype(np.float64)  # (F, N)
+    both: NDArray[np.int64] = np.rint(np.take_along_axis(labeled.T @ labeled, neighbours, axis=1)).astype(np.int64)
     return both
