@@ -32,6 +32,9 @@ gone. With x^_m(t) = 2 x_m(t - 1) - x_m(t - 2) a track's constant-velocity conti
 The KTK basket sprint's ForearmL:Marker1 label at frame 732 moves 73 mm onto the point of
 ForearmL:Marker4 (0.1 mm from where that track was heading), whose label ends there; on no other
 take of ``service.evaluation.matrix.RECORDINGS`` does a label do this.
+
+A rigid plate can also come back from a gap with its labels exchanged, which moves each
+marker's distance to one partner only (``plate_flips``): its marker-frames are left out too.
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.markers.runs import runs
+from service.evaluation.plate_flips import plate_flips
 from service.io.recording import Recording
 
 Mask = NDArray[np.bool_]
@@ -77,7 +81,7 @@ def label_jumps(recording: Recording, rule: LabelJumpRule = LabelJumpRule()) -> 
                 jumped[span, marker] = True
             elif length >= rule.min_frames:
                 reference = shape
-    return jumped | _handed_over(recording.positions, seen, rule)
+    return jumped | _handed_over(recording.positions, seen, rule) | plate_flips(recording)
 
 
 def _handed_over(positions: Array, seen: Mask, rule: LabelJumpRule) -> Mask:
