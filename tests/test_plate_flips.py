@@ -12,7 +12,8 @@ from service.evaluation.plate_flips import plate_flips
 from service.io.recording import Recording
 
 FRAMES = 200
-# A shank plate like 03_rolling's (mm): sides 85, 69, 93 and 90, diagonals 126 and 112.
+# A four-marker plate (mm): sides 85, 69, 63 and 92, diagonals 119 and 98
+# (03_rolling's shank plate: sides 66-93, diagonals 126 and 112).
 PLATE = np.array([[0.0, 0.0, 0.0], [85.0, 0.0, 0.0], [97.0, 68.0, 0.0], [36.0, 85.0, 0.0]])
 
 
