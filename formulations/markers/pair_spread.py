@@ -34,6 +34,7 @@ class PairSpreads:
     def __init__(self, positions: Array) -> None:
         self._positions = positions
         self._var = np.full((positions.shape[1],) * 2, np.nan)  # NaN: not computed yet
+        self._median = np.full((positions.shape[1],) * 2, np.nan)
 
     def var(self, rows: list[int], columns: list[int]) -> Array:
         """``(R, C)`` the spread of each pair (mm^2)."""
@@ -41,9 +42,18 @@ class PairSpreads:
         todo = np.nonzero(np.isnan(self._var[block]))
         if todo[0].size:
             a, b = np.asarray(rows)[todo[0]], np.asarray(columns)[todo[1]]
-            self._var[a, b] = self._var[b, a] = _robust_var(self._positions, a, b)
-        var: Array = self._var[block]
-        return var
+            median, var = _robust_stats(self._positions, a, b)
+            self._var[a, b] = self._var[b, a] = var
+            self._median[a, b] = self._median[b, a] = median
+        spread: Array = self._var[block]
+        return spread
+
+    def median(self, rows: list[int], columns: list[int]) -> Array:
+        """``(R, C)`` the median distance of each pair over the frames labeling both (mm); NaN
+        where its spread is inf (too few frames, or a = b)."""
+        self.var(rows, columns)
+        median: Array = self._median[np.ix_(rows, columns)]
+        return median
 
     def rigid(self, rows: list[int], columns: list[int]) -> NDArray[np.bool_]:
         """``(R, C)`` pairs whose spread is a rigid one's (``RIGID_SD_MM``); False for a = b."""
@@ -51,13 +61,15 @@ class PairSpreads:
         return rigid
 
 
-def _robust_var(positions: Array, a: NDArray[np.intp], b: NDArray[np.intp]) -> Array:
-    """``(P,)`` the spread of each pair (a[p], b[p]) (module doc)."""
+def _robust_stats(positions: Array, a: NDArray[np.intp], b: NDArray[np.intp]) -> tuple[Array, Array]:
+    """``(P,)`` the median distance and the spread of each pair (a[p], b[p]) (module doc)."""
     d = np.linalg.norm(positions[:, a] - positions[:, b], axis=2)  # (F, P)
     enough = np.isfinite(d).sum(axis=0) >= MIN_FRAMES
     with np.errstate(all="ignore"):
         d = np.where(enough, d, 0.0)
-        off = np.nanmedian(np.abs(d - np.nanmedian(d, axis=0)), axis=0)
+        median = np.nanmedian(d, axis=0)
+        off = np.nanmedian(np.abs(d - median), axis=0)
     var: Array = np.maximum((MAD_TO_SIGMA * off) ** 2, SPREAD_FLOOR_MM2)
-    var[~enough | (a == b)] = np.inf
-    return var
+    unknown = ~enough | (a == b)
+    var[unknown], median[unknown] = np.inf, np.nan
+    return median, var

@@ -10,9 +10,10 @@ exactly. ``label_jumps`` reads each marker against its partners one at a time (t
 change), and a half turn moves only the diagonal partner, so it does not see this.
 
 Here a plate is read whole. Each marker's plate is the marker and its three nearest partners
-rigid with it over the take (a robust distance s.d. at most ``rigid_mm``, over the frames
-that see both, which must be a quarter of the take's; the reference distances are the
-take's medians), where those are rigid with each other too. Each stretch of frames that
+rigid with it over the take (``PairSpreads``: the median absolute deviation of their
+distance, robust to a plate exchanged over under half the frames, at most ``rigid_mm`` as an
+s.d.; the reference distances are the take's medians), where those are rigid with each other
+too. Each stretch of frames that
 sees the whole plate (at least ``min_frames``) is compared with the reference by its median
 distances: where the plate's own labels misfit by more than ``flip_mm`` on some pair, and
 another assignment of the four labels fits every pair within ``rigid_mm``, that stretch's
@@ -22,7 +23,7 @@ nothing tells it.
 
 On the recordings of ``service.evaluation.matrix.RECORDINGS`` this flags 03_rolling's right
 shank plate from frame 2181 (496 marker-frames, 0.3 s) and nothing else. Its right thigh plate
-is not flagged: over the take its pairs spread 5.6-6.4 mm (it sits on soft tissue), over
+is not flagged: over the take its pairs spread 5.6-6.2 mm (it sits on soft tissue), over
 ``rigid_mm``, so it is no plate by this rule.
 """
 
@@ -34,6 +35,7 @@ from itertools import permutations
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.pair_spread import PairSpreads
 from formulations.markers.runs import runs
 from service.io.recording import Recording
 
@@ -55,49 +57,29 @@ def plate_flips(recording: Recording, rule: PlateFlipRule = PlateFlipRule()) -> 
     """``(frames, markers)`` the marker-frames of plates whose labels came back exchanged."""
     seen = ~recording.missing()
     flipped = np.zeros_like(seen)
-    reference, spread = _reference(recording.positions, seen)
-    for plate in _plates(reference, spread, rule.rigid_mm):
+    spreads = PairSpreads(recording.positions)
+    for plate in _plates(spreads, seen.shape[1], rule.rigid_mm):
         whole: Mask = np.asarray(seen[:, plate].all(axis=1), dtype=bool)
+        reference = spreads.median(plate, plate)
         for start, length in runs(whole):
-            if length < rule.min_frames:
-                continue
-            span = slice(start, start + length)
-            moved = _moved_labels(_distances(recording.positions[span][:, plate]), reference[np.ix_(plate, plate)], rule)
-            flipped[span, np.asarray(plate)[moved]] = True
+            if length >= rule.min_frames:
+                span = slice(start, start + length)
+                moved = _moved_labels(_distances(recording.positions[span][:, plate]), reference, rule)
+                flipped[span, np.asarray(plate)[moved]] = True
     return flipped
 
 
-def _reference(positions: Array, seen: Mask) -> tuple[Array, Array]:
-    """``(N, N)`` each pair's median distance over the frames that see both, and its robust
-    s.d. (the interquartile range over 1.349, a Gaussian's: a plate exchanged over under a
-    quarter of those frames does not loosen it); NaN for a marker itself and for pairs seen
-    together in under a quarter of the take's frames (a moment, not the take)."""
-    n = positions.shape[1]
-    median, sd = np.full((n, n), np.nan), np.full((n, n), np.nan)
-    for m in range(n):  # one marker's distances at a time: (F, N, N, 3) would take 256 MB on 03_rolling
-        together = (seen & seen[:, m : m + 1]).sum(axis=0)
-        kept = np.flatnonzero(together >= len(positions) / 4)
-        kept = kept[kept != m]
-        if len(kept):
-            distance = np.linalg.norm(positions[:, kept] - positions[:, m : m + 1], axis=2)  # NaN where unseen
-            low, median[m, kept], high = np.nanpercentile(distance, [25, 50, 75], axis=0)
-            sd[m, kept] = (high - low) / 1.349
-    return median, sd
-
-
-def _plates(reference: Array, spread: Array, rigid_mm: float) -> list[tuple[int, ...]]:
+def _plates(spreads: PairSpreads, n: int, rigid_mm: float) -> list[list[int]]:
     """Each marker with its three nearest rigid partners, where those are rigid with each other
     too, once each."""
-    plates = set()
-    with np.errstate(invalid="ignore"):
-        rigid = spread <= rigid_mm
-    for m in range(len(reference)):
-        partners = np.flatnonzero(rigid[m])
-        if len(partners) >= PLATE - 1:
-            plate = [m, *partners[np.argsort(reference[m, partners], kind="stable")[: PLATE - 1]].tolist()]
-            if rigid[np.ix_(plate, plate)][np.triu_indices(PLATE, 1)].all():  # a plate, not a joint's two sides
-                plates.add(tuple(sorted(plate)))
-    return sorted(plates)
+    markers, plates = list(range(n)), set()
+    for m in markers:
+        var, length = spreads.var([m], markers)[0], spreads.median([m], markers)[0]
+        partners = np.flatnonzero(var <= rigid_mm**2)  # inf for m itself
+        plate = [m, *partners[np.argsort(length[partners], kind="stable")[: PLATE - 1]].tolist()]
+        if len(plate) == PLATE and (spreads.var(plate, plate)[np.triu_indices(PLATE, 1)] <= rigid_mm**2).all():
+            plates.add(tuple(sorted(plate)))  # a plate, not a joint's two sides
+    return [list(plate) for plate in sorted(plates)]
 
 
 def _distances(positions: Array) -> Array:
