@@ -7,6 +7,7 @@ tuning half only. Takes with real gaps keep them: they add to the simulated dele
 
     .venv/bin/python bench/accuracy_matrix.py [--half both] [--recordings ...] [--conditions ...]
         [--seeds 0 1 2] [--formulations lp-l1 nn-hungarian] [--frames 0] [--jobs 2] [--json cells.json] [--mht-reading]
+        [--frame-step 1]
 
 Columns per formulation: acc % (pooled over seeds), known (the same without the marker-frames
 where the file's own label jumps to another marker, ``service/evaluation/label_jumps.py``:
@@ -53,7 +54,7 @@ _COLUMNS = f"{'acc %':>7s} {'known':>6s} {'swaps':>5s} {'vdo':>5s} {'ghost':>5s}
 
 def main() -> None:
     args = _arguments()
-    takes = [prepare(r, args.data) for r in RECORDINGS
+    takes = [prepare(r, args.data, args.frame_step) for r in RECORDINGS
              if (args.half in ("both", r.half)) and (not args.recordings or r.name in args.recordings)]
     _print_takes(takes, args.frames)
     keys = [CellKey(t.recording.name, c, s, f)
@@ -85,7 +86,12 @@ def _arguments() -> argparse.Namespace:
     parser.add_argument("--json", type=Path, help="write every cell here")
     parser.add_argument("--mht-reading", action="store_true", help="read doubtful takes by mht too (LabelingOptions.mht_reading)")
     parser.add_argument("--data", type=Path, default=DATA, help="the shared data folder")
-    return parser.parse_args()
+    parser.add_argument("--frame-step", type=int, default=1,
+                        help="keep every k-th frame of each take: the takes at 1/k of their frame rates")
+    args = parser.parse_args()
+    if args.frame_step < 1:
+        parser.error(f"--frame-step must be 1 or more, got {args.frame_step}")
+    return args
 
 
 @dataclass(frozen=True)
@@ -105,7 +111,7 @@ def _attempt(work: Callable[[CellKey], Cell], key: CellKey) -> Cell | _Failed:
 def _run(keys: list[CellKey], args: argparse.Namespace) -> tuple[list[Cell], list[_Failed]]:
     """Every cell, with one progress line per cell on stderr."""
     work = partial(_attempt, partial(run_cell, frames_cap=args.frames, data=args.data, block_frames=args.block,
-                                     mht_reading=args.mht_reading))
+                                     mht_reading=args.mht_reading, frame_step=args.frame_step))
     done: list[Cell | _Failed] = []
     start = time.perf_counter()
     with Pool(args.jobs) if args.jobs > 1 else nullcontext() as pool:
@@ -123,7 +129,7 @@ def _write_json(args: argparse.Namespace, takes: list[Take], cells: list[Cell], 
         "settings": settings,
         "takes": [{"recording": t.recording.name, "half": t.recording.half, "start": t.start,
                    "frames": t.frames, "markers": t.truth.n_markers, "dropped": list(t.dropped),
-                   "own_gaps": t.own_gaps} for t in takes],
+                   "own_gaps": t.own_gaps, "rate": t.truth.rate} for t in takes],
         "cells": [asdict(c) for c in sorted(cells, key=lambda c: astuple(c.key))],
         "failed": [asdict(f) for f in sorted(failed, key=lambda f: astuple(f.key))],
     }
@@ -133,13 +139,14 @@ def _write_json(args: argparse.Namespace, takes: list[Take], cells: list[Cell], 
 
 def _print_takes(takes: list[Take], cap: int) -> None:
     print("Takes (start: first frame with the most markers present, unless fixed; markers absent there dropped)")
-    print(f"{'recording':18s} {'half':10s} {'lab':24s} {'start':>5s} {'frames':>6s} {'mk':>3s} {'gaps %':>6s}  dropped")
+    print(f"{'recording':18s} {'half':10s} {'lab':24s} {'Hz':>5s} {'start':>5s} {'frames':>6s} {'mk':>3s} {'gaps %':>6s}"
+          "  dropped")
     for t in takes:
         frames = min(cap, t.frames) if cap else t.frames
         dropped = ", ".join(t.dropped) or "-"
         if t.recording.exclude:
             dropped += f" (left out: {', '.join(t.recording.exclude)})"
-        print(f"{t.recording.name:18s} {t.recording.half:10s} {t.recording.lab:24s} {t.start:5d} {frames:6d} "
+        print(f"{t.recording.name:18s} {t.recording.half:10s} {t.recording.lab:24s} {t.truth.rate:5.0f} {t.start:5d} {frames:6d} "
               f"{t.truth.n_markers:3d} {100 * t.own_gaps:6.1f}  {dropped}")
     print()
 

@@ -2,6 +2,7 @@
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 from conftest import DATA
 from test_scores import MARKER_FRAMES, PERFECT, _capture, _labeled
@@ -52,6 +53,16 @@ def test_a_take_without_a_complete_frame_drops_the_markers_absent_at_its_start()
     assert take.dropped == tuple(f"Probe{i}" for i in range(1, 7))
     assert take.truth.n_markers == 40 and not take.truth.missing()[take.start].any()
     assert take.frames == 700 - 17 and take.own_gaps > 0
+
+
+@needs_data
+def test_a_frame_step_keeps_the_start_frame_and_every_kth_frame_at_a_kth_of_the_rate() -> None:
+    full, step = prepare(recording_named("ktk-racing")), prepare(recording_named("ktk-racing"), frame_step=3)
+    # the start (frame 17) stays a kept frame, its markers the same; frames before it keep the step
+    assert step.truth.rate == full.truth.rate / 3 and step.truth.names == full.truth.names
+    assert np.array_equal(step.truth.positions[step.start], full.truth.positions[full.start], equal_nan=True)
+    assert np.array_equal(step.truth.positions, full.truth.positions[17 % 3 :: 3], equal_nan=True)
+    assert step.frames == len(range(17, 700, 3))
 
 
 @needs_data

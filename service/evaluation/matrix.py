@@ -116,11 +116,13 @@ class Take:
         return self.truth.n_frames - self.start
 
 
-def prepare(recording: MatrixRecording, data: Path = DATA) -> Take:
+def prepare(recording: MatrixRecording, data: Path = DATA, frame_step: int = 1) -> Take:
     """Read a take: excluded columns left out, start chosen, markers absent there dropped.
 
     The start is ``recording.start`` if fixed, else ``argmax_f #{n : n present in f}``,
-    the first frame with the most markers present in the file.
+    the first frame with the most markers present in the file. ``frame_step`` > 1 keeps every
+    ``frame_step``-th frame from the start on (and before it, in step): the take as a system
+    capturing at 1 / ``frame_step`` of its rate would have recorded it.
     """
     read = read_labeled(data / recording.path)
     own = [i for i, n in enumerate(read.names) if n not in recording.exclude]
@@ -128,14 +130,15 @@ def prepare(recording: MatrixRecording, data: Path = DATA) -> Take:
     missing = full.missing()
     start = int(np.argmax((~missing).sum(axis=1))) if recording.start is None else recording.start
     keep = ~missing[start]
-    truth = Recording([n for n, k in zip(full.names, keep) if k], full.positions[:, keep], full.rate)
+    frames = slice(start % frame_step, None, frame_step)
+    truth = Recording([n for n, k in zip(full.names, keep) if k], full.positions[frames][:, keep], full.rate / frame_step)
     dropped = tuple(n for n, k in zip(full.names, keep) if not k)
-    return Take(recording, truth, start, dropped, float(missing[start:, keep].mean()))
+    return Take(recording, truth, start // frame_step, dropped, float(missing[frames][start // frame_step :, keep].mean()))
 
 
 @lru_cache(maxsize=4)
-def _take(name: str, data: Path) -> Take:
-    return prepare(recording_named(name), data)
+def _take(name: str, data: Path, frame_step: int = 1) -> Take:
+    return prepare(recording_named(name), data, frame_step)
 
 
 def recording_named(name: str) -> MatrixRecording:
@@ -188,10 +191,11 @@ class Cell:
 
 def run_cell(
     key: CellKey, frames_cap: int = 0, data: Path = DATA, block_frames: int = 1000, mht_reading: bool = False,
+    frame_step: int = 1,
 ) -> Cell:
     """Simulate, label and score one cell; ``frames_cap`` > 0 caps the frames used; ``mht_reading``
-    as ``LabelingOptions.mht_reading``."""
-    take = _take(key.recording, data)
+    as ``LabelingOptions.mht_reading``; ``frame_step`` as ``prepare``'s."""
+    take = _take(key.recording, data, frame_step)
     frames = min(frames_cap, take.frames) if frames_cap else take.frames
     scenario = replace(CONDITIONS[key.condition], seed=key.seed, start_frame=take.start, frames=frames,
                        mht_reading=mht_reading)
