@@ -38,7 +38,10 @@ Wall time is the whole command (start-up, reading, writing); frames/s is the lab
 `--mht-reading` with `track --mht-reading`.
 
     .venv/bin/python bench/real_takes.py [--only NAME ...] [--cap FRAMES] [--half | --starts K] [--model [--keep-labels]]
-        [--formulation NAME] [--mht-reading]
+        [--formulation NAME] [--mht-reading] [--frame-step K]
+
+`--frame-step K` relabels every K-th frame of each take (written as a TRC beside the run, the
+take's unlabeled trajectories kept; frame numbers and frames/s are the decimated take's).
 """
 
 from __future__ import annotations
@@ -62,8 +65,8 @@ from formulations.subject.fit import fit_subject  # noqa: E402
 from service.capture.model_input import model_names  # noqa: E402
 from service.evaluation.label_jumps import label_jumps  # noqa: E402
 from service.evaluation.matrix import DATA, RECORDINGS  # noqa: E402
-from service.io.formats import read_labeled  # noqa: E402
-from service.io.recording import Recording  # noqa: E402
+from service.io.formats import read_labeled, write_labeled  # noqa: E402
+from service.io.recording import LabeledTrajectories, Recording  # noqa: E402
 
 MARKERFLOW = [sys.executable, "-m", "service.cli"]  # the interpreter running this bench, as `markerflow`
 SAME_POINT_MM = 1e-3  # the output holds the input's own coordinates, through a unit round trip
@@ -220,6 +223,17 @@ def relabel(
     return row
 
 
+def every_kth_frame(path: Path, step: int, folder: Path) -> Path:
+    """The take at ``path`` with every ``step``-th frame kept, written as a TRC in ``folder`` (its
+    unlabeled trajectories kept as its *N columns): the take as a system capturing at 1/``step``
+    of its rate would have recorded it. A C3D's analog data and parameters are not carried."""
+    full = read_labeled(path)
+    positions = full.positions[::step]
+    out = folder / f"{path.stem}_every{step}.trc"
+    write_labeled(out, LabeledTrajectories(list(full.names), positions, ~np.isfinite(positions).all(axis=2), full.rate / step))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     # choices: a misspelt or file name (03_rolling for numediart-rolling) is refused, not an empty table
@@ -234,7 +248,11 @@ def main() -> None:
                         "frames spread over it (--cap frames from each, 600 unless given)")
     parser.add_argument("--formulation", default="lp-l1", help="track --formulation (default lp-l1)")
     parser.add_argument("--mht-reading", action="store_true", help="track --mht-reading")
+    parser.add_argument("--frame-step", type=int, default=1, help="relabel every k-th frame of each take (as a TRC "
+                        "with its unlabeled trajectories): the take at 1/k of its frame rate")
     args = parser.parse_args()
+    if args.frame_step < 1:
+        parser.error(f"--frame-step must be 1 or more, got {args.frame_step}")
     fractions = [(k + 1) / (args.starts + 1) for k in range(args.starts)] if args.starts else [0.5 if args.half else None]
     cap = args.cap or (600 if args.starts else 0)
     print("| take | start | frames | markers | correct | reachable | off jumps | wrong | missing | extra | present | "
@@ -246,6 +264,8 @@ def main() -> None:
             if args.only and recording.name not in args.only:
                 continue
             path = DATA / recording.path
+            if args.frame_step > 1:
+                path = every_kth_frame(path, args.frame_step, Path(folder))
             # its markers (an unlabeled trajectory *N names none); a take with every marker in
             # frame 0 starts there on every route
             truth = read_labeled(path).without_unlabeled()
