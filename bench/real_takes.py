@@ -227,10 +227,10 @@ def every_kth_frame(path: Path, step: int, folder: Path) -> Path:
     """The take at ``path`` with every ``step``-th frame kept, written as a TRC in ``folder`` (its
     unlabeled trajectories kept as its *N columns): the take as a system capturing at 1/``step``
     of its rate would have recorded it. A C3D's analog data and parameters are not carried."""
-    full = read_labeled(path)
-    positions = full.positions[::step]
+    kept = read_labeled(path).every(step)
+    missing = kept.missing()
     out = folder / f"{path.stem}_every{step}.trc"
-    write_labeled(out, LabeledTrajectories(list(full.names), positions, ~np.isfinite(positions).all(axis=2), full.rate / step))
+    write_labeled(out, LabeledTrajectories(kept.names, np.where(missing[..., None], np.nan, kept.positions), missing, kept.rate))
     return out
 
 

@@ -130,10 +130,11 @@ def prepare(recording: MatrixRecording, data: Path = DATA, frame_step: int = 1) 
     missing = full.missing()
     start = int(np.argmax((~missing).sum(axis=1))) if recording.start is None else recording.start
     keep = ~missing[start]
-    frames = slice(start % frame_step, None, frame_step)
-    truth = Recording([n for n, k in zip(full.names, keep) if k], full.positions[frames][:, keep], full.rate / frame_step)
+    truth = Recording([n for n, k in zip(full.names, keep) if k], full.positions[:, keep], full.rate)
+    truth = truth.every(frame_step, start % frame_step)
     dropped = tuple(n for n, k in zip(full.names, keep) if not k)
-    return Take(recording, truth, start // frame_step, dropped, float(missing[frames][start // frame_step :, keep].mean()))
+    start //= frame_step
+    return Take(recording, truth, start, dropped, float(truth.missing()[start:].mean()))
 
 
 @lru_cache(maxsize=4)

@@ -104,6 +104,11 @@ class Recording:
         keep = [i for i, name in enumerate(self.names) if not is_unlabeled(name)]
         return replace(self, names=[self.names[i] for i in keep], positions=self.positions[:, keep])
 
+    def every(self, step: int, first: int = 0) -> Recording:
+        """Frames ``first``, ``first + step``, ...: the take as a system capturing at 1/``step``
+        of its rate would have recorded it (no ``source``: the file's frame numbering no longer holds)."""
+        return Recording(self.names, self.positions[first::step], self.rate / step)
+
     def without_never_seen(self) -> tuple[Recording, list[str]]:
         """The markers with a position in some frame, and the names of those with none
         (a marker set's spare that was never placed: nothing to label or score)."""
