@@ -84,85 +84,97 @@ def rigid_refill(positions: Array, filled: Array, guides: tuple[Array, Mask] | N
     spread, _ = distance_spread(positions, MIN_SHARED_FRAMES)
     np.fill_diagonal(spread, np.inf)  # a marker is not its own donor
     spread[:markers, markers:][~serves.T] = np.inf
-    donors = [np.argsort(row)[: int(np.isfinite(row).sum())] for row in spread]
-    gaps = [closed_gaps(seen[:, marker]) for marker in range(positions.shape[1])]
+    donors = _Donors.of(spread)
+    # Every frame of every gap carried at once: one fit per gap and side cost more in numpy's
+    # per-call overhead than in the fits (03_rolling from 562: 1.1 -> 0.5 s, the same fill to 1e-9 mm).
+    column, frame, before, after = _closed_gap_frames(seen)
     track, doubt = positions, np.where(seen, 0.0, np.inf)
     for _ in range(ROUNDS):
         refilled, fill_doubt = filled.copy(), np.full(seen.shape, np.inf)
-        for marker, marker_gaps in enumerate(gaps):
-            mine = donors[marker]
-            for start, end in marker_gaps:
-                around = slice(start - 1, end + 2)  # the gap and a sighting on either side
-                fill_doubt[start : end + 1, marker] = _fill_gap(
-                    refilled[start : end + 1, marker], track[around][:, [marker, *mine]],
-                    doubt[around][:, mine], spread[marker, mine] ** 2 + 1.0,
-                )
+        from_before, before_ok = donors.carry(track, doubt, column, before, frame)
+        from_after, after_ok = donors.carry(track, doubt, column, after, frame)
+        both = before_ok & after_ok
+        share = ((frame - before) / (after - before))[:, None]
+        refilled[frame[both], column[both]] = ((1.0 - share) * from_before + share * from_after)[both]
+        fill_doubt[frame, column] = np.where(both, np.sum((from_before - from_after) ** 2, axis=1) / 4.0, np.inf)
         carried = np.isfinite(fill_doubt)
         track, doubt = np.where(carried[..., None], refilled, positions), np.where(seen, 0.0, fill_doubt)
     variance = doubt[:, :markers].copy()  # the closed gaps' track and doubt stay what donors read
-    for marker in (m for m in range(markers) if len(donors[m]) >= 2):  # two donors carry, fewer keep the fill
-        combined = 1.0 / np.sum(1.0 / (spread[marker, donors[marker][:MAX_DONORS]] ** 2 + 1.0))
-        for start, end in open_gaps(seen[:, marker]):
-            done = _fill_open(refilled[start : end + 1, marker], track, doubt, marker, donors[marker], spread, start, end)
-            variance[start : end + 1, marker][done] = combined
+    column, frame, sighting = _open_gap_frames(seen[:, :markers], donors.count[:markers] >= 2)  # two donors carry
+    carried, enough = donors.carry(track, doubt, column, sighting, frame)
+    refilled[frame[enough], column[enough]] = carried[enough]
+    variance[frame[enough], column[enough]] = donors.combined[column[enough]]
     return refilled[:, :markers], variance
 
 
-def _fill_open(
-    gap: Array, track: Array, doubt: Array, marker: int, mine: NDArray[np.intp], spread: Array, start: int, end: int,
-) -> Mask:
-    """Refill ``gap`` (frames start..end, open at one end of the take) in place by the donors'
-    carry from its one sighting; returns the frames carried (two donors or more)."""
-    leading = start == 0
-    sighting = end + 1 if leading else start - 1
-    frames = np.r_[start : end + 1, sighting] if leading else np.r_[sighting, start : end + 1]
-    columns = [marker, *mine]
-    # _carry reads a gap between two sightings; the missing one is padded and never read.
-    pad, pad_doubt = np.full((1, len(columns), 3), np.nan), np.full((1, len(mine)), np.inf)
-    around, around_doubt = track[frames][:, columns], doubt[frames][:, mine]
-    around = np.concatenate([pad, around] if leading else [around, pad])
-    around_doubt = np.concatenate([pad_doubt, around_doubt] if leading else [around_doubt, pad_doubt])
-    side = len(around) - 1 if leading else 0
-    carried, enough = _carry(around, around_doubt, spread[marker, mine] ** 2 + 1.0, side)
-    gap[enough] = carried[enough]
-    return enough
+class _Donors:
+    """Each column's donors, most rigid first, padded to one width with a column that is
+    never known (index = the number of columns: NaN track, inf doubt and variance)."""
 
+    def __init__(self, table: NDArray[np.intp], variance: Array, count: NDArray[np.intp]) -> None:
+        self.table, self.variance, self.count = table, variance, count
+        # a gap open at one end: the variance of the donors' combined distance (module doc)
+        self.combined = 1.0 / np.sum(1.0 / variance[:, :MAX_DONORS], axis=1)
 
-def _fill_gap(gap: Array, track: Array, donor_doubt: Array, variance: Array) -> Array:
-    """Refill ``gap`` in place from ``track`` ``(G + 2, 1 + D, 3)``: the marker, then its donors
-    most rigid first (distance ``variance`` ``(D,)``), over the gap's G frames and the
-    sighting on either side; ``donor_doubt`` ``(G + 2, D)`` each donor's position variance
-    (0 labeled, inf unknown). Returns ``(G,)`` the refill's variance, (|y_a - y_b| / 2)^2,
-    inf where not refilled."""
-    before, before_ok = _carry(track, donor_doubt, variance, 0)
-    after, after_ok = _carry(track, donor_doubt, variance, len(track) - 1)
-    both = before_ok & after_ok
-    share = (np.arange(1, len(track) - 1) / (len(track) - 1))[:, None]
-    gap[both] = ((1.0 - share) * before + share * after)[both]
-    return np.where(both, np.sum((before - after) ** 2, axis=1) / 4.0, np.inf)
+    @classmethod
+    def of(cls, spread: Array) -> _Donors:
+        """The donors of every column from the ``(C, C)`` spreads (inf: never a donor)."""
+        count = np.isfinite(spread).sum(axis=1)
+        width = max(int(count.max(initial=0)), MAX_DONORS)
+        order = np.argsort(spread, axis=1, kind="stable")[:, :width]
+        table = np.where(np.arange(width) < count[:, None], order, len(spread))
+        variance = np.where(table < len(spread), np.take_along_axis(spread, order, axis=1) ** 2 + 1.0, np.inf)
+        return cls(table, variance, count)
 
-
-def _carry(track: Array, donor_doubt: Array, variance: Array, side: int) -> tuple[Array, Mask]:
-    """Where the donors of sighting frame ``side`` carry the marker in the gap's frames, and in
-    which of them two or more do: the ``MAX_DONORS`` known at both frames whose distance to
-    the marker is surest (its variance plus their positions'), weighted by its inverse. Donors
-    spread off a line carry it by their weighted Kabsch motion; donors on a line (the
-    forearm's markers once the hand is lost) leave the turn about the line free, so they
-    carry it by the least turn that follows the line (``line_motion``), and the blend of
-    both sides' carries then turns it about the line from one sighting's roll to the other's."""
-    total = variance + donor_doubt[side] + donor_doubt[1:-1]  # inf where either is unknown
-    rank = np.argsort(np.argsort(total, axis=1, kind="stable"), axis=1)
-    usable = np.isfinite(total) & (rank < MAX_DONORS)
-    enough = usable.sum(axis=1) >= 2
-    carried = np.full((len(track) - 2, 3), np.nan)
-    if not enough.any():
+    def carry(self, track: Array, doubt: Array, column: NDArray[np.intp], side: NDArray[np.intp],
+              frame: NDArray[np.intp]) -> tuple[Array, Mask]:
+        """``(S, 3)`` where the donors of ``column`` at sighting frame ``side`` carry it in
+        ``frame`` (each ``(S,)``), and ``(S,)`` where two or more do: the ``MAX_DONORS``
+        known at both frames whose distance to the column is surest (its variance plus their
+        positions'), weighted by its inverse. Donors spread off a line carry it by their
+        weighted Kabsch motion; donors on a line (the forearm's markers once the hand is
+        lost) leave the turn about the line free, so they carry it by the least turn that
+        follows the line (``line_motion``), and the blend of both sides' carries then turns
+        it about the line from one sighting's roll to the other's."""
+        track = np.concatenate([track, np.full((len(track), 1, 3), np.nan)], axis=1)
+        doubt = np.concatenate([doubt, np.full((len(doubt), 1), np.inf)], axis=1)
+        table = self.table[column]
+        total = self.variance[column] + doubt[side[:, None], table] + doubt[frame[:, None], table]  # inf where unknown
+        pick = np.sort(np.argsort(total, axis=1, kind="stable")[:, :MAX_DONORS], axis=1)  # in the donors' order
+        total, table = np.take_along_axis(total, pick, axis=1), np.take_along_axis(table, pick, axis=1)
+        usable = np.isfinite(total)
+        enough = usable.sum(axis=1) >= 2
+        carried = np.full((len(column), 3), np.nan)
+        if not enough.any():
+            return carried, enough
+        weight = np.where(usable, 1.0 / np.where(usable, total, 1.0), 0.0)[enough]
+        source = np.nan_to_num(track[side[enough, None], table[enough]])
+        target = np.nan_to_num(track[frame[enough, None], table[enough]])
+        rotation, c_s, c_t = rigid_transform(source, target, weight)
+        on_line = (usable[enough].sum(axis=1) < 3) | (span_across_line(source, weight) < MIN_SPAN_MM)
+        if on_line.any():
+            rotation[on_line], c_s[on_line], c_t[on_line] = line_motion(source[on_line], target[on_line], weight[on_line])
+        own = track[side[enough], column[enough]]
+        carried[enough] = np.einsum("tij,tj->ti", rotation, own - c_s) + c_t
         return carried, enough
-    weight = np.where(usable, 1.0 / np.where(usable, total, 1.0), 0.0)[enough]
-    source = np.broadcast_to(np.nan_to_num(track[side, 1:]), usable.shape + (3,))[enough]
-    target = np.nan_to_num(track[1:-1, 1:][enough])
-    rotation, c_s, c_t = rigid_transform(source, target, weight)
-    on_line = (usable[enough].sum(axis=1) < 3) | (span_across_line(source, weight) < MIN_SPAN_MM)
-    if on_line.any():
-        rotation[on_line], c_s[on_line], c_t[on_line] = line_motion(source[on_line], target[on_line], weight[on_line])
-    carried[enough] = np.einsum("tij,tj->ti", rotation, track[side, 0] - c_s) + c_t
-    return carried, enough
+
+
+Frames = tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]
+
+
+def _closed_gap_frames(seen: Mask) -> Frames:
+    """Every frame of every closed gap of ``seen`` ``(F, C)``: its column, the frame, and the
+    gap's sightings before and after it, each ``(S,)``."""
+    rows = np.array([(c, s, e) for c in range(seen.shape[1]) for s, e in closed_gaps(seen[:, c])], dtype=np.intp)
+    column, start, end = rows.reshape(-1, 3).T
+    length = end - start + 1
+    frame = np.arange(length.sum()) - np.repeat(np.cumsum(length) - length, length) + np.repeat(start, length)
+    return np.repeat(column, length), frame, np.repeat(start - 1, length), np.repeat(end + 1, length)
+
+
+def _open_gap_frames(seen: Mask, carried: Mask) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """Every frame of every gap of ``seen`` ``(F, N)`` open at one end of the take, for the
+    ``carried`` columns: its column, the frame, and the gap's one sighting."""
+    rows = np.array([(c, f, e + 1 if s == 0 else s - 1) for c in np.flatnonzero(carried)
+                     for s, e in open_gaps(seen[:, c]) for f in range(s, e + 1)], dtype=np.intp).reshape(-1, 3)
+    return rows[:, 0], rows[:, 1], rows[:, 2]
