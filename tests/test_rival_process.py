@@ -88,6 +88,17 @@ def test_a_reading_started_early_is_ended_when_the_take_is_not_doubtful(monkeypa
     assert started[0].ended
 
 
+def test_the_first_pass_is_judged_long_enough_from_its_windows_so_far(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A reading beside starts once the first pass looks long, not once it has taken long."""
+    asked: list[float] = []
+    monkeypatch.setattr(rival_process, "runs_beside", lambda seconds, readings: asked.append(seconds) and False)
+    windows = list(CaptureLabeling(_doubtful(), LabelingOptions(window=10, rival_reading=False)).windows())
+    list(EarlyStart(_doubtful(), LabelingOptions(window=10), windows=len(windows)).watched(iter(windows)))
+    spent = np.cumsum([w.stats.total_seconds for w in windows])
+    assert np.allclose(asked, spent / np.arange(1, len(windows) + 1) * len(windows))
+    assert asked[0] > spent[0]  # after one window of several, the whole pass is projected
+
+
 def test_a_marker_state_travels_to_another_process_whole() -> None:
     """Its weakly held advances stay behind; what it predicts and how it advances do not change."""
     state = MarkerState.from_first_frame(np.random.default_rng(0).uniform(0, 500, (12, 3)))

@@ -113,7 +113,7 @@ class CaptureLabeling:
             if rival_unread_reason(capture, options, self.formulation) is None else None
         self._hypotheses = None if self._rival is None else hypothesis_reading(capture, options, self.formulation, unrepaired)
         self._readings = READINGS[: 1 + (self._hypotheses is not None)]  # what runs beside, in child processes
-        self._early = None if self._rival is None else EarlyStart(capture, options, self._readings)  # started early
+        self._early = None if self._rival is None else EarlyStart(capture, options, self._readings, self.n_windows)
         self._geometry = None if model is None else ModelGeometry.of(model)  # the model as the take corrected it
 
     def windows(

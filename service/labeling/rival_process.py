@@ -39,9 +39,15 @@ from types import TracebackType
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.loop import Progress
 from service.labeling.outcome import WindowOutcome
-from service.labeling.second_pass import Stop, second_pass_runs
+from service.labeling.second_pass import MOSTLY_DOUBTFUL, Stop, doubtful_share
+from service.labeling.stats import DOUBTFUL_WARNING
 
 READINGS = ("frame-by-frame", "mht")  # what a child reads: ``CaptureLabeling.read_beside``
+# Doubtful share of the first pass so far from which the readings start beside it: half the
+# share a second pass needs (``second_pass_runs``), as a take's first windows are often its
+# surest (03_rolling from 562: 1.1 % after 16 of 93 windows, 2.1 % after 38, 3.1 % in all);
+# a reading started for a take that ends less doubtful is ended unread (``EarlyStart.taken``).
+EARLY_DOUBT = DOUBTFUL_WARNING / 2
 BESIDE_MIN_SECONDS = 5.0  # first-pass seconds from which a child's ~1.5 s start-up is worth paying
 POLL_SECONDS = 0.05  # how often the parent looks at its child (stop latency)
 
@@ -128,14 +134,18 @@ class RivalBeside:
 
 
 class EarlyStart:
-    """Starts the readings beside during the first pass, once that pass has taken long enough
-    (``runs_beside``) and its windows so far are doubtful enough for a second pass
-    (``second_pass_runs``): they then run beside the rest of the first pass too (03_rolling:
-    otherwise the window reading's second pass waits 4-5 s for them at the end). ``taken``
-    hands them over when the whole first pass is doubtful, and ends them otherwise."""
+    """Starts the readings beside during the first pass, as soon as that pass looks long
+    enough (``runs_beside`` of its seconds so far per window times its ``windows``) and its
+    windows so far are doubtful (``EARLY_DOUBT``): they then run beside the rest of the first
+    pass too. On 03_rolling from 562 the reading beside is the longer: started once 5 s of the
+    first pass had gone and its share had passed a second pass's bar, it kept the window
+    reading waiting 3.5 s at the end of its second pass. ``taken`` hands them over when the
+    whole first pass is doubtful enough for a second pass (``second_pass_runs``), and ends
+    them otherwise."""
 
-    def __init__(self, capture: Capture, options: LabelingOptions, readings: tuple[str, ...] = READINGS[:1]) -> None:
-        self._capture, self._options, self._readings = capture, options, readings
+    def __init__(self, capture: Capture, options: LabelingOptions, readings: tuple[str, ...] = READINGS[:1],
+                 windows: int = 1) -> None:
+        self._capture, self._options, self._readings, self._windows = capture, options, readings, windows
         self._seen: list[WindowOutcome] = []
         self._children = Beside({})
 
@@ -143,10 +153,15 @@ class EarlyStart:
         """``windows``, each looked at (``EarlyStart``) as it finishes."""
         for outcome in windows:
             self._seen.append(outcome)
-            if not self._children.children and runs_beside(sum(o.stats.total_seconds for o in self._seen), len(self._readings)) \
-                    and second_pass_runs(self._seen):
+            if not self._children.children and runs_beside(self._projected_seconds(), len(self._readings)) \
+                    and EARLY_DOUBT < doubtful_share(self._seen) <= MOSTLY_DOUBTFUL:
                 self._children = started(self._capture, self._options, self._readings)
             yield outcome
+
+    def _projected_seconds(self) -> float:
+        """The first pass's seconds, projected from its windows so far."""
+        seconds = sum(o.stats.total_seconds for o in self._seen)
+        return seconds * max(self._windows, len(self._seen)) / len(self._seen)
 
     def taken(self, wanted: bool) -> Beside:
         """The readings started early, if ``wanted`` (else they are ended); none if none started."""
