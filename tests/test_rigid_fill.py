@@ -127,3 +127,13 @@ def test_a_lost_donor_refilled_counts_in_the_second_round(monkeypatch: pytest.Mo
     assert np.allclose(rigid_fill(positions, tied)[GAP, 4], truth[GAP, 4], atol=1e-6)
     monkeypatch.setattr(rigid_fill_module, "ROUNDS", 1)
     assert np.linalg.norm(rigid_fill(positions, tied)[GAP, 4] - truth[GAP, 4], axis=1).max() > 20.0
+
+
+def test_a_take_of_fewer_markers_than_donors_asked_is_filled():
+    """Three markers: two donors at most, fewer than ``MAX_DONORS``, still carry the third."""
+    truth = _spinning_body()[:, [0, 1, 4]]
+    positions, tied = _hidden(truth, marker=2)
+    refilled = rigid_fill(positions, tied)
+    # Two donors lie on a line: the turn about it is blended from both sightings, not exact.
+    assert np.linalg.norm(refilled[GAP, 2] - truth[GAP, 2], axis=1).max() < 40.0
+    assert np.linalg.norm(tied[GAP, 2] - truth[GAP, 2], axis=1).max() > 40.0

@@ -120,7 +120,7 @@ class _Donors:
     def of(cls, spread: Array) -> _Donors:
         """The donors of every column from the ``(C, C)`` spreads (inf: never a donor)."""
         count = np.isfinite(spread).sum(axis=1)
-        width = max(int(count.max(initial=0)), MAX_DONORS)
+        width = max(int(count.max(initial=0)), 1)  # at most the other columns: a marker is not its own donor
         order = np.argsort(spread, axis=1, kind="stable")[:, :width]
         table = np.where(np.arange(width) < count[:, None], order, len(spread))
         variance = np.where(table < len(spread), np.take_along_axis(spread, order, axis=1) ** 2 + 1.0, np.inf)
