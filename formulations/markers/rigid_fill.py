@@ -47,6 +47,8 @@ mislabeled, which no fill can mend.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -87,7 +89,9 @@ def rigid_refill(positions: Array, filled: Array, guides: tuple[Array, Mask] | N
     donors = _Donors.of(spread)
     # Every frame of every gap carried at once: one fit per gap and side cost more in numpy's
     # per-call overhead than in the fits (03_rolling from 562: 1.1 -> 0.5 s, the same fill to 1e-9 mm).
-    column, frame, before, after = _closed_gap_frames(seen)
+    gaps = _gaps(seen, range(seen.shape[1]), closed_gaps)
+    column, frame, gap = _gap_frames(gaps)
+    before, after = gaps[gap, 1] - 1, gaps[gap, 2] + 1  # the sightings on either side
     track, doubt = positions, np.where(seen, 0.0, np.inf)
     for _ in range(ROUNDS):
         refilled, fill_doubt = filled.copy(), np.full(seen.shape, np.inf)
@@ -100,7 +104,9 @@ def rigid_refill(positions: Array, filled: Array, guides: tuple[Array, Mask] | N
         carried = np.isfinite(fill_doubt)
         track, doubt = np.where(carried[..., None], refilled, positions), np.where(seen, 0.0, fill_doubt)
     variance = doubt[:, :markers].copy()  # the closed gaps' track and doubt stay what donors read
-    column, frame, sighting = _open_gap_frames(seen[:, :markers], donors.count[:markers] >= 2)  # two donors carry
+    gaps = _gaps(seen, np.flatnonzero(donors.count[:markers] >= 2), open_gaps)  # two donors carry, fewer keep the fill
+    column, frame, gap = _gap_frames(gaps)
+    sighting = np.where(gaps[:, 1] == 0, gaps[:, 2] + 1, gaps[:, 1] - 1)[gap]  # the one side seen
     carried, enough = donors.carry(track, doubt, column, sighting, frame)
     refilled[frame[enough], column[enough]] = carried[enough]
     variance[frame[enough], column[enough]] = donors.combined[column[enough]]
@@ -159,22 +165,14 @@ class _Donors:
         return carried, enough
 
 
-Frames = tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]
+def _gaps(seen: Mask, columns: Iterable[int], found: Callable[[Mask], list[tuple[int, int]]]) -> NDArray[np.intp]:
+    """``(G, 3)`` the gaps ``found`` in each of ``columns`` of ``seen`` ``(F, C)``: column, first and last frame."""
+    return np.array([(c, s, e) for c in columns for s, e in found(seen[:, c])], dtype=np.intp).reshape(-1, 3)
 
 
-def _closed_gap_frames(seen: Mask) -> Frames:
-    """Every frame of every closed gap of ``seen`` ``(F, C)``: its column, the frame, and the
-    gap's sightings before and after it, each ``(S,)``."""
-    rows = np.array([(c, s, e) for c in range(seen.shape[1]) for s, e in closed_gaps(seen[:, c])], dtype=np.intp)
-    column, start, end = rows.reshape(-1, 3).T
-    length = end - start + 1
-    frame = np.arange(length.sum()) - np.repeat(np.cumsum(length) - length, length) + np.repeat(start, length)
-    return np.repeat(column, length), frame, np.repeat(start - 1, length), np.repeat(end + 1, length)
-
-
-def _open_gap_frames(seen: Mask, carried: Mask) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
-    """Every frame of every gap of ``seen`` ``(F, N)`` open at one end of the take, for the
-    ``carried`` columns: its column, the frame, and the gap's one sighting."""
-    rows = np.array([(c, f, e + 1 if s == 0 else s - 1) for c in np.flatnonzero(carried)
-                     for s, e in open_gaps(seen[:, c]) for f in range(s, e + 1)], dtype=np.intp).reshape(-1, 3)
-    return rows[:, 0], rows[:, 1], rows[:, 2]
+def _gap_frames(gaps: NDArray[np.intp]) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """Every frame of ``gaps`` (``_gaps``): its column, the frame, and its gap's row, each ``(S,)``."""
+    length = gaps[:, 2] - gaps[:, 1] + 1
+    gap = np.repeat(np.arange(len(gaps)), length)
+    frame = np.arange(len(gap)) - np.repeat(np.cumsum(length) - length, length) + gaps[gap, 1]
+    return gaps[gap, 0], frame, gap

@@ -39,14 +39,15 @@ from types import TracebackType
 from service.capture.capture import Capture, LabelingOptions
 from service.labeling.loop import Progress
 from service.labeling.outcome import WindowOutcome
-from service.labeling.second_pass import MOSTLY_DOUBTFUL, Stop, doubtful_share
+from service.labeling.second_pass import Stop, second_pass_runs
 from service.labeling.stats import DOUBTFUL_WARNING
 
 READINGS = ("frame-by-frame", "mht")  # what a child reads: ``CaptureLabeling.read_beside``
 # Doubtful share of the first pass so far from which the readings start beside it: half the
 # share a second pass needs (``second_pass_runs``), as a take's first windows are often its
 # surest (03_rolling from 562: 1.1 % after 16 of 93 windows, 2.1 % after 38, 3.1 % in all);
-# a reading started for a take that ends less doubtful is ended unread (``EarlyStart.taken``).
+# a reading started for a take that ends less doubtful is ended unread (``EarlyStart.taken``),
+# so this bar moves only when the readings start, never what they read.
 EARLY_DOUBT = DOUBTFUL_WARNING / 2
 BESIDE_MIN_SECONDS = 5.0  # first-pass seconds from which a child's ~1.5 s start-up is worth paying
 POLL_SECONDS = 0.05  # how often the parent looks at its child (stop latency)
@@ -154,7 +155,7 @@ class EarlyStart:
         for outcome in windows:
             self._seen.append(outcome)
             if not self._children.children and runs_beside(self._projected_seconds(), len(self._readings)) \
-                    and EARLY_DOUBT < doubtful_share(self._seen) <= MOSTLY_DOUBTFUL:
+                    and second_pass_runs(self._seen, bar=EARLY_DOUBT):
                 self._children = started(self._capture, self._options, self._readings)
             yield outcome
 

@@ -96,10 +96,10 @@ def doubtful_share(outcomes: list[WindowOutcome]) -> float:
     return sum(o.stats.doubtful for o in outcomes) / labels if labels else 0.0
 
 
-def second_pass_runs(outcomes: list[WindowOutcome]) -> bool:
+def second_pass_runs(outcomes: list[WindowOutcome], bar: float = DOUBTFUL_WARNING) -> bool:
     """Whether ``second_pass`` labels the take of first-pass ``outcomes`` again: a share of
-    doubtful labels above a clean take's and below a mostly wrong one's (module doc)."""
-    return DOUBTFUL_WARNING < doubtful_share(outcomes) <= MOSTLY_DOUBTFUL
+    doubtful labels above a clean take's (``bar``) and below a mostly wrong one's (module doc)."""
+    return bar < doubtful_share(outcomes) <= MOSTLY_DOUBTFUL
 
 
 def second_pass(
