@@ -50,6 +50,12 @@ is made where
   that way, right or exchanged, as the knee flexes from the first frame's stance, and at
   0.12-0.14 by the difference.)
 
+A pair that no marker is rigid with (a head left with two markers) is judged the same way by
+its witnesses by difference (``difference_witnesses``): markers whose difference of distances
+to the two keeps its sign and size over the take, one cost per witness on that difference.
+Those pin no absolute distance, so the run must also keep the pair's own distance, which an
+exchange of the two leaves as it was (``pair_offset``).
+
 Best exchanges first, every pair judged again after each, until none clears. Distances
 cannot see a reflection (``mirror``) nor a plate's symmetry (``turns``): those gain nothing
 here and are left alone.
@@ -62,6 +68,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from formulations.markers.difference_witnesses import difference_witnesses, pair_offset
 from formulations.markers.heading import track_heading
 from formulations.markers.state import RIGID_SD_MM
 from formulations.markers.take_spread import take_spread
@@ -110,7 +117,8 @@ def take_exchanges(
     pairs = [(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(rigid & near_pairs(neighbours, NEAREST), 1)))]
     continued = positions if predicted is None else np.where(np.isfinite(positions), positions, predicted)
     working, done = np.stack([positions, continued]), []
-    judged = {pair: _judged(working, *pair, rigid, d0, spread) for pair in pairs}
+    nearby = {(a, b): np.union1d(neighbours[a], neighbours[b]) for a, b in pairs}
+    judged = {pair: _judged(working, *pair, rigid, d0, spread, nearby[pair]) for pair in pairs}
     for _ in range(n):
         found = [e for e in judged.values() if e is not None]
         if not found:
@@ -120,8 +128,8 @@ def take_exchanges(
         working[:, best.start : best.stop, moved] = working[:, best.start : best.stop, moved[::-1]]
         done.append(best)
         for a, b in pairs:  # judged again: the pairs the exchange moved, or moved a witness of
-            if a in moved or b in moved or (rigid[a, moved] & rigid[b, moved]).any():
-                judged[a, b] = _judged(working, a, b, rigid, d0, spread)
+            if a in moved or b in moved or (rigid[a, moved] & rigid[b, moved]).any() or np.isin(moved, nearby[a, b]).any():
+                judged[a, b] = _judged(working, a, b, rigid, d0, spread, nearby[a, b])
     return done
 
 
@@ -147,20 +155,28 @@ def rigid_pairs(positions: Array, first: Array, neighbours: NDArray[np.int64]) -
     return spread, rigid
 
 
-def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, spread: Array) -> TakeExchange | None:
+def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, spread: Array,
+            nearby: NDArray[np.int64]) -> TakeExchange | None:
     """The pair's exchange over its best frames, None when it does not clear (module doc).
-    ``tracks``: the labeled positions and the same continued over gaps by the prediction."""
+    ``tracks``: the labeled positions and the same continued over gaps by the prediction;
+    ``nearby``: the pair's neighbours, its witnesses by difference (``difference_witnesses``)
+    where no marker is rigid with both."""
     positions = tracks[0]
     witness = rigid[a] & rigid[b]
     witness[[a, b]] = False
     j = np.flatnonzero(witness)
-    if not j.size:
-        return None
-    sd = np.sqrt(spread[a, j] + spread[b, j])
     own, other = positions[:, a], positions[:, b]
-    to_own, to_other = (np.linalg.norm(x[:, None] - positions[:, j], axis=2) for x in (own, other))  # (F, W)
-    right = capped_cost((to_own - d0[a, j]) / sd) + capped_cost((to_other - d0[b, j]) / sd)
-    swapped = capped_cost((to_other - d0[a, j]) / sd) + capped_cost((to_own - d0[b, j]) / sd)
+    if j.size:
+        sd = np.sqrt(spread[a, j] + spread[b, j])
+        to_own, to_other = (np.linalg.norm(x[:, None] - positions[:, j], axis=2) for x in (own, other))  # (F, W)
+        right = capped_cost((to_own - d0[a, j]) / sd) + capped_cost((to_other - d0[b, j]) / sd)
+        swapped = capped_cost((to_other - d0[a, j]) / sd) + capped_cost((to_own - d0[b, j]) / sd)
+        apart, apart0 = to_own - to_other, d0[a, j] - d0[b, j]
+    elif (by_difference := difference_witnesses(positions, a, b, nearby, d0)) is not None:
+        apart, apart0, sd = by_difference
+        right, swapped = capped_cost((apart - apart0) / sd), capped_cost((-apart - apart0) / sd)
+    else:
+        return None
     both = np.isfinite(right) & np.isfinite(swapped)
     gain = np.where(both, right - swapped, 0.0)
     if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:  # no run can reach it: spare the turns
@@ -172,8 +188,9 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     outside[0] = False  # the first frame is d0 itself
     if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
         return None
-    apart, apart0 = to_own - to_other, d0[a, j] - d0[b, j]
     if _fit((-apart[both & inside] - apart0) / sd) > FIT_COST or _fit((apart[outside] - apart0) / sd) > FIT_COST:
+        return None
+    if not j.size and _fit(pair_offset(own[both & inside], other[both & inside], d0[a, b], spread[a, b])) > FIT_COST:
         return None
     return TakeExchange(a, b, start, stop, nats)
 
