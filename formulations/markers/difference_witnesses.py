@@ -63,11 +63,12 @@ def difference_witnesses(positions: Array, a: int, b: int, candidates: NDArray[n
 
 
 def pair_offset(own: Array, other: Array, d0: float, spread: float) -> Array:
-    """``(F, 1)`` the pair's distance off the first frame's in take sd (``spread``: its
-    variance, mm^2), NaN where either is unlabeled. An exchange of the two keeps their
-    distance: labels that moved onto other markers' points do not (the tennis serve's first
-    pass, 2026-12-07: its forearm and wrist labels on the upper arm's two points from frame
-    209, 135 mm apart against 125, which difference witnesses alone would exchange).
+    """``(F, 1)`` the pair's distance off the first frame's, in sqrt(2) take sds (``spread``:
+    its variance, mm^2; the first frame's distance is as noisy as any other's), NaN where
+    either is unlabeled. An exchange of the two keeps their distance: labels that moved onto
+    other markers' points do not (the tennis serve's first pass, 2026-12-07: its forearm and
+    wrist labels RFRM and RWRB on the elbow's and the upper arm's points from frame 209, 135 mm
+    apart against 125, which the difference witnesses alone exchanged).
     """
     offset: Array = (np.linalg.norm(own - other, axis=1) - d0) / np.sqrt(2.0 * spread)
     return offset[:, None]
