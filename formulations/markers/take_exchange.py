@@ -166,17 +166,10 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     witness[[a, b]] = False
     j = np.flatnonzero(witness)
     own, other = positions[:, a], positions[:, b]
-    if j.size:
-        sd = np.sqrt(spread[a, j] + spread[b, j])
-        to_own, to_other = (np.linalg.norm(x[:, None] - positions[:, j], axis=2) for x in (own, other))  # (F, W)
-        right = capped_cost((to_own - d0[a, j]) / sd) + capped_cost((to_other - d0[b, j]) / sd)
-        swapped = capped_cost((to_other - d0[a, j]) / sd) + capped_cost((to_own - d0[b, j]) / sd)
-        apart, apart0 = to_own - to_other, d0[a, j] - d0[b, j]
-    elif (by_difference := difference_witnesses(positions, a, b, nearby, d0)) is not None:
-        apart, apart0, sd = by_difference
-        right, swapped = capped_cost((apart - apart0) / sd), capped_cost((-apart - apart0) / sd)
-    else:
+    judged = _rigid_costs(positions, a, b, j, d0, spread) if j.size else _difference_costs(positions, a, b, nearby, d0)
+    if judged is None:
         return None
+    right, swapped, apart, apart0, sd = judged
     both = np.isfinite(right) & np.isfinite(swapped)
     gain = np.where(both, right - swapped, 0.0)
     if gain[1:][gain[1:] > 0].sum() < EXCHANGE_NATS:  # no run can reach it: spare the turns
@@ -193,6 +186,28 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     if not j.size and _fit(pair_offset(own[both & inside], other[both & inside], d0[a, b], spread[a, b])) > FIT_COST:
         return None
     return TakeExchange(a, b, start, stop, nats)
+
+
+def _rigid_costs(positions: Array, a: int, b: int, j: NDArray[np.int64], d0: Array, spread: Array,
+                 ) -> tuple[Array, Array, Array, Array, Array]:
+    """``(F,)`` the labels' and the exchanged labels' costs against the rigid witnesses ``j``
+    (module doc), the pair's ``(F, W)`` differences of distances to them, the first frame's
+    ``(W,)`` and their ``(W,)`` sds."""
+    sd = np.sqrt(spread[a, j] + spread[b, j])
+    to_own, to_other = (np.linalg.norm(positions[:, [m]] - positions[:, j], axis=2) for m in (a, b))  # (F, W)
+    right = capped_cost((to_own - d0[a, j]) / sd) + capped_cost((to_other - d0[b, j]) / sd)
+    swapped = capped_cost((to_other - d0[a, j]) / sd) + capped_cost((to_own - d0[b, j]) / sd)
+    return right, swapped, to_own - to_other, d0[a, j] - d0[b, j], sd
+
+
+def _difference_costs(positions: Array, a: int, b: int, nearby: NDArray[np.int64], d0: Array,
+                      ) -> tuple[Array, Array, Array, Array, Array] | None:
+    """As ``_rigid_costs``, by the witnesses by difference among ``nearby``; None when there are none."""
+    by_difference = difference_witnesses(positions, a, b, nearby, d0)
+    if by_difference is None:
+        return None
+    apart, apart0, sd = by_difference
+    return capped_cost((apart - apart0) / sd), capped_cost((-apart - apart0) / sd), apart, apart0, sd
 
 
 def best_run(gain: Array, may_turn: NDArray[np.bool_]) -> tuple[int, int, float]:
