@@ -12,9 +12,9 @@ distances to a marker j,
 
 keeps its sign and roughly its size where each distance does not: the temple sits 45-75 mm
 farther than the ear from C7, the scapula and the acromion however the neck bends. An
-exchange flips D_j. So j witnesses the pair when |D_j| varies little over the take, by the
-deciles' span of |D_j| as ``take_spread`` takes a distance's (|D_j|, so that an exchanged
-stretch does not widen it), s_j <= ``RIGID_SD_MM``, and when the first frame's D0_j is at
+exchange flips D_j. So j witnesses the pair when |D_j| varies little over the take (its
+deciles' span, ``take_spread.decile_spread``, as a distance's; |D_j|, so that an exchanged
+stretch does not widen it): s_j <= ``RIGID_SD_MM``, and when the first frame's D0_j is at
 least ``CAP`` of those from zero: the exchanged reading, -D_j, then lies 2 ``CAP`` s_j from
 the right one. The labels then cost, per frame and witness, min(z^2, CAP^2) / 2 with
 z = (D_j - D0_j) / s_j, exchanged z = (-D_j - D0_j) / s_j, as ``take_exchange`` prices its
@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from formulations.markers.state import RIGID_SD_MM
-from formulations.markers.take_spread import DECILE_SPAN_SD, MIN_FRAMES, SPREAD_FLOOR_MM2
+from formulations.markers.take_spread import decile_spread
 
 Array = NDArray[np.float64]
 
@@ -50,13 +50,9 @@ def difference_witnesses(positions: Array, a: int, b: int, candidates: NDArray[n
         return None
     apart = (np.linalg.norm(positions[:, a, None] - positions[:, j], axis=2)
              - np.linalg.norm(positions[:, b, None] - positions[:, j], axis=2))
-    size = np.abs(apart)
-    counted = np.isfinite(size).sum(axis=0)
-    with np.errstate(invalid="ignore"):
-        low, high = np.nanpercentile(np.where(counted >= MIN_FRAMES, size, 0.0), [10, 90], axis=0)
-    sd = np.maximum((high - low) / DECILE_SPAN_SD, np.sqrt(SPREAD_FLOOR_MM2))
+    sd = np.sqrt(decile_spread(np.abs(apart).T))  # NaN with too few frames: compares False below
     apart0 = d0[a, j] - d0[b, j]
-    kept = (counted >= MIN_FRAMES) & (sd <= RIGID_SD_MM) & (np.abs(apart0) >= CAP * sd)
+    kept = (sd <= RIGID_SD_MM) & (np.abs(apart0) >= CAP * sd)
     if not kept.any():
         return None
     return apart[:, kept], apart0[kept], sd[kept]

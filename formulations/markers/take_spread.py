@@ -78,11 +78,19 @@ def _spread(positions: Array, neighbours: NDArray[np.int64]) -> Array:
     # marker by marker: (K, F) at a time, where (F, N, K, 3) at once took 200 MB for 5,200
     # frames of 41 markers, and gigabytes for a long take assembled by the service
     for m in range(len(neighbours)):
-        distance = lengths(track[m] - track[neighbours[m]])  # (K, F)
-        enough = np.isfinite(distance).sum(axis=1) >= MIN_FRAMES
-        if enough.any():
-            low, high = _deciles(distance[enough])
-            spread[m, enough] = np.maximum(((high - low) / DECILE_SPAN_SD) ** 2, SPREAD_FLOOR_MM2)
+        spread[m] = decile_spread(lengths(track[m] - track[neighbours[m]]))  # (K, F) distances
+    return spread
+
+
+def decile_spread(values: Array) -> Array:
+    """``(K,)`` the spread of each row of ``values`` ``(K, F)`` as the module doc takes a
+    distance's: ((P90 - P10) / ``DECILE_SPAN_SD``)^2 over its finite values, floored at
+    ``SPREAD_FLOOR_MM2``; NaN for a row with fewer than ``MIN_FRAMES``."""
+    spread = np.full(len(values), np.nan)
+    enough = np.isfinite(values).sum(axis=1) >= MIN_FRAMES
+    if enough.any():
+        low, high = _deciles(values[enough])
+        spread[enough] = np.maximum(((high - low) / DECILE_SPAN_SD) ** 2, SPREAD_FLOOR_MM2)
     return spread
 
 
