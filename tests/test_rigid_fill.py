@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -137,3 +139,16 @@ def test_a_take_of_fewer_markers_than_donors_asked_is_filled():
     # Two donors lie on a line: the turn about it is blended from both sightings, not exact.
     assert np.linalg.norm(refilled[GAP, 2] - truth[GAP, 2], axis=1).max() < 40.0
     assert np.linalg.norm(tied[GAP, 2] - truth[GAP, 2], axis=1).max() > 40.0
+
+
+def test_a_marker_labeled_in_too_few_frames_has_no_donors_and_no_warning():
+    """A marker labeled in fewer frames than a spread needs has no donor at all (every spread
+    inf): its combined variance is inf, quietly, and the others are filled as before."""
+    truth = _spinning_body()
+    positions, tied = _hidden(truth)
+    positions[rigid_fill_module.MIN_SHARED_FRAMES - 1 :, 0] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        refilled, variance = rigid_refill(positions, tied)
+    assert np.allclose(refilled[GAP, 4], truth[GAP, 4], atol=1e-6)
+    assert np.isinf(variance[rigid_fill_module.MIN_SHARED_FRAMES - 1 :, 0]).all()

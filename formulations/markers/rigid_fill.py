@@ -119,8 +119,10 @@ class _Donors:
 
     def __init__(self, table: NDArray[np.intp], variance: Array, count: NDArray[np.intp]) -> None:
         self.table, self.variance, self.count = table, variance, count
-        # a gap open at one end: the variance of the donors' combined distance (module doc)
-        self.combined = 1.0 / np.sum(1.0 / variance[:, :MAX_DONORS], axis=1)
+        # a gap open at one end: the variance of the donors' combined distance (module doc);
+        # inf for a column with no donor (every spread inf: labeled in too few frames)
+        with np.errstate(divide="ignore"):
+            self.combined = 1.0 / np.sum(1.0 / variance[:, :MAX_DONORS], axis=1)
 
     @classmethod
     def of(cls, spread: Array) -> _Donors:
