@@ -11,6 +11,7 @@ from rigid_scenes import SwingingSegment
 from service_fixtures import document_json, generated_capture
 from typer.testing import CliRunner
 
+import formulations.markers.take_exchange as take_exchange
 import service.labeling.exchanged as exchanged_module
 from formulations.markers.state import MarkerState
 from formulations.markers.take_exchange import TakeExchange, best_run, take_exchanges
@@ -134,3 +135,40 @@ def test_track_says_which_pairs_the_first_frame_gave_back(tmp_path: Path, monkey
     assert summary["doubtful_fraction"] >= 30 / (60 * len(capture.names))
     line = CliRunner().invoke(app, ["track", str(source), "--out", str(tmp_path / "b.csv"), "--one-pass"], env={"COLUMNS": "400"})
     assert "1 exchanged pair given back by the first frame's shape (labels doubtful)" in line.stdout
+
+
+# A foot: heel (0) and fifth metatarsal (1) exchanged, judged by the ankle (2) and the toe (3),
+# the toe on a foreign point (100 mm off the foot, as CMU 135_02's file holds it) over most of
+# the exchanged run.
+FOOT = np.array([[0, 0, 0], [165, 40, 0], [20, 30, 75], [230, 10, 10]], float)
+FOOT_FRAMES, FOOT_EXCHANGED, TOE_OFF = 1200, 1100, slice(1100, 1160)  # wrong labels under a tenth: the pairs stay rigid
+
+
+def _foot_take(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    take = np.stack([RUN.frame(t, FOOT) for t in range(FOOT_FRAMES)]) + rng.normal(0, 1.0, (FOOT_FRAMES, 6, 3))
+    take[FOOT_EXCHANGED:, [0, 1]] = take[FOOT_EXCHANGED:, [1, 0]]
+    take[TOE_OFF, 3] += [0.0, 0.0, 100.0]
+    return take
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_witness_on_a_foreign_point_neither_judges_nor_spoils_the_fit(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The toe's terms are beyond CAP both ways where it sits off the foot: the gain caps them
+    to nothing, and the fit leaves them out. Counted, they fail the exchanged labels' fit."""
+    take = _foot_take(seed)
+    ((a, b, start, stop),) = _found(take)
+    assert (a, b, stop) == (0, 1, FOOT_FRAMES) and abs(start - FOOT_EXCHANGED) <= 2
+    monkeypatch.setattr(take_exchange, "_judging", lambda apart, apart0, sd: np.ones(apart.shape, bool))
+    assert _found(take) == []
+
+
+def test_a_run_no_witness_judges_is_not_given_back(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every witness term beyond CAP both ways (as where the witnesses are themselves on each
+    other's points): the fit of nothing would pass, so the run is refused for want of a judge;
+    without that bar the same gain is taken."""
+    take = _foot_take(0)
+    monkeypatch.setattr(take_exchange, "_judging", lambda apart, apart0, sd: np.zeros(apart.shape, bool))
+    assert _found(take) == []
+    monkeypatch.setattr(take_exchange, "JUDGED_SHARE", 0.0)
+    assert [found[:2] for found in _found(take)] == [(0, 1)]

@@ -79,6 +79,7 @@ CAP = 3.0  # z beyond 3 sd counts as 3: a slipped neighbour or a foreign point, 
 EXCHANGE_NATS = 20.0  # as the window's pair evidence: frames are not independent (skin motion is slow)
 NEAREST = 3  # a pair is among either's three nearest in the first frame: a plate, a wrist, a forefoot
 MIN_RATE = 0.5  # nats a frame labeling both must give on average: a pose's slow bias gives less
+JUDGED_SHARE = 0.5  # of the run's witness terms within CAP either way (``_judging``): else no judge
 FIT_COST = 1.0  # mean capped e^2 / 2 of a right pair: about 0.1-0.4 (sd_j^2 is two spreads)
 
 
@@ -181,6 +182,10 @@ def _judged(tracks: Array, a: int, b: int, rigid: NDArray[np.bool_], d0: Array, 
     outside[0] = False  # the first frame is d0 itself
     if nats < max(EXCHANGE_NATS, MIN_RATE * both[inside].sum()) or not (both & inside).any():
         return None
+    judging = _judging(apart, apart0, sd)
+    if judging[both & inside].sum() < JUDGED_SHARE * np.isfinite(apart[both & inside]).sum():
+        return None  # the run's witnesses mostly sit on foreign points: nothing judges its fit
+    apart = np.where(judging, apart, np.nan)
     if _fit((-apart[both & inside] - apart0) / sd) > FIT_COST or _fit((apart[outside] - apart0) / sd) > FIT_COST:
         return None
     if not j.size and _fit(pair_offset(own[both & inside], other[both & inside], d0[a, b], spread[a, b])) > FIT_COST:
@@ -247,10 +252,21 @@ def label_distance(x: Array, y: Array) -> Array:
     return distance
 
 
+def _judging(apart: Array, apart0: Array, sd: Array) -> NDArray[np.bool_]:
+    """``(F, W)`` where a witness judges the pair's fit: within ``CAP`` sds of the first frame's
+    difference as labeled or as exchanged. Beyond it both ways the witness sits on a foreign
+    point or the pair is on two others' points: the gain caps it to nothing, and the fit must
+    not count it against either reading (CMU 135_02's left heel and fifth metatarsal,
+    exchanged for 360 frames on a toe marker the file itself holds 100 mm off the foot)."""
+    return (np.abs(apart - apart0) < CAP * sd) | (np.abs(apart + apart0) < CAP * sd)
+
+
 def _fit(e: Array) -> float:
     """Mean over frames of ``capped_cost(e)``, e_j = ((d_a - d_b) - (d0_a - d0_b)) / sd_j: how the
-    pair's difference of distances to each witness keeps the first frame's (0 for no frame)."""
-    return float(np.nanmean(capped_cost(e))) if len(e) else 0.0
+    pair's difference of distances to each witness keeps the first frame's (0 for no frame
+    with a witness judging: ``_judging``)."""
+    cost = capped_cost(e)
+    return float(np.nanmean(cost)) if np.isfinite(cost).any() else 0.0
 
 
 def capped_cost(z: Array) -> Array:
