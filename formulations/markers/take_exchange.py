@@ -48,7 +48,9 @@ is made where
   right is no judge of where it is not. (Each distance against its own d0 is no such test:
   OpenSim's walking knee pair, LMFC and LKJC, exchanged for 174 frames, fits at 1.3-1.6
   that way, right or exchanged, as the knee flexes from the first frame's stance, and at
-  0.12-0.14 by the difference.)
+  0.12-0.14 by the difference.) A witness term beyond ``CAP`` both ways, as labeled and as
+  exchanged, sits on a foreign point and is left out of both fits, as the gain caps it to
+  nothing (``_judging``); a run whose terms are mostly such has no judge and is not made.
 
 A pair that no marker is rigid with (a head left with two markers) is judged the same way by
 its witnesses by difference (``difference_witnesses``): markers whose difference of distances
