@@ -49,8 +49,9 @@ is made where
   OpenSim's walking knee pair, LMFC and LKJC, exchanged for 174 frames, fits at 1.3-1.6
   that way, right or exchanged, as the knee flexes from the first frame's stance, and at
   0.12-0.14 by the difference.) A witness term beyond ``CAP`` both ways, as labeled and as
-  exchanged, sits on a foreign point and is left out of both fits, as the gain caps it to
-  nothing (``_judging``); a run whose terms are mostly such has no judge and is not made.
+  exchanged, fits neither reading (the witness or the pair on foreign points) and is left
+  out of both fits (``_judging``); a run whose terms are mostly such has no judge and is not
+  made.
 
 A pair that no marker is rigid with (a head left with two markers) is judged the same way by
 its witnesses by difference (``difference_witnesses``): markers whose difference of distances
@@ -257,9 +258,12 @@ def label_distance(x: Array, y: Array) -> Array:
 def _judging(apart: Array, apart0: Array, sd: Array) -> NDArray[np.bool_]:
     """``(F, W)`` where a witness judges the pair's fit: within ``CAP`` sds of the first frame's
     difference as labeled or as exchanged. Beyond it both ways the witness sits on a foreign
-    point or the pair is on two others' points: the gain caps it to nothing, and the fit must
-    not count it against either reading (CMU 135_02's left heel and fifth metatarsal,
-    exchanged for 360 frames on a toe marker the file itself holds 100 mm off the foot)."""
+    point or the pair on two others' points: it fits neither reading, so it says nothing of
+    whether the exchanged labels fit as right ones do, and the fit must not count it against
+    either (a witness by difference adds nothing to the gain there either, its one term capped
+    both ways; a rigid witness's two distances may still). CMU 135_02's left heel and fifth
+    metatarsal, exchanged for 360 frames, were refused on a toe marker the file itself holds
+    100 mm off the foot."""
     return (np.abs(apart - apart0) < CAP * sd) | (np.abs(apart + apart0) < CAP * sd)
 
 
