@@ -9,8 +9,7 @@ For markers m of the set, each taking the labels of pi(m) under the permutation,
 
 with c the capped cost of ``take_exchange.capped_cost`` (mean over the judges seen, each z
 capped at ``CAP``), x'_j where judge j sits under the permutation, and sd_mj^2 = var_mj +
-var_pi(m)j the two pairs' take spreads (``PairSpreads``; 2 var_mj where j is pi(m), which
-has no spread with itself: an infinite one made that term free). ``take_rotation`` makes a
+var_pi(m)j the two pairs' take spreads (``PairSpreads``). ``take_rotation`` makes a
 permutation where the permuted costs are lower by its bars; ``plate_turns`` lets the same
 witnesses deny a turn of a plate read from the plate's own corners alone.
 """
@@ -41,9 +40,8 @@ def permutation_costs(positions: Array, markers: list[int], taken: list[int], ju
     right, permuted = np.zeros(len(positions)), np.zeros(len(positions))
     for k, (m, t) in enumerate(zip(markers, taken, strict=True)):
         others = [i for i, j in enumerate(judges) if j != m]
+        sd = np.sqrt(var[k, others] + var[markers.index(t), others])
         jud = [judges[i] for i in others]
-        # judged by the marker it takes, m's own spread stands for the pair (t, t), which has none
-        sd = np.sqrt(var[k, others] + np.where(np.asarray(jud) == t, var[k, others], var[markers.index(t), others]))
         # the set's other markers, in the permuted labeling, sit on the points they take
         where = np.stack([positions[:, taken[markers.index(j)]] if j in markers else positions[:, j] for j in jud], axis=1)
         right = right + capped_cost((np.linalg.norm(positions[:, m][:, None] - positions[:, jud], axis=2) - d0[m, jud]) / sd)
