@@ -14,6 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
+from formulations.confidence.lone import lone_labels
 from formulations.markers.cloud_candidates import CloudGating, CloudWindow, cloud_candidates
 from formulations.markers.coexistence import BackLinks, coexisted
 from formulations.markers.exchange import continued_points, repair_exchanges
@@ -105,7 +106,7 @@ class CloudChain:
         triples, symmetric = rigid_triples(inverse.state)
         taken, _, plates = repair_turns(inverse.state, inverse.frames, taken, triples, symmetric)
         taken, _ = repair_pair_evidence(inverse.state, inverse.frames, taken, inverse.doubtful)
-        state, filled = _advance(inverse.state, inverse.frames, taken)
+        state, filled = _advance(inverse.state, inverse.frames, taken, _lone_sightings(taken, inverse.state.visible))
         state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
@@ -179,8 +180,23 @@ def _unclaimed(points: np.ndarray, state: MarkerState) -> np.ndarray:
     return np.asarray(nearest > 1e-6)
 
 
-def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> tuple[MarkerState, np.ndarray]:
+def _lone_sightings(taken: np.ndarray, visible: np.ndarray) -> np.ndarray:
+    """``(N, M)`` the labels of ``taken`` with none the frame before (``visible`` before the
+    first) nor after (``lone_labels``); the window's last frame is never lone, as the next
+    window may go on from it."""
+    labeled = np.vstack([visible, (taken >= 0).T, np.ones(len(visible), bool)])
+    lone: np.ndarray = lone_labels(labeled)[1:-1].T
+    return lone
+
+
+def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray, lone: np.ndarray,
+             ) -> tuple[MarkerState, np.ndarray]:
     """Carry the marker state through the labeled frames to the next template.
+
+    A lone sighting (``lone``) is kept as a label but carried as unseen: one point gives no
+    step, and taken by a lost marker it is most often a ghost that would move the prediction
+    later frames are gated by (CMU 135_02 with deletions: RSHN predicted 612 mm off its point
+    after two such ghosts) and teach the drift and distances from it.
 
     Returns:
         The state at the last frame, and ``(M, N, 3)`` the predicted position of every
@@ -188,11 +204,12 @@ def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) ->
     """
     filled = np.full((len(frames),) + state.position.shape, np.nan)
     for m, points in enumerate(frames):
-        seen = taken[:, m] >= 0
+        seen = (taken[:, m] >= 0) & ~lone[:, m]
         observed = np.zeros((len(seen), 3))
         observed[seen] = points[taken[seen, m]]
         state = state.advance(observed, seen)
-        filled[m, ~seen] = state.position[~seen]
+        unlabeled = taken[:, m] < 0
+        filled[m, unlabeled] = state.position[unlabeled]
     if (taken >= 0).all():  # nothing to fill: a NaN seen as the window's shape, not 1 kB a frame kept per window
         filled = np.broadcast_to(np.nan, filled.shape)
     return state, filled
