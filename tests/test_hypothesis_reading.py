@@ -11,6 +11,7 @@ import pytest
 from service_fixtures import generated_capture
 from test_cli import CMU, assert_input_error, run_cli
 
+import service.labeling.cloud as cloud_module
 from formulations.methods.mht import Mht
 from service.capture.capture import LabelingOptions
 from service.evaluation.matrix import prepare, recording_named
@@ -27,7 +28,8 @@ HARD = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "hard.tom
 def _wrist_exchange() -> SimulatedCapture:
     """CMU 135_02 under the hard preset, seed 1, 400 frames: LWRA, unseen for over 100 frames,
     takes LFIN's returning point at frame 161 in both window passes and in the frame-by-frame
-    reading, and holds it to the end (the module docstring's case)."""
+    reading, and holds it to the end (the module docstring's case), while lone sightings moved
+    the marker state."""
     take = prepare(recording_named("cmu-135_02"))
     scenario = Scenario.from_toml(HARD)
     return simulate_cloud(take.truth, dataclasses.replace(scenario, seed=1, start_frame=take.start, frames=400))
@@ -40,10 +42,15 @@ def _held(simulated: SimulatedCapture, result: LabeledTrajectories, marker: str,
                      for f in frames])
 
 
-def test_the_mht_reading_gives_a_returning_wrist_marker_its_own_point() -> None:
+def test_the_mht_reading_gives_a_returning_wrist_marker_its_own_point(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With lone sightings moving the state, as they did when the case was found: since they
+    do not (``test_lone_sightings``), the windows keep LWRA right there themselves (below)."""
     simulated = _wrist_exchange()
     names = list(simulated.first_frame.names)
     wrist, finger, after = names.index("male:LWRA"), names.index("male:LFIN"), range(170, 400)
+    result, _ = CaptureLabeling(simulated.capture()).label()
+    assert not np.any(_held(simulated, result, "male:LWRA", after) == finger)
+    monkeypatch.setattr(cloud_module, "_lone_sightings", lambda taken, visible: np.zeros(taken.shape, bool))
     without = CaptureLabeling(simulated.capture())  # off by default
     result, _ = without.label()
     assert np.mean(_held(simulated, result, "male:LWRA", after) == finger) > 0.9  # the setup: exchanged to the end
