@@ -13,10 +13,6 @@ BODY = np.vstack([PLATE, PLATE + [300.0, 0.0, 0.0]])
 STEP = np.array([5.0, 0.0, 0.0])
 
 
-def _walked(frames: int) -> list[np.ndarray]:
-    return [BODY + (t + 1) * STEP for t in range(frames)]
-
-
 def _lost_state(lost_for: int) -> MarkerState:
     """Tracked 40 frames, then marker 0 unseen ``lost_for`` frames while the rest walk on."""
     state = MarkerState.from_first_frame(BODY, n_neighbours=7)
@@ -40,15 +36,16 @@ def test_lone_is_a_label_with_none_the_frame_before_nor_after_and_never_the_last
 
 
 def test_a_lone_ghost_does_not_move_the_lost_marker_s_state() -> None:
-    state = _lost_state(10)
-    frames = [np.vstack([f[1:], f[0] + [0.0, 250.0, 0.0]]) for f in _walked(5)]  # a ghost 250 mm off, in every frame
-    frames = [f + 40 * STEP + 10 * STEP - STEP for f in frames]
+    state = _lost_state(10)  # frames 0-49 read
+    # frames 50-54: markers 1-7 as points 0-6, and a ghost 250 mm from marker 0 as point 7
+    walked = [BODY + t * STEP for t in range(50, 55)]
+    frames = [np.vstack([body[1:], body[0] + [0.0, 250.0, 0.0]]) for body in walked]
     taken = np.vstack([np.full((1, 5), -1), np.tile(np.arange(7)[:, None], (1, 5))])
     taken[0, 2] = 7  # marker 0 takes the ghost in the window's third frame only
     lone = _lone_sightings(taken, state.visible)
     assert lone[0, 2] and lone.sum() == 1
     kept, _ = _advance(state, frames, taken, lone)
-    truth = BODY[0] + 54 * STEP
+    truth = walked[-1][0]
     assert kept.unseen[0] == 15 and np.linalg.norm(kept.position[0] - truth) < 20.0
     # the setup fails without the rule: the ghost becomes the marker's last sighting
     moved, _ = _advance(state, frames, taken, np.zeros_like(lone))
