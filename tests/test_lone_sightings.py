@@ -3,7 +3,9 @@
 is most often a ghost that would send the prediction astray."""
 
 import numpy as np
+import pytest
 
+import service.labeling.cloud as cloud_module
 from formulations.markers.state import MarkerState
 from service.labeling.cloud import _advance, _lone_sightings
 
@@ -35,7 +37,7 @@ def test_lone_is_a_label_with_none_the_frame_before_nor_after_and_never_the_last
     assert lone.tolist() == [[False] * 5, [False, False, True, False, False], [False] * 5, [False] * 5]
 
 
-def test_a_lone_ghost_does_not_move_the_lost_marker_s_state() -> None:
+def test_a_lone_ghost_does_not_move_the_lost_marker_s_state(monkeypatch: pytest.MonkeyPatch) -> None:
     state = _lost_state(10)  # frames 0-49 read
     # frames 50-54: markers 1-7 as points 0-6, and a ghost 250 mm from marker 0 as point 7
     walked = [BODY + t * STEP for t in range(50, 55)]
@@ -44,9 +46,10 @@ def test_a_lone_ghost_does_not_move_the_lost_marker_s_state() -> None:
     taken[0, 2] = 7  # marker 0 takes the ghost in the window's third frame only
     lone = _lone_sightings(taken, state.visible)
     assert lone[0, 2] and lone.sum() == 1
-    kept, _ = _advance(state, frames, taken, lone)
+    kept, _ = _advance(state, frames, taken)
     truth = walked[-1][0]
     assert kept.unseen[0] == 15 and np.linalg.norm(kept.position[0] - truth) < 20.0
     # the setup fails without the rule: the ghost becomes the marker's last sighting
-    moved, _ = _advance(state, frames, taken, np.zeros_like(lone))
+    monkeypatch.setattr(cloud_module, "_lone_sightings", lambda taken, visible: np.zeros(taken.shape, bool))
+    moved, _ = _advance(state, frames, taken)
     assert moved.unseen[0] == 2 and np.linalg.norm(moved.position[0] - truth) > 200.0

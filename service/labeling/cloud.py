@@ -106,7 +106,7 @@ class CloudChain:
         triples, symmetric = rigid_triples(inverse.state)
         taken, _, plates = repair_turns(inverse.state, inverse.frames, taken, triples, symmetric)
         taken, _ = repair_pair_evidence(inverse.state, inverse.frames, taken, inverse.doubtful)
-        state, filled = _advance(inverse.state, inverse.frames, taken, _lone_sightings(taken, inverse.state.visible))
+        state, filled = _advance(inverse.state, inverse.frames, taken)
         state = plates.remembered(state, triples, len(inverse.frames))
         return WindowLabels(state=state, point_index=taken.T, filled=filled)
 
@@ -189,19 +189,19 @@ def _lone_sightings(taken: np.ndarray, visible: np.ndarray) -> np.ndarray:
     return lone
 
 
-def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray, lone: np.ndarray,
-             ) -> tuple[MarkerState, np.ndarray]:
+def _advance(state: MarkerState, frames: list[np.ndarray], taken: np.ndarray) -> tuple[MarkerState, np.ndarray]:
     """Carry the marker state through the labeled frames to the next template.
 
-    A lone sighting (``lone``) is kept as a label but carried as unseen: one point gives no
-    step, and taken by a lost marker it is most often a ghost that would move the prediction
-    later frames are gated by (CMU 135_02 with deletions: RSHN predicted 612 mm off its point
-    after two such ghosts) and teach the drift and distances from it.
+    A lone sighting (``_lone_sightings``) is kept as a label but carried as unseen: one point
+    gives no step, and taken by a lost marker it is most often a ghost that would move the
+    prediction later frames are gated by (CMU 135_02 with deletions: RSHN predicted 612 mm off
+    its point after two such ghosts) and teach the drift and distances from it.
 
     Returns:
         The state at the last frame, and ``(M, N, 3)`` the predicted position of every
-        marker in every frame where it was occluded (NaN where it was seen): the fill.
+        marker in every frame where it was unlabeled (NaN where it was labeled): the fill.
     """
+    lone = _lone_sightings(taken, state.visible)
     filled = np.full((len(frames),) + state.position.shape, np.nan)
     for m, points in enumerate(frames):
         seen = (taken[:, m] >= 0) & ~lone[:, m]
