@@ -153,7 +153,6 @@ def cloud_candidates(
                                            np.repeat(unnamed.template_location[:, None], len(frames), axis=1)]),
         motion=np.concatenate([expected_steps(guide, gating.step_median_frames).transpose(1, 0, 2), unnamed.motion]),
         likelihood=likelihood,
-        candidate_motion=_chain_motion(guide, gating, obj, frame, point, len(state.position)),
     )
     return CloudWindow(candidates=candidates, frame=frame, point=point, guide=guide)
 
@@ -211,27 +210,3 @@ def _window_resources(frames: list[np.ndarray], point_resources: list[sp.csr_mat
     if point_resources is None:
         return sp.identity(sum(len(c) for c in frames), format="csr")
     return sp.block_diag(point_resources, format="csr")
-
-
-def _chain_motion(guide: GuideTrack, gating: CloudGating, obj: np.ndarray, frame: np.ndarray, point: np.ndarray,
-                  n: int) -> np.ndarray:
-    """``(C, 3)`` per candidate of a lost marker on a track the guide began inside the window for
-    another marker k: k's expected step into that point (NaN elsewhere: the marker's own), so
-    the point's motion prices every lost marker that takes it alike. Measured and not kept
-    (docs/how-a-window-is-solved.md, "Traced on 2026-12-07 (evening)", change (3))."""
-    steps = expected_steps(guide, gating.step_median_frames)  # (M, N, 3)
-    assert guide.point is not None  # guide_track fills it
-    m = len(guide.point)
-    holder = np.full((m, int(point.max(initial=0)) + 2), -1)
-    f_idx, k_idx = np.nonzero(guide.point >= 0)
-    holder[f_idx, guide.point[f_idx, k_idx]] = k_idx
-    out = np.full((len(obj), 3), np.nan)
-    k = holder[frame - 1, point]
-    seen = guide.point >= 0
-    held_since_template = np.logical_and.accumulate(seen, axis=0) & (guide.unseen[0] == 0)[None, :]
-    fresh = seen & ~held_since_template  # the guide's chain for k began inside the window
-    lost = guide.unseen[frame - 1, np.minimum(obj, n - 1)] > 0
-    use = (k >= 0) & (obj < n) & (k != obj)
-    use[use] &= fresh[frame[use] - 1, k[use]] & lost[use]
-    out[use] = steps[frame[use] - 1, k[use]]
-    return out

@@ -57,11 +57,6 @@ def build_window(
     motion = np.zeros_like(location)
     inner = (node_frame >= 1) & (node_frame <= m)
     motion[inner] = candidates.motion[node_object[inner], node_frame[inner] - 1]
-    if candidates.candidate_motion is not None:
-        own = candidates.candidate_motion[candidate_of[is_candidate]]
-        rows = np.flatnonzero(is_candidate)
-        ok = np.isfinite(own).all(axis=1)
-        motion[rows[ok]] = own[ok]
     source_occluded = np.zeros(len(order), dtype=bool)
     source_occluded[source_of >= 0] = candidates.template_occluded[source_of[source_of >= 0]]
     if candidates.likelihood is None:

@@ -49,7 +49,6 @@ class WindowCandidates:
     appearance: np.ndarray | None = None
     template_appearance: np.ndarray | None = None
     likelihood: CandidateLikelihood | None = None
-    candidate_motion: np.ndarray | None = None
 
     @property
     def n_objects(self) -> int:
