@@ -168,9 +168,7 @@ class _Judges:
 
 def _judges(state: MarkerState, markers: np.ndarray, settings: ShapeReacquisition) -> _Judges:
     """The ``rigid`` most rigid neighbours of each marker among those seen now with sd <= ``max_sd_mm``."""
-    # Tried: a pair across a joint is rigid only as far as the joint has been seen still, so
-    # its variance grows with its length (2 % of it as an sd). Not kept: docs/how-a-window-is-solved.md.
-    var = state.distance_var[markers] + (0.02 * state.distance_mean[markers]) ** 2
+    var = state.distance_var[markers]
     usable = state.visible[state.neighbours[markers]] & (var <= settings.max_sd_mm**2)
     order = np.argsort(np.where(usable, var, np.inf), axis=1)[:, : settings.rigid]
     rows, picked = np.arange(len(markers))[:, None], (markers[:, None], order)
