@@ -6,14 +6,12 @@ For object n, an arc from node i (frame m) to node j (frame m+1) costs
             = c_a + g(s_n, j)                                    i occlusion, j observation
             = c_a + c_b                                          j occlusion or sink
 
-where t = 1 in Jiang's paper (``template_on_track``; markers use t = 0.3,
-``service.labeling.cloud.MARKER_COSTS``: where a previous position anchors the step its
-displacement says most, but not all: at t = 0.1 the real 03_rolling relabels 77.69 % right
-against 89.74 %, docs/how-a-window-is-solved.md), g compares appearances (here: half the L1
-distance of normalised histograms, in [0, 1]) and g(s_n, j) is supplied per candidate by the
-candidate generator (it is the template term: appearance to the template; for markers the
-shape signature in a 3D cloud, the distance to the prediction per camera). d is the
-displacement off the expected motion of the object,
+where t = 1 in Jiang's paper (``template_on_track``; the marker chains set their own, with
+what it was measured against), g compares appearances (here: half the L1 distance of
+normalised histograms, in [0, 1]) and g(s_n, j) is supplied per candidate by the candidate
+generator (it is the template term: appearance to the template; for markers the shape
+signature in a 3D cloud, the distance to the prediction per camera). d is the displacement
+off the expected motion of the object,
 
     d(i, j) = || r_j - r_i - delta_n(m+1) ||_2,
 

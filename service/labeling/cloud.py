@@ -39,8 +39,10 @@ from service.labeling.stats import DOUBTFUL_BELOW
 # Jiang's weighted costs for markers: the per-camera chain prices its arcs with them. Cloud
 # candidates carry negative log-likelihoods (``formulations.markers.likelihood``), which
 # replace every weight here but ``template_on_track`` (the shape term's factor on a step).
-# Either side of 0.3 loses the real 03_rolling from frame 562: 0.1 gave 77.69 % against
-# 89.74 % (2026-12-07), 0.6 gave 74.32 % against 79.54 % (2026-11-28); docs/how-a-window-is-solved.md.
+# 0.3 was set by hand; 0.1 loses (2026-12-07): seed-0 matrix 98.194 / 99.352 -> 98.034 / 99.047 %
+# (tuning / validation), 6 rows up and 15 down, and every real take it changes (03_rolling
+# 89.74 -> 77.69 %, the basket sprint 93.27 -> 87.56 %); 0.6 lost the real 03_rolling on
+# 2026-11-28 (79.54 -> 74.32 %). docs/how-a-window-is-solved.md.
 MARKER_COSTS = ArcCostWeights(
     appearance_change=0.0, displacement=1.0, reappear=15.0, disappear=15.0, template_on_track=0.3
 )
