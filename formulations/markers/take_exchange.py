@@ -71,7 +71,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from formulations.markers.difference_witnesses import difference_witnesses, pair_offset
+from formulations.markers.difference_witnesses import difference_witnesses, fit_spread, pair_offset
 from formulations.markers.heading import track_heading
 from formulations.markers.state import RIGID_SD_MM
 from formulations.markers.take_spread import take_spread
@@ -210,12 +210,14 @@ def _rigid_costs(positions: Array, a: int, b: int, j: NDArray[np.int64], d0: Arr
 
 def _difference_costs(positions: Array, a: int, b: int, nearby: NDArray[np.int64], d0: Array,
                       ) -> tuple[Array, Array, Array, Array, Array] | None:
-    """As ``_rigid_costs``, by the witnesses by difference among ``nearby``; None when there are none."""
+    """As ``_rigid_costs``, by the witnesses by difference among ``nearby``, the sds returned
+    for the fit widened by the pose (``fit_spread``); None when there are none."""
     by_difference = difference_witnesses(positions, a, b, nearby, d0)
     if by_difference is None:
         return None
     apart, apart0, sd = by_difference
-    return capped_cost((apart - apart0) / sd), capped_cost((-apart - apart0) / sd), apart, apart0, sd
+    right, swapped = capped_cost((apart - apart0) / sd), capped_cost((-apart - apart0) / sd)
+    return right, swapped, apart, apart0, fit_spread(apart, apart0, sd)
 
 
 def best_run(gain: Array, may_turn: NDArray[np.bool_]) -> tuple[int, int, float]:
