@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 import service.labeling.exchanged as exchanged_module
 from formulations.markers.state import MarkerState
-from formulations.markers.take_handover import Handover, _Headings, hand_back, step_sd, take_handovers
+from formulations.markers.take_handover import FirstShape, Handover, _Headings, hand_back, step_sd, take_handovers
 from service.cli.app import app
 from service.io.recording import LabeledTrajectories
 from service.labeling.exchanged import EXCHANGED_CONFIDENCE, handed_back
@@ -203,3 +203,24 @@ def test_a_claim_stands_when_the_windows_then_hold_the_pair_exchanged(seed: int)
     labels[HANDED_AT : exchanged.stop, TAKER] = take[HANDED_AT : exchanged.stop, OWNER]
     labels[exchanged, OWNER] = take[exchanged, TAKER]
     assert _handovers(labels, fill)[:1] == [(OWNER, TAKER, HANDED_AT, HANDED_AT + 10)]
+
+
+@pytest.mark.parametrize("kept_elsewhere", [False, True])
+def test_a_claim_needs_owner_witnesses_that_keep_the_first_frame_where_it_is_labeled(kept_elsewhere: bool) -> None:
+    """The basket sprint's ear, "rigid" with a forearm and an elbow that were still while it
+    was labeled, not as in the first frame. The taker (1) is back at 50 on a point 160 mm from
+    its witness (3) against 100 in its first frame and elsewhere; the owner's witness (2) sits
+    there 50 mm from the point, as from the owner in the first frame. Where the owner's own
+    labels keep that 50 mm, the witness judges and the claim stands; where they sit 90 mm from
+    it, the witness fits the owner nowhere, says nothing here, and the claim is not made."""
+    frames, run = 100, slice(50, 60)
+    positions = np.full((frames, 4, 3), np.nan)
+    positions[:, 2], positions[:, 3] = [160.0, 50.0, 0.0], [0.0, 0.0, 0.0]
+    positions[:50, 0] = [210.0, 50.0, 0.0] if kept_elsewhere else [250.0, 50.0, 0.0]  # the owner, lost at 50
+    positions[0, 0] = [210.0, 50.0, 0.0]
+    positions[:, 1], positions[run, 1] = [100.0, 0.0, 0.0], [160.0, 0.0, 0.0]
+    positions += np.random.default_rng(0).normal(0.0, 0.5, positions.shape)
+    spread = np.full((4, 4), np.inf)
+    spread[0, 2] = spread[2, 0] = spread[1, 3] = spread[3, 1] = 25.0
+    shape = FirstShape(spread, spread < 100.0, np.linalg.norm(positions[0][:, None] - positions[0][None], axis=2))
+    assert shape.claims(positions, 0, 1, run.start, run.stop) == kept_elsewhere
