@@ -75,8 +75,9 @@ def fit_spread(apart: Array, apart0: Array, sd: Array) -> Array:
 def typical_size(apart: Array) -> Array:
     """``(W,)`` the take's median |D_j|, which an exchanged stretch leaves as it was (NaN for a
     witness never labeled with the pair)."""
-    with np.errstate(invalid="ignore"):
-        typical: Array = np.nanmedian(np.abs(apart), axis=0)
+    typical: Array = np.full(apart.shape[1], np.nan)
+    labeled = np.isfinite(apart).any(axis=0)  # nanmedian warns on a column of NaN
+    typical[labeled] = np.nanmedian(np.abs(apart[:, labeled]), axis=0)
     return typical
 
 
