@@ -44,10 +44,11 @@ def _held(simulated: SimulatedCapture, result: LabeledTrajectories, marker: str,
 
 
 def test_the_mht_reading_gives_a_returning_wrist_marker_its_own_point(monkeypatch: pytest.MonkeyPatch) -> None:
-    """With lone sightings moving the state and the take-wide exchange's fit held to the take's
-    spreads alone, as when the case was found: since lone sightings do not move it
-    (``test_lone_sightings``), the windows keep LWRA right there themselves (below), and with
-    either alone the take-wide exchange gives LWRA back over 162-400 (96.14 -> 99.99 %)."""
+    """The case as it was found: lone sightings moving the state, and the take-wide exchange's
+    fit held to the take's spreads. Today the windows keep LWRA right there themselves (lone
+    sightings no longer move the state: ``test_lone_sightings``), and with lone sightings moving
+    it the take-wide exchange gives LWRA back over 162-400 (96.14 -> 99.99 %); so the setup
+    restores both before showing that the ``mht`` reading repairs it too."""
     simulated = _wrist_exchange()
     names = list(simulated.first_frame.names)
     wrist, finger, after = names.index("male:LWRA"), names.index("male:LFIN"), range(170, 400)

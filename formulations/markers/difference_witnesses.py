@@ -64,8 +64,8 @@ def fit_spread(apart: Array, apart0: Array, sd: Array) -> Array:
     its gain): s_j widened by how far the first frame's |D0_j| lies from the take's median
     |D_j| (exchange-blind, as |D_j| is; at most ``CAP`` s_j for a witness kept). A pair no
     marker is rigid with is judged across a joint, and a pose the first frame did not have
-    moves D_j as a whole: the basket sprint's head under 30 % deletions (seed 0) sits 51 mm
-    from its fastest witness against 72 in the first frame (s_j 9.7), so its right labels fit
+    moves D_j as a whole: the basket sprint's head under 30 % deletions (seed 0) differs by 51 mm
+    in its distances to one witness against 72 in the first frame (s_j 9.7), so its right labels fit
     at 1.8, over ``take_exchange.FIT_COST``, and the exchanged stretch (frames 108-577) stayed.
     """
     widened: Array = np.sqrt(sd**2 + np.nan_to_num(np.abs(apart0) - typical_size(apart)) ** 2)
