@@ -210,8 +210,9 @@ def _rigid_costs(positions: Array, a: int, b: int, j: NDArray[np.int64], d0: Arr
 
 def _difference_costs(positions: Array, a: int, b: int, nearby: NDArray[np.int64], d0: Array,
                       ) -> tuple[Array, Array, Array, Array, Array] | None:
-    """As ``_rigid_costs``, by the witnesses by difference among ``nearby``, the sds returned
-    for the fit widened by the pose (``fit_spread``); None when there are none."""
+    """As ``_rigid_costs``, by the witnesses by difference among ``nearby``; the costs (the
+    gain) at s_j, the sds returned widened by the pose (``fit_spread``: the fit and which of its
+    terms judge, ``_judging``); None when there are none."""
     by_difference = difference_witnesses(positions, a, b, nearby, d0)
     if by_difference is None:
         return None
