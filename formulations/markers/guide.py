@@ -18,7 +18,6 @@ from scipy.spatial.distance import cdist
 
 from formulations.markers.cluster_search import search_lost_clusters
 from formulations.markers.first_step import coherent_steps, first_velocities
-from formulations.markers.guide_returns import returns_judged
 from formulations.markers.reacquire import REACQUISITION, Reacquisition, realign_lost, refine_by_segment
 from formulations.markers.shape_reacquire import reacquire_by_shape
 from formulations.markers.state import MarkerState
@@ -145,7 +144,6 @@ def guide_track(
             predicted[f] += shared
             velocity[f] += shared
             assigned = assign_nearest(predicted[f], points, radius[f], miss)
-        assigned = returns_judged(state, predicted[f], points, assigned, radius[f])
         seen, point[f] = assigned >= 0, assigned
         taken = np.zeros((n, 3))
         taken[seen] = points[assigned[seen]]
