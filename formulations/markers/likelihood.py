@@ -51,7 +51,7 @@ def marker_likelihood(
     step_var = np.maximum(state.motion_var[obj], guide.burst_var[frame - 1, obj])
     step_var = np.where(state.velocity_known[obj], step_var, np.maximum(step_var, MOTION_VAR_PRIOR_MM2))
     step_sigma = np.sqrt(step_var)
-    predicted_sigma = np.sqrt(step_var + state.drift_rate[obj] * guide.unseen[frame - 1, obj])
+    predicted_sigma = np.sqrt(step_var + state.drift_var[obj] * guide.unseen[frame - 1, obj])
     off = lengths(location - guide.predicted[frame - 1, obj]) / predicted_sigma
     reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
     offset = 3 * np.log(step_sigma) + base

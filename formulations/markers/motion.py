@@ -70,25 +70,23 @@ def learn_motion(
 
 def learn_drift(
     var: np.ndarray, samples: np.ndarray, residual: np.ndarray, reappearing: np.ndarray,
-    unseen: np.ndarray, motion_var: np.ndarray, carried: np.ndarray,
+    unseen: np.ndarray, motion_var: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``drift_var`` and its count, ``(2,)`` each (carried, not), after one frame (module doc).
+    """``drift_var`` (one value for all markers) and its count after one frame (module doc).
 
     Args:
         residual: ``(N, 3)`` observed minus predicted position.
         reappearing: ``(N,)`` markers seen now after ``unseen`` >= 1 frames unseen.
-        carried: ``(N,)`` markers a firm rigid fit carried into this frame.
     """
     usable = reappearing & (unseen >= 1)
     if not usable.any():
         return var, samples
     per_frame = np.maximum(axis_mean(residual[usable] ** 2) - motion_var[usable], 0.0) / unseen[usable]
-    var, samples = var.copy(), samples.copy()
-    for sample, pool in zip(per_frame, np.where(carried[usable], 0, 1)):
-        sample = min(sample, MOTION_CLIP * var[pool])
-        var[pool] += max(1.0 / (samples[pool] + 2), MOTION_RATE) * (sample - var[pool])
-        samples[pool] += 1
-    return var, samples
+    current, count = float(var[0]), int(samples[0])
+    for sample in np.minimum(per_frame, MOTION_CLIP * current):
+        current += max(1.0 / (count + 2), MOTION_RATE) * (sample - current)
+        count += 1
+    return np.full_like(var, current), np.full_like(samples, count)
 
 
 def learn_burst(

@@ -52,10 +52,9 @@ class MarkerState:
             axis (``motion.learn_burst``, from lag products): high while a limb accelerates,
             about 0 under noise alone, 0 when unknown.
         last_residual: ``(N, 3)`` the last frame's motion residual, 0 where it had none.
-        drift_var, drift_samples: ``(2,)`` how fast (mm^2 per axis per frame unseen) an occluded
+        drift_var, drift_samples: ``(N,)`` how fast (mm^2 per axis per frame unseen) an occluded
             marker's prediction drifts, and the reappearances it was learned from
-            (``motion.learn_drift``): one value for the markers a firm rigid fit carries, one
-            for the rest (``drift_rate``).
+            (``motion.learn_drift``; one value for all markers: reappearances are rare).
         plate_position, plate_age, plate_rate: ``(N, 3)``, ``(N,)``, ``(N,)`` where each marker was
             when its rigid plate (``turns.rigid_triples``) was last seen whole, how many frames ago
             (-1: never), and how fast it turned then (rad per frame, NaN unknown; ``turns``).
@@ -110,7 +109,7 @@ class MarkerState:
             distance_var=np.full(neighbours.shape, 100.0),
             motion_var=np.full(n, MOTION_VAR_PRIOR_MM2), motion_samples=np.zeros(n, int),
             burst_var=np.zeros(n), last_residual=np.zeros((n, 3)),
-            drift_var=np.full(2, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(2, int),
+            drift_var=np.full(n, DRIFT_VAR_PRIOR_MM2), drift_samples=np.zeros(n, int),
             plate_position=np.full((n, 3), np.nan), plate_age=np.full(n, -1), plate_rate=np.full(n, np.nan), **initial_filter(n),
         )
 
@@ -164,7 +163,7 @@ class MarkerState:
         usable = seen & (self.streak >= 2)
         motion_var, motion_samples = learn_motion(self.motion_var, self.motion_samples, residual, usable)
         drift_var, drift_samples = learn_drift(
-            self.drift_var, self.drift_samples, residual, seen & ~self.visible, self.unseen, self.motion_var, carried,
+            self.drift_var, self.drift_samples, residual, seen & ~self.visible, self.unseen, self.motion_var,
         )
         # A marker carried by a firm rigid fit re-anchors at its prediction when a neighbour it
         # followed is lost (it may have been the only one on its segment): the rest carry it on
@@ -223,15 +222,8 @@ class MarkerState:
     def prediction_var(self, unseen: np.ndarray) -> np.ndarray:
         """Per-axis variance (mm^2) of a prediction ``unseen + 1`` frames past the last sighting:
         one frame's motion residual plus the learned drift per further frame."""
-        var: np.ndarray = self.step_var + self.drift_rate * unseen
+        var: np.ndarray = self.step_var + self.drift_var * unseen
         return var
-
-    @cached_property
-    def drift_rate(self) -> np.ndarray:
-        """``(N,)`` each marker's drift per frame unseen: the carried pool's where a firm rigid
-        fit carries it into the next frame, else the other's (``motion.learn_drift``)."""
-        rate: np.ndarray = np.where(self.carriers.any(axis=1), self.drift_var[0], self.drift_var[1])
-        return rate
 
     def predict(self) -> np.ndarray:
         """``(N, 3)`` predicted position one frame ahead: the Kalman filter's where it predicts

@@ -19,9 +19,6 @@ from formulations.markers.state import MarkerState
 from service.labeling.outcome import WindowOutcome
 from service.labeling.stats import doubtful_labels
 
-# State fields learned over the whole take, not per marker: the kept reading's stand.
-TAKE_WIDE = frozenset({"drift_var", "drift_samples"})
-
 
 def merged_windows(mine: list[WindowOutcome], theirs: list[WindowOutcome], taken: np.ndarray) -> list[WindowOutcome]:
     """``mine`` with the labels ``taken`` (``(F, N)`` bool over the take's frames) as in ``theirs``."""
@@ -36,8 +33,7 @@ def _merged(mine: WindowOutcome, theirs: WindowOutcome, taken: np.ndarray) -> Wi
     if not taken.any():
         return mine
     last = taken[-1]
-    state = MarkerState(**{f.name: getattr(mine.state, f.name) if f.name in TAKE_WIDE else
-                           _pick(getattr(mine.state, f.name), getattr(theirs.state, f.name), last)
+    state = MarkerState(**{f.name: _pick(getattr(mine.state, f.name), getattr(theirs.state, f.name), last)
                            for f in fields(MarkerState)})
     point_index = _pick(mine.point_index, theirs.point_index, taken)
     confidence = _optional(mine.confidence, theirs.confidence, taken)
