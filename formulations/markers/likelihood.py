@@ -53,36 +53,19 @@ def marker_likelihood(
     step_sigma = np.sqrt(step_var)
     predicted_sigma = np.sqrt(step_var + state.drift_var[obj] * guide.unseen[frame - 1, obj])
     off = lengths(location - guide.predicted[frame - 1, obj]) / predicted_sigma
-    returning = guide.unseen[frame - 1, obj] >= 1
-    loss = np.where(returning, return_loss(off), step_loss(off))
-    reappear = loss + 3 * np.log(predicted_sigma) + base
-    lowest = np.where(returning, return_loss(np.zeros(1)), 0.0) + 3 * np.log(predicted_sigma) + base
+    reappear = step_loss(off) + 3 * np.log(predicted_sigma) + base
     offset = 3 * np.log(step_sigma) + base
     typical = np.full(int(np.count_nonzero(unnamed.point >= 0)), np.sqrt(np.median(state.motion_var)))
     step_sigma, offset = np.r_[step_sigma, typical], np.r_[offset, 3 * np.log(typical) + base]
     reappear = np.r_[reappear, np.full(len(typical), np.log(spare / unnamed.births_per_frame()))]
-    lowest = np.r_[lowest, reappear[len(lowest):]]
+    off = np.r_[off, np.zeros(len(typical))]
     miss = np.vstack([np.full((n, m), -np.log1p(-detection)), np.zeros((unnamed.n_objects, m))])
     # K: the lowest cost an observation can have (its residual 0) is lifted to 0.
-    shift = -float(min(offset.min(initial=0.0), lowest.min(initial=0.0)))
+    shift = -float(min(offset.min(initial=0.0), (reappear - step_loss(off)).min(initial=0.0)))
     miss = miss + shift
     return CandidateLikelihood(
         step_sigma=step_sigma, step_offset=offset + shift, reappear_cost=reappear + shift, miss_cost=miss,
     )
-
-
-# Fitted once to bench/return_spread.py's tables (basket sprint, 03_rolling): the same total
-# variance as s_u^2, most returns far nearer than s_u, a sixth far out.
-RETURN_TAIL, RETURN_CORE, RETURN_WIDE = 0.16, 0.25, 2.5
-
-
-def return_loss(z: np.ndarray) -> np.ndarray:
-    """-log density (3D, unit sd) of a return z prediction sds off: a core RETURN_CORE wide
-    and a share RETURN_TAIL RETURN_WIDE wide."""
-    core = np.log1p(-RETURN_TAIL) - 3 * np.log(RETURN_CORE) - 0.5 * (z / RETURN_CORE) ** 2
-    tail = np.log(RETURN_TAIL) - 3 * np.log(RETURN_WIDE) - 0.5 * (z / RETURN_WIDE) ** 2
-    loss: np.ndarray = -np.logaddexp(core, tail)
-    return loss
 
 
 def _detection_probability(guide: GuideTrack, n: int) -> float:
