@@ -4,7 +4,8 @@
 ``WindowProblem`` and the chosen paths. ``margins`` finds, per object, frame and other
 node, how much dearer the best reading through that node is (moving one or two objects);
 ``probability`` turns the margins into a probability under the objective read as a
-negative log-likelihood.
+negative log-likelihood, where the readings that put a label at the same place (a copied
+point, ``same_place``) count for it.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from numpy.typing import NDArray
 
 from formulations.confidence.margins import reading_margins
 from formulations.confidence.probability import label_probability, nearest_alternative
+from formulations.confidence.same_place import same_place
 from formulations.window.problem import WindowProblem
 
 CONFIDENCE_SCALE = 1.0  # cost units per nat: the window's costs are read as negative log-likelihoods
@@ -39,5 +41,5 @@ class LabelConfidence:
 def label_confidence(problem: WindowProblem, path: NDArray[np.intp], scale: float = CONFIDENCE_SCALE) -> LabelConfidence:
     """The confidence of every label of ``path`` (``(N, M)`` nodes) in ``problem``."""
     margin, grid = reading_margins(problem, np.asarray(path, dtype=np.intp), NEGLIGIBLE_NATS * scale)
-    chosen = grid.chosen[:, 1:-1]
-    return LabelConfidence(label_probability(margin, chosen, scale), nearest_alternative(margin, chosen))
+    chosen, same = grid.chosen[:, 1:-1], same_place(problem, grid)
+    return LabelConfidence(label_probability(margin, chosen, scale, same), nearest_alternative(margin, chosen, same))

@@ -16,7 +16,8 @@ chosen slot and Delta(n, t, c) = 0,
 
 It is 1/2 at an exact tie with one alternative, above 1 - e^{-d} when every alternative
 is d units dearer, and below 1/2 when an alternative is cheaper than the chosen reading
-(Delta < 0: P was not the optimum). Evaluated as a logistic of a log-sum-exp, so a large
+(Delta < 0: P was not the optimum). Readings that leave the label where it is (a copied
+point, ``same_place``) count for it, not against it. Evaluated as a logistic of a log-sum-exp, so a large
 negative Delta gives 0 rather than an overflow.
 """
 
@@ -29,6 +30,7 @@ from scipy.special import expit
 
 def label_probability(
     margin: NDArray[np.float64], chosen: NDArray[np.intp], scale: float = 1.0,
+    same: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.float64]:
     """``(N, M)`` p(n, t) from ``margin`` ``(N, M, K)`` and the chosen slots ``(N, M)``.
 
@@ -36,22 +38,36 @@ def label_probability(
         margin: Delta(n, t, u), inf for slots that are no alternative.
         chosen: The chosen slot of every object and frame.
         scale: Cost units per nat of log-likelihood.
+        same: ``(N, M, K)`` slots that put the label where the chosen one does
+            (``same_place``): their readings count for the label, not against it.
     """
     if not scale > 0:
         raise ValueError(f"confidence scale must be positive, got {scale}")
     alternative = -margin / scale
     np.put_along_axis(alternative, chosen[..., None], -np.inf, axis=2)
-    top = alternative.max(axis=2, keepdims=True)
-    shift = np.where(np.isfinite(top), top, 0.0)  # all -inf: no alternative, the sum is 0
-    with np.errstate(divide="ignore"):  # log(0) = -inf is the right answer there
-        weight = (shift + np.log(np.exp(alternative - shift).sum(axis=2, keepdims=True)))[..., 0]
-    probability: NDArray[np.float64] = expit(-weight)
+    same = np.zeros(margin.shape, bool) if same is None else same
+    with np.errstate(divide="ignore"):  # log(0) = -inf: no such slot
+        support = np.logaddexp(0.0, _log_sum_exp(np.where(same, alternative, -np.inf)))
+        against = _log_sum_exp(np.where(same, -np.inf, alternative))
+    probability: NDArray[np.float64] = expit(support - against)
     return probability
 
 
-def nearest_alternative(margin: NDArray[np.float64], chosen: NDArray[np.intp]) -> NDArray[np.float64]:
-    """``(N, M)`` min over u != chosen of Delta(n, t, u): the margin of each label (inf if none)."""
-    others = margin.copy()
+def _log_sum_exp(terms: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(N, M)`` log sum_u exp(terms[..., u]), -inf where every term is -inf."""
+    top = terms.max(axis=2, keepdims=True)
+    shift = np.where(np.isfinite(top), top, 0.0)  # all -inf: no term, the sum is 0
+    with np.errstate(divide="ignore"):  # log(0) = -inf is the right answer there
+        total: NDArray[np.float64] = (shift + np.log(np.exp(terms - shift).sum(axis=2, keepdims=True)))[..., 0]
+    return total
+
+
+def nearest_alternative(
+    margin: NDArray[np.float64], chosen: NDArray[np.intp], same: NDArray[np.bool_] | None = None,
+) -> NDArray[np.float64]:
+    """``(N, M)`` min over u != chosen (and not in ``same``) of Delta(n, t, u): the margin of
+    each label (inf if none)."""
+    others = margin.copy() if same is None else np.where(same, np.inf, margin)
     np.put_along_axis(others, chosen[..., None], np.inf, axis=2)
     nearest: NDArray[np.float64] = others.min(axis=2)
     return nearest

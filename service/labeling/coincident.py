@@ -2,8 +2,10 @@
 
 Some files carry a marker twice (HDM05's ``*0``, ``*1`` and ``*2`` repeat LFHD, CLAV and
 LFWT to the micrometre). Two points at one position are two equally good readings of each
-of the two markers: their labels come out doubtful though right, the windows that hold them
-are fractional, and the fast-motion check would read their zero spacing as aliasing. A pair
+of the two markers: the windows that hold them are fractional, and the fast-motion check
+would read their zero spacing as aliasing. Either reading puts each label at that position,
+so neither is counted against the other (``formulations.confidence.same_place``: before,
+each such label was held at p = 1/2, doubtful though right). A pair
 is reported when its median distance, over sampled frames where both are labeled, is below
 ``COINCIDENT_MM``; ``take_warnings`` leaves such partners out of a marker's spacing.
 """
@@ -50,4 +52,4 @@ def coincident_warning(pairs: list[tuple[str, str]]) -> str | None:
     named = ", ".join(f"{a} and {b}" for a, b in pairs[:LISTED])
     more = f" and {len(pairs) - LISTED} more" if len(pairs) > LISTED else ""
     return (f"warning: {counted(len(pairs), 'pair')} of markers on one position ({named}{more}): copied columns? "
-            "each pair's labels cannot be told apart and count as doubtful")
+            "each pair's two labels cannot be told apart (both are at that position, so neither is doubtful)")
