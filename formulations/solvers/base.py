@@ -99,6 +99,10 @@ class SolverBackend(ABC):
         """
 
     @abstractmethod
+    def set_presolve(self, enabled: bool) -> None:
+        """Reduce the model before solving it (the solver's default: it decides), or solve it as given."""
+
+    @abstractmethod
     def set_model(self, model: LinearModel) -> None:
         """Load the model (replacing any previous one)."""
 

@@ -63,6 +63,9 @@ class ClarabelBackend(SolverBackend):
         self._settings.tol_gap_abs = self._settings.tol_gap_rel = float(tolerance)
         self._settings.tol_feas = float(tolerance)
 
+    def set_presolve(self, enabled: bool) -> None:
+        self._settings.presolve_enable = bool(enabled)
+
     def set_model(self, model: LinearModel) -> None:
         if model.integer is not None and np.any(model.integer):
             raise ValueError("the Clarabel backend solves no MIP; use 'highs'")

@@ -61,6 +61,9 @@ class HighsBackend(SolverBackend):
         # (columns already in it price negative): solve the model as given.
         self._set("presolve", "off")
 
+    def set_presolve(self, enabled: bool) -> None:
+        self._set("presolve", "on" if enabled else "off")
+
     def _set(self, name: str, value: bool | int | float | str) -> None:
         if self._highs.setOptionValue(name, value) != highspy.HighsStatus.kOk:
             raise ValueError(f"HiGHS rejected option {name}={value!r}")
