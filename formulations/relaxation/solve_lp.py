@@ -72,8 +72,8 @@ def solve_window_lp(
         result, _ = solve_with_pricing(model, backend, initial_columns(problem, len(model.cost), pricing_successors))
     else:
         # Presolve finds little to remove in a window's flow rows and costs more than it saves:
-        # over the arc LPs of four labelings (real racing and 03_rolling, CMU 85_02 with ghosts,
-        # racing at 4 mm) the simplex took 0.66-0.91 of the time without it, every optimum the same.
+        # over the arc LPs of five labelings (docs/how-a-window-is-solved.md, "lp-l1") the
+        # simplex took 0.66-0.98 of the time without it, every solution the same.
         backend.set_presolve(False)
         backend.set_model(model)
         result = backend.solve()
