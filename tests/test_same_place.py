@@ -18,6 +18,7 @@ from formulations.window.problem import OBSERVATION
 from service.capture.capture import Capture, LabelingOptions
 from service.evaluation.scene import generate_scene
 from service.labeling.capture_labeling import CaptureLabeling
+from service.labeling.leftover_points import copied_markers, leftover_note, leftover_summary
 from service.labeling.stats import reported_doubtful
 
 COPIED = 2  # the marker whose point the scene's file carries twice
@@ -75,3 +76,15 @@ def test_a_copied_point_leaves_its_marker_sure() -> None:
     assert (np.linalg.norm(result.positions - truth, axis=2) < 5.0).all()  # every label on its own point
     doubtful = reported_doubtful(result.confidence, result.occluded)
     assert not doubtful.any()  # before: the copied marker at p = 1/2 in every frame but the first
+
+
+def test_the_copy_is_kept_as_an_unlabeled_trajectory_named_as_a_repeat() -> None:
+    capture, truth = _copied_scene()
+    result, _ = CaptureLabeling(capture, LabelingOptions(window=10)).label()
+    summary = leftover_summary(result)
+    assert summary["unlabeled_points"] == len(truth)  # the copy, in every frame
+    assert copied_markers(result) == [capture.names[COPIED]]
+    note = leftover_note(summary)
+    assert note.endswith(f"*N (1 repeating a marker's point: {capture.names[COPIED]})")
+    result.unlabeled = result.unlabeled + 0.001  # a thousandth of a millimetre off: another point, no copy
+    assert copied_markers(result) == []

@@ -133,7 +133,7 @@ def run_track(
             f"{second_pass_note(labeling.choice)}{rival_note(labeling.rival)}"
             f"{rival_note(labeling.hypotheses, 'an mht reading', options.mht_reading)}"
             f"{_exchange_note(len(labeling.exchanges), len(labeling.handovers))}"
-            f"{leftover_note(summary['unlabeled_points'], summary['unlabeled_trajectories'], output.suffix.lower() == '.c3d')}",
+            f"{leftover_note(summary, output.suffix.lower() == '.c3d')}",
             highlight=False,
         )
     for line in labeling.warnings(result, windows, unit, start or 0, spacing_judged=True):
@@ -162,7 +162,7 @@ def track_summary(
     (``service.labeling.coincident``).
     ``unnamed_span`` is the longest stretch where no marker is labeled though points are
     there (``service.labeling.lost_subject``: start, frames, points), or None.
-    ``unlabeled_points`` and ``unlabeled_trajectories``: what ``service.labeling.leftover_points`` kept.
+    ``unlabeled_points``, ``unlabeled_trajectories`` and ``unlabeled_copies``: what ``service.labeling.leftover_points`` kept.
     ``run_track`` adds ``second_pass`` (``PassChoice``: each pass's doubtful share, its
     rigid pairs' disagreement with the first frame, and the one kept), None when no second
     pass applied; ``rival_reading`` (``RivalChoice``: the window and frame-by-frame readings'

@@ -37,22 +37,39 @@ def with_leftover_points(result: LabeledTrajectories, points: list[np.ndarray] |
     return replace(result, unlabeled=unlabeled_channels(leftover, reach_from_labels(result.positions)))
 
 
-def leftover_summary(result: LabeledTrajectories) -> dict[str, int]:
+def leftover_summary(result: LabeledTrajectories) -> dict[str, int | list[str]]:
     """``unlabeled_points``: input samples no marker took; ``unlabeled_trajectories``: the
-    channels (``*N`` in a C3D output) that hold them."""
+    channels (``*N`` in a C3D output) that hold them; ``unlabeled_copies``: the markers whose
+    point one of them repeats (``copied_markers``)."""
     present = np.isfinite(result.unlabeled).all(axis=2)
-    return {"unlabeled_points": int(present.sum()), "unlabeled_trajectories": int(present.shape[1])}
+    return {"unlabeled_points": int(present.sum()), "unlabeled_trajectories": int(present.shape[1]),
+            "unlabeled_copies": copied_markers(result)}
 
 
-def leftover_note(points: int, trajectories: int, kept: bool = True) -> str:
-    """The summary line's mention of them, empty when there are none; ``kept`` False for an
-    output that holds labels only (TRC, CSV), which says so instead."""
+def copied_markers(result: LabeledTrajectories) -> list[str]:
+    """Markers whose point an unlabeled channel repeats in every frame it has one: a column
+    the input carried twice (HDM05's ``*0``-``*2``), kept as a channel beside the label."""
+    present = np.isfinite(result.unlabeled).all(axis=2)
+    copied: list[str] = []
+    for channel in np.flatnonzero(present.any(axis=0)):
+        frames = present[:, channel]
+        same = (result.positions[frames] == result.unlabeled[frames, channel][:, None, :]).all(axis=2).all(axis=0)
+        copied += [result.names[int(marker)] for marker in np.flatnonzero(same)[:1]]
+    return copied
+
+
+def leftover_note(summary: dict, kept: bool = True) -> str:
+    """The summary line's mention of them (``summary`` holds ``leftover_summary``'s keys),
+    empty when there are none; ``kept`` False for an output that holds labels only (TRC, CSV),
+    which says so instead."""
+    points, trajectories, copies = summary["unlabeled_points"], summary["unlabeled_trajectories"], summary["unlabeled_copies"]
     if not points:
         return ""
     if not kept:
         return f"; {points} points no marker took are not in this table (a .c3d output keeps them as *N)"
     plural = "trajectory" if trajectories == 1 else "trajectories"
-    return f"; {points} points no marker took kept as {trajectories} unlabeled {plural} *N"
+    repeat = f" ({len(copies)} repeating a marker's point: {', '.join(copies)})" if copies else ""
+    return f"; {points} points no marker took kept as {trajectories} unlabeled {plural} *N{repeat}"
 
 
 def leftover_points(points: list[np.ndarray], point_index: np.ndarray) -> list[np.ndarray]:
