@@ -48,7 +48,7 @@ def test_a_slot_at_the_chosen_place_counts_for_the_label(seed: int) -> None:
     for n, t in itertools.product(range(problem.n_objects), range(problem.n_frames)):
         at = place[n, t, chosen[n, t]]
         same = [u != chosen[n, t] and (place[n, t, u] == at).all() and grid.valid[n, t + 1, u]
-                for u, d in enumerate(exact[n, t])]
+                for u in range(grid.width)]
         weight = np.exp(-np.where(np.isfinite(exact[n, t]), exact[n, t], np.inf))
         weight[chosen[n, t]] = 1.0
         support = weight[chosen[n, t]] + weight[same].sum()

@@ -42,4 +42,4 @@ def label_confidence(problem: WindowProblem, path: NDArray[np.intp], scale: floa
     """The confidence of every label of ``path`` (``(N, M)`` nodes) in ``problem``."""
     margin, grid = reading_margins(problem, np.asarray(path, dtype=np.intp), NEGLIGIBLE_NATS * scale)
     chosen, same = grid.chosen[:, 1:-1], same_place(problem, grid)
-    return LabelConfidence(label_probability(margin, chosen, scale, same), nearest_alternative(margin, chosen, same))
+    return LabelConfidence(label_probability(margin, chosen, same, scale), nearest_alternative(margin, chosen, same))

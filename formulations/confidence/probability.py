@@ -29,23 +29,21 @@ from scipy.special import expit
 
 
 def label_probability(
-    margin: NDArray[np.float64], chosen: NDArray[np.intp], scale: float = 1.0,
-    same: NDArray[np.bool_] | None = None,
+    margin: NDArray[np.float64], chosen: NDArray[np.intp], same: NDArray[np.bool_], scale: float = 1.0,
 ) -> NDArray[np.float64]:
     """``(N, M)`` p(n, t) from ``margin`` ``(N, M, K)`` and the chosen slots ``(N, M)``.
 
     Args:
         margin: Delta(n, t, u), inf for slots that are no alternative.
         chosen: The chosen slot of every object and frame.
-        scale: Cost units per nat of log-likelihood.
         same: ``(N, M, K)`` slots that put the label where the chosen one does
             (``same_place``): their readings count for the label, not against it.
+        scale: Cost units per nat of log-likelihood.
     """
     if not scale > 0:
         raise ValueError(f"confidence scale must be positive, got {scale}")
     alternative = -margin / scale
     np.put_along_axis(alternative, chosen[..., None], -np.inf, axis=2)
-    same = np.zeros(margin.shape, bool) if same is None else same
     with np.errstate(divide="ignore"):  # log(0) = -inf: no such slot
         support = np.logaddexp(0.0, _log_sum_exp(np.where(same, alternative, -np.inf)))
         against = _log_sum_exp(np.where(same, -np.inf, alternative))
@@ -63,11 +61,11 @@ def _log_sum_exp(terms: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def nearest_alternative(
-    margin: NDArray[np.float64], chosen: NDArray[np.intp], same: NDArray[np.bool_] | None = None,
+    margin: NDArray[np.float64], chosen: NDArray[np.intp], same: NDArray[np.bool_],
 ) -> NDArray[np.float64]:
     """``(N, M)`` min over u != chosen (and not in ``same``) of Delta(n, t, u): the margin of
     each label (inf if none)."""
-    others = margin.copy() if same is None else np.where(same, np.inf, margin)
+    others = np.where(same, np.inf, margin)
     np.put_along_axis(others, chosen[..., None], np.inf, axis=2)
     nearest: NDArray[np.float64] = others.min(axis=2)
     return nearest

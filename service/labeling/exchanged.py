@@ -29,8 +29,8 @@ from service.io.recording import LabeledTrajectories
 GivenBack = TakeExchange | TakeRotation | PlateTurn | TakeMirror
 # The windows and the first frame's shape read these labels otherwise: an even call. Measured
 # on 2026-12-07: on the real takes relabeled from their files all 3,167 given-back labels were
-# right (CMU 135_02, 03_rolling, walking2), but on the seed-0 matrix's tuning takes 438 of 638
-# on the racing take and 0 of 7 on BTS at 4 mm, so no single rate fits both.
+# right (CMU 135_02, 03_rolling, walking2), but over 37 of the seed-0 matrix's 40 tuning rows
+# 438 of 638 on the racing take and 0 of 7 on BTS at 4 mm, so no single rate fits both.
 EXCHANGED_CONFIDENCE = 0.5
 
 
